@@ -1,0 +1,68 @@
+"""The ``scenweave`` command line.
+
+Each subcommand lives in its own module under ``scenweave/commands/`` and is imported only
+when it runs, so ``scenweave --help`` stays fast and one broken extra never breaks the rest.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import click
+
+from scenweave import __version__
+
+#: subcommand name -> "module:attribute" of its click command
+COMMANDS: dict[str, str] = {
+    "sample-data": "scenweave.commands.sample_data:sample_data",
+    "ingest": "scenweave.commands.ingest:ingest",
+    "demo": "scenweave.commands.demo:demo",
+}
+
+
+class LazyGroup(click.Group):
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        target = COMMANDS.get(name)
+        if target is None:
+            return None
+        module_name, attr = target.split(":")
+        return getattr(importlib.import_module(module_name), attr)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="scenweave")
+@click.option("--verbose", "-v", is_flag=True, help="Show the full traceback on errors.")
+@click.pass_context
+def cli(ctx: click.Context, verbose: bool) -> None:
+    """ScenWeave: driving records in, validated OpenSCENARIO 1.0 scenarios for CARLA out."""
+    ctx.obj = {"verbose": verbose}
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point: user errors become one line; ``--verbose`` shows the traceback."""
+    args = sys.argv[1:] if argv is None else argv
+    verbose = "--verbose" in args or "-v" in args
+    try:
+        cli.main(args=args, prog_name="scenweave", standalone_mode=False)
+    except click.exceptions.Exit as exit_:
+        sys.exit(exit_.exit_code)
+    except click.ClickException as err:
+        err.show()
+        sys.exit(err.exit_code)
+    except click.Abort:
+        click.echo("Aborted.", err=True)
+        sys.exit(130)
+    except Exception as err:  # noqa: BLE001 - the one place that turns crashes into a line
+        if verbose:
+            raise
+        click.echo(f"error: {type(err).__name__}: {err} (run with --verbose for the traceback)",
+                   err=True)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

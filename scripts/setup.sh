@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Sets up this machine for ScenWeave: Debian packages, a virtualenv in .venv with the project
+# and its extras, then every step in scripts/setup.d/ (each one idempotent and quick on rerun).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    mapfile -t wanted < <(grep -v '^\s*#' scripts/apt-packages.txt | tr -s ' \n' '\n' | sed '/^$/d')
+    missing=()
+    for pkg in "${wanted[@]}"; do
+        dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+    done
+    if [ "${#missing[@]}" -gt 0 ]; then
+        echo "setup: installing Debian packages: ${missing[*]}"
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+    fi
+fi
+
+if [ ! -x .venv/bin/python ]; then
+    python3.11 -m venv .venv 2>/dev/null || python3 -m venv .venv
+fi
+.venv/bin/python -m pip install -q --upgrade pip
+.venv/bin/python -m pip install -q -e ".[$(tr -d ' \n' < scripts/extras.txt)]"
+
+for step in scripts/setup.d/*.sh; do
+    [ -e "$step" ] || continue
+    echo "setup: $(basename "$step")"
+    bash "$step"
+done
+echo "setup: done"

@@ -1,0 +1,16 @@
+"""Schemas and validation: column layouts, JSON Schemas, the OpenSCENARIO XSD, validate_xosc."""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+SCHEMAS_DIR = Path(__file__).resolve().parent
+
+
+@cache
+def load_json_schema(name: str) -> dict[str, Any]:
+    """Load ``schemas/<name>.schema.json`` (cached per process)."""
+    return json.loads((SCHEMAS_DIR / f"{name}.schema.json").read_text(encoding="utf-8"))

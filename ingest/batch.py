@@ -1,0 +1,97 @@
+"""A raw data folder -> canonical record files plus an ingest report.
+
+Output: ``<out>/highway/<CLASS>.json`` and ``<out>/urban/<CODE>.json`` (arrays of records, as
+the thesis's converters write them) and ``<out>/ingest_report.json``. Files are processed one
+at a time, so memory stays bounded by the largest input file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from ingest.atomic import write_json_atomic
+from ingest.extract import extract_params
+from ingest.highway import DEFAULT_BINNING, canonicalize_highway_file, iter_highway_files
+from ingest.issues import IngestError, IngestReport, Issue, RecordIssue
+from ingest.layouts import HighwayLayouts, load_layouts
+from ingest.records import check_record
+from ingest.urban import canonicalize_urban_file, iter_urban_files
+
+REPORT_NAME = "ingest_report.json"
+
+
+@dataclass
+class RawRecord:
+    """One checked canonical record and where it came from."""
+
+    record: dict
+    file: str
+
+
+def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayouts | None = None,
+                     binning: str = DEFAULT_BINNING,
+                     on_file: Callable[[Path], None] | None = None) -> Iterator[RawRecord]:
+    """Canonical, schema-checked records of every raw file; problems go into ``report``."""
+    raw_dir = Path(raw_dir)
+    if not raw_dir.is_dir():
+        raise IngestError(f"input folder not found: {raw_dir}")
+    layouts = layouts or load_layouts()
+    for path in iter_highway_files(raw_dir):
+        result = canonicalize_highway_file(path, layouts, binning)
+        report.files_read += 1
+        report.add(result.issues)
+        yield from _checked(result.records, path.name, report)
+        if on_file:
+            on_file(path)
+    for path in iter_urban_files(raw_dir):
+        record, issues = canonicalize_urban_file(path)
+        report.files_read += 1
+        report.add(issues)
+        yield from _checked([record] if record else [], f"{path.parent.name}/{path.name}", report)
+        if on_file:
+            on_file(path)
+
+
+def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[RawRecord]:
+    for record in records:
+        row = record.get("source", {}).get("row_index")
+        try:
+            check_record(record)
+            extract_params(record)
+        except RecordIssue as issue:
+            report.add([Issue(file=file, row=row, field=issue.field, message=issue.message)])
+            continue
+        yield RawRecord(record, file)
+
+
+def ingest_directory(raw_dir: Path, out_dir: Path, layout_path: Path | None = None,
+                     binning: str = DEFAULT_BINNING,
+                     on_file: Callable[[Path], None] | None = None) -> IngestReport:
+    """Canonicalise every raw file under ``raw_dir`` into ``out_dir``; return the report."""
+    report = IngestReport()
+    layouts = load_layouts(layout_path)
+    pending: dict[tuple[str, str], list[dict]] = {}
+    for item in iter_raw_records(raw_dir, report, layouts, binning, on_file):
+        key = (_folder(item.record), item.record["maneuver_class"])
+        if key not in pending:
+            # highway classes arrive one file at a time: write the finished ones now
+            for done in [k for k in pending if k[0] == "highway"]:
+                _write_group(out_dir, done, pending.pop(done), report)
+        pending.setdefault(key, []).append(item.record)
+    for key in sorted(pending):
+        _write_group(out_dir, key, pending[key], report)
+    write_json_atomic(out_dir / REPORT_NAME, report.to_dict())
+    return report
+
+
+def _folder(record: dict) -> str:
+    return "highway" if record["domain"] == "highway" else "urban"
+
+
+def _write_group(out_dir: Path, key: tuple[str, str], records: list[dict],
+                 report: IngestReport) -> None:
+    folder, code = key
+    write_json_atomic(out_dir / folder / f"{code}.json", records, indent=None)
+    report.count(code, len(records))

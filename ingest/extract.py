@@ -1,0 +1,248 @@
+"""Canonical record -> flat params dict (thesis Tables 5.1, 5.2; contract in docs/params.md).
+
+Each extractor reads the record's primary quantities; ``_finish`` then derives what follows
+from them (end speeds, timeout, the spawn footprint), so perturbed variants stay consistent.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ingest.freeride import SLOTS, slot_present
+from ingest.issues import RecordIssue
+from ingest.layouts import FAMILY_OF_CLASS
+
+KMH = 3.6
+HIGHWAY_MANEUVER_START_S = 2.0
+TIMEOUT_FACTOR = 2.5
+COUTF_EGO_SPEEDUP = 1.05
+YELLOW_DELAY_BOUNDS_S = (1.0, 8.0)
+YELLOW_POINT_BEFORE_LIGHT_M = 5.0
+STOPPED_BELOW_MS = 0.1
+HIGHWAY_WEATHER = "Day_Clear"
+SPAWN_KEYS = ("spawn_id", "ego_x", "ego_y", "ego_z", "ego_h", "ego_road_id", "ego_lane_id",
+              "ego_s")
+
+
+def extract_params(record: dict) -> dict:
+    """The flat params dict of one canonical record, highway or urban."""
+    if record.get("domain") == "highway":
+        return _extract_highway(record)
+    if str(record.get("version", "")).startswith("urban."):
+        return _extract_urban(record)
+    raise RecordIssue("not a canonical record (neither highway phase1.v1 nor urban.v1)",
+                      field="schema_version")
+
+
+# -- highway -----------------------------------------------------------------------------------
+
+def _extract_highway(record: dict) -> dict:
+    code = record["maneuver_class"]
+    family = FAMILY_OF_CLASS.get(code)
+    if family is None:
+        raise RecordIssue(f"unknown highway class {code!r}", field="maneuver_class")
+    raw = record["params"]
+    base = {
+        "scenario_id": record["scenario_id"],
+        "maneuver_class": code,
+        "maneuver_tag": record["maneuver_tag"],
+        "domain": "highway",
+        "weather_key": HIGHWAY_WEATHER,
+        "maneuver_start_s": HIGHWAY_MANEUVER_START_S,
+        "duration_s": raw["duration_s"],
+        "other_dir_traffic": raw.get("other_dir_traffic") == "Yes",
+        "has_npc": bool(record["has_npc"]),
+        "npc_position": record["npc_position"],
+    }
+    try:
+        base.update(HIGHWAY_EXTRACTORS[family](raw, code))
+    except KeyError as err:
+        raise RecordIssue("missing in params", field=f"params.{err.args[0]}") from err
+    base.update(dict.fromkeys(SPAWN_KEYS))
+    return finish(base)
+
+
+def _brake(raw: dict, code: str) -> dict:
+    return {
+        "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
+        "npc_speed_ms": raw["lead_vel_kmh"] / KMH,
+        "delta_speed_ms": raw["delta_vel_kmh"] / KMH,
+        "npc_distance_m": raw["npc_distance_m"],
+        "brake_intensity": raw["brake_intensity"],
+        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
+    }
+
+
+def _cut(raw: dict, code: str) -> dict:
+    sign = -1.0 if code == "COUTB" else 1.0
+    return {
+        "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
+        "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
+        "delta_speed_ms": raw["delta_vel_kmh"] / KMH,
+        "npc_distance_m": raw["npc_distance_m"],
+        "lane_change_direction": raw["direction"].lower(),
+        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
+    }
+
+
+def _lane_change(raw: dict, code: str) -> dict:
+    return {
+        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
+        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
+        "lane_change_direction": raw["direction"].lower(),
+    }
+
+
+def _follow(raw: dict, code: str) -> dict:
+    sign = -1.0 if code == "FLB" else 1.0
+    return {
+        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
+        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
+        "npc_speed_ms": raw["lead_vel_begin_kmh"] / KMH,
+        "npc_end_speed_ms": raw["lead_vel_end_kmh"] / KMH,
+        "npc_distance_m": sign * abs(raw["npc_distance_begin_m"]),
+        "npc_distance_end_m": sign * abs(raw["npc_distance_end_m"]),
+        "npc_dist_traveled_m": raw["lead_dist_traveled_m"],
+        "behavior_type": raw["behavior_type"],
+        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
+    }
+
+
+def _free_ride(raw: dict, code: str) -> dict:
+    sign = -1.0 if code == "FRB" else 1.0
+    params: dict = {
+        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
+        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
+        "ego_dist_traveled_m": raw["ego_dist_traveled_m"],
+    }
+    if code == "FRF":
+        params["driving_side"] = str(raw.get("driving_side", "Right")).lower()
+    for slot in SLOTS:
+        present = slot_present(raw, slot)
+        params[f"{slot}_present"] = present
+        params[f"{slot}_speed_ms"] = raw[f"{slot}_vel_begin_ms"] if present else 0.0
+        params[f"{slot}_end_speed_ms"] = raw[f"{slot}_vel_end_ms"] if present else 0.0
+        params[f"{slot}_distance_m"] = sign * abs(raw[f"{slot}_posx_begin_m"]) if present else 0.0
+        params[f"{slot}_end_distance_m"] = (sign * abs(raw[f"{slot}_posx_end_m"])
+                                            if present else 0.0)
+        params[f"{slot}_vehicle_type"] = (raw[f"{slot}_vehicle_type"].lower()
+                                          if present else None)
+    return params
+
+
+HIGHWAY_EXTRACTORS: dict[str, Callable[[dict, str], dict]] = {
+    "BRAKE": _brake, "CUT": _cut, "LC": _lane_change, "FL": _follow, "FR": _free_ride,
+}
+
+
+# -- urban -------------------------------------------------------------------------------------
+
+def _extract_urban(record: dict) -> dict:
+    trajectory = record["dynamic_content"]["ego_trajectory"]
+    t, ds, v = trajectory["t"], trajectory["ds"], trajectory["v"]
+    env = record["environment"]
+    light = next((s for s in record["infrastructure"]["traffic_signs"] if s["light_state"]), None)
+    tfl_ds = light["position_m"] if light else None
+    lead = next((a for a in record["initial_state"]["actors"] if a["role"] == "lead_vehicle"),
+                None)
+    roles = {a["role"] for a in record["initial_state"]["actors"]}
+    params = {
+        "scenario_id": record["scenario_id"],
+        "maneuver_class": record["maneuver_class"],
+        "maneuver_tag": record["maneuver_tag"],
+        "domain": "urban",
+        "road_type": record["domain"],
+        "weather_key": env["weather_key"],
+        "maneuver_start_s": 0.0,
+        "duration_s": t[-1] - t[0],
+        "ego_speed_ms": v[0],
+        "ego_end_speed_ms": v[-1],
+        "brake_time_s": brake_time(t, v),
+        "yellow_delay_s": yellow_delay(t, ds, v[0], tfl_ds),
+        "drive_distance_m": ds[-1] - ds[0],
+        "tfl_ds_m": tfl_ds,
+        "tfl_state": light["light_state"] if light else None,
+        "turn": "right" if record["maneuver_class"] == "U4_4" else "straight",
+        "speed_limit_kmh": env["speed_limit_kmh"],
+        "lane_count": env["lane_count"],
+        "lane_width_m": env["lane_width_m"],
+        "has_npc": lead is not None,
+        "npc_position": "front" if lead else None,
+        "lead_present": lead is not None,
+        "lead_distance_m": lead["pos_x_m"] if lead else 0.0,
+        "lead_speed_ms": lead["speed_ms"] if lead else 0.0,
+        "lead_vehicle_type": lead["classification"].lower() if lead else None,
+        "oncoming_present": "oncoming" in roles,
+        "pedestrian_present": "pedestrian" in roles,
+        "min_ttc_s": record["semantics"]["criticality_metric"]["min_ttc_s"],
+        **record["perturbation"],
+    }
+    params.update(dict.fromkeys(SPAWN_KEYS))
+    return finish(params)
+
+
+def brake_time(t: list[float], v: list[float]) -> float:
+    """Time of the first frame at or below 0.1 m/s; the whole span if the ego never stops."""
+    for time, speed in zip(t, v, strict=True):
+        if speed <= STOPPED_BELOW_MS:
+            return time - t[0]
+    return t[-1] - t[0]
+
+
+def yellow_delay(t: list[float], ds: list[float], v0: float, tfl_ds: float | None) -> float | None:
+    """Time for the ego to reach 5 m before the light, clamped to [1, 8] s (None: no light)."""
+    if tfl_ds is None:
+        return None
+    target = tfl_ds - YELLOW_POINT_BEFORE_LIGHT_M
+    reached = _time_at_distance(t, ds, target)
+    if reached is None:
+        reached = target / v0 if v0 > 0 else YELLOW_DELAY_BOUNDS_S[1]
+    low, high = YELLOW_DELAY_BOUNDS_S
+    return min(max(reached, low), high)
+
+
+def _time_at_distance(t: list[float], ds: list[float], target: float) -> float | None:
+    if target <= ds[0]:
+        return t[0] - t[0]
+    for i in range(1, len(ds)):
+        if ds[i] >= target:
+            share = (target - ds[i - 1]) / (ds[i] - ds[i - 1]) if ds[i] > ds[i - 1] else 1.0
+            return t[i - 1] + share * (t[i] - t[i - 1]) - t[0]
+    return None
+
+
+# -- derived values, shared by both domains and by variants -----------------------------------
+
+def finish(params: dict) -> dict:
+    """Fill the values that follow from the primary ones; returns ``params`` (changed in place)."""
+    if "delta_speed_ms" in params:
+        params["npc_end_speed_ms"] = max(params["npc_speed_ms"] + params["delta_speed_ms"], 0.0)
+    if params["maneuver_class"] in ("BRAKE", "BR_BK", "CINF", "CINB", "COUTB"):
+        params["ego_end_speed_ms"] = params["ego_speed_ms"]
+    elif params["maneuver_class"] == "COUTF":
+        params["ego_end_speed_ms"] = params["ego_speed_ms"] * COUTF_EGO_SPEEDUP
+    params["timeout_s"] = TIMEOUT_FACTOR * (params["maneuver_start_s"] + params["duration_s"])
+    params["required_lane_sides"] = _required_lane_sides(params)
+    speeds = [v for k, v in params.items() if k.endswith("speed_ms") and isinstance(v, float)]
+    params["max_speed_ms"] = max(speeds, default=0.0)
+    gaps = _start_gaps(params)
+    params["gap_ahead_m"] = max([g for g in gaps if g > 0], default=0.0)
+    params["gap_behind_m"] = max([-g for g in gaps if g < 0], default=0.0)
+    return params
+
+
+def _required_lane_sides(params: dict) -> list[str]:
+    code = params["maneuver_class"]
+    move = params.get("lane_change_direction")
+    if code in ("CINF", "CINB"):
+        return ["right" if move == "left" else "left"]
+    if code in ("COUTF", "COUTB", "LCF", "LCB"):
+        return [move]
+    if code in ("FRF", "FRB"):
+        return [side for side in ("left", "right") if params[f"{side}_present"]]
+    return []
+
+
+def _start_gaps(params: dict) -> list[float]:
+    keys = ["npc_distance_m", "lead_distance_m", *(f"{s}_distance_m" for s in SLOTS)]
+    return [float(params[k]) for k in keys if isinstance(params.get(k), int | float)]

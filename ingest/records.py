@@ -1,0 +1,51 @@
+"""Checking canonical records against their JSON Schemas, and reading them back."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator
+from functools import cache
+from pathlib import Path
+
+import fastjsonschema
+
+from ingest.issues import IngestError, RecordIssue
+from schemas import load_json_schema
+
+SCHEMA_OF_DOMAIN = {"highway": "highway_record", "urban": "urban_record"}
+
+
+@cache
+def _compiled(name: str) -> Callable[[dict], dict]:
+    return fastjsonschema.compile(load_json_schema(name))
+
+
+def schema_name(record: dict) -> str:
+    """Which JSON Schema a record answers to."""
+    return SCHEMA_OF_DOMAIN["highway" if record.get("domain") == "highway" else "urban"]
+
+
+def check_record(record: dict) -> None:
+    """Raise RecordIssue naming the field when ``record`` breaks its JSON Schema."""
+    try:
+        _compiled(schema_name(record))(record)
+    except fastjsonschema.JsonSchemaValueException as err:
+        field = err.name.removeprefix("data.").removeprefix("data") or None
+        raise RecordIssue(f"record breaks {schema_name(record)}.schema.json: {err.message}",
+                          field=field) from err
+
+
+def load_records(path: Path | str) -> Iterator[dict]:
+    """Canonical records from an ingest output folder (``highway/``, ``urban/``) or one file."""
+    path = Path(path)
+    files = [path] if path.is_file() else sorted(
+        p for sub in ("highway", "urban") for p in (path / sub).glob("*.json"))
+    if not files:
+        raise IngestError(f"no canonical records in {path} (expected highway/*.json or "
+                          f"urban/*.json written by 'scenweave ingest')")
+    for file in files:
+        try:
+            data = json.loads(file.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+            raise IngestError(f"{file}: cannot read canonical records: {err}") from err
+        yield from data if isinstance(data, list) else [data]

@@ -1,0 +1,418 @@
+"""Urban ADScene JSON files -> canonical records (thesis §4.4, Table 4.10).
+
+Beyond reshaping, this decodes the RT_* code tables, gives each obstacle a role, rebuilds
+ego and actor trajectories relative to their start, measures time-step regularity and the
+minimum time-to-collision, and writes a two-sentence description.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import statistics
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from ingest.codes import TRAFFIC_LIGHT_STATES, decode
+from ingest.issues import Issue, RecordIssue
+from ingest.tags import URBAN_NAMES, URBAN_TAGS
+
+RECORD_VERSION = "urban.v1"
+REGULAR_STEP_TOLERANCE = 0.1  # steps within 10 % of the median count as regular
+DEFAULT_PERTURBATION = {"dl_noise_std": 0.2, "v_noise_std": 0.5, "t_noise_std": 0.2}
+TIMED_FIELDS = ("ego_vehicle", "temporal_climatic", "obstacles")
+EGO_FIELDS = ("ego_speed", "longitudinal_acceleration_wheels", "steer_wheel_angle", "ego_brake",
+              "ego_lane", "turning_signal_state", "yaw_rate", "covered_distance_by_ego",
+              "dist_to_marking_left", "dist_to_marking_right")
+OBSTACLE_FIELDS = ("unique_id", "pos_x", "pos_y", "relative_velocity_x", "absolute_velocity_x",
+                   "mobile_object_classification", "obstacle_relative_lane")
+
+
+def iter_urban_files(folder: Path) -> Iterator[Path]:
+    """ADScene files ``<CODE>/<begin_time>.json`` in ``folder`` or ``folder/urban``, sorted."""
+    for base in (folder, folder / "urban"):
+        if base.is_dir():
+            for sub in sorted(p for p in base.iterdir() if p.is_dir()):
+                if re.fullmatch(r"U\d+_\d+", sub.name) or sub.name in URBAN_TAGS:
+                    yield from sorted(sub.glob("*.json"))
+
+
+def canonicalize_urban_file(path: Path) -> tuple[dict | None, list[Issue]]:
+    """Read one ADScene file; return its canonical record (or None) and its issues."""
+    name = f"{path.parent.name}/{path.name}"
+    try:
+        scene = _read_json(path)
+        return canonicalize_scene(scene, name, folder_code=path.parent.name), []
+    except RecordIssue as issue:
+        return None, [issue.to_issue(name)]
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise RecordIssue(f"not UTF-8 text (byte {err.start}: {err.reason})") from err
+    except OSError as err:
+        raise RecordIssue(f"cannot read: {err.strerror}") from err
+    try:
+        scene = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise RecordIssue(f"invalid or truncated JSON at line {err.lineno}, column {err.colno}: "
+                          f"{err.msg}") from err
+    if not isinstance(scene, dict):
+        raise RecordIssue("the top level must be a JSON object")
+    return scene
+
+
+def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None) -> dict:
+    """Turn one parsed ADScene object into a canonical urban record (RecordIssue if bad)."""
+    code = _get(scene, "scenario_code", str)
+    if code not in URBAN_TAGS:
+        raise RecordIssue(f"unknown urban class {code!r} (known: {', '.join(URBAN_TAGS)})",
+                          field="scenario_code")
+    if folder_code and folder_code in URBAN_TAGS and folder_code != code:
+        raise RecordIssue(f"file is in folder {folder_code} but says {code}",
+                          field="scenario_code")
+    segment = _get(scene, "segment", dict)
+    frames = _frames(scene)
+    times = [f["time"] for f in frames]
+    ego = _ego_trajectory(frames)
+    infra = _infrastructure(scene)
+    environment = _environment(frames[0], infra, scene)
+    actors_start, actor_tracks = _actors(frames, ego["ds"])
+    min_ttc = _min_ttc(frames)
+    record = {
+        "version": RECORD_VERSION,
+        "scenario_id": _scenario_id(code, segment, source),
+        "maneuver_class": code,
+        "maneuver_tag": URBAN_TAGS[code],
+        "domain": _slug(environment["road_type"]),
+        "semantics": {
+            "main_maneuver": URBAN_TAGS[code],
+            "description": "",
+            "tags": _tags(code, environment, actors_start),
+            "criticality_metric": {"min_ttc_s": min_ttc, "source": "obstacles.time_to_collision"},
+        },
+        "metadata": _metadata(segment, source, times, scene),
+        "environment": environment,
+        "infrastructure": infra,
+        "initial_state": {"ego": _ego_state(frames[0]), "actors": actors_start},
+        "dynamic_content": {
+            "ego_trajectory": ego,
+            "actor_trajectories": actor_tracks,
+            "summary": _summary(ego),
+            "events": [],
+        },
+        "final_state": {"ego": _ego_state(frames[-1]),
+                        "actors": [_actor_state(o) for o in frames[-1]["obstacles"]]},
+        "perturbation": dict(DEFAULT_PERTURBATION),
+    }
+    record["semantics"]["description"] = describe(record)
+    return record
+
+
+# -- reading, with errors that name the field --------------------------------------------------
+
+def _get(obj: dict, key: str, kind: type | tuple[type, ...], where: str = "") -> Any:
+    path = f"{where}.{key}" if where else key
+    if key not in obj:
+        raise RecordIssue("missing", field=path)
+    value = obj[key]
+    if kind is float:
+        kind = (int, float)
+    if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
+        raise RecordIssue(f"expected {_kind_name(kind)}, got {type(value).__name__} {value!r:.40}",
+                          field=path)
+    if isinstance(value, float) and value != value or value in (float("inf"), float("-inf")):
+        raise RecordIssue(f"not a finite number: {value!r}", field=path)
+    return value
+
+
+def _kind_name(kind: type | tuple[type, ...]) -> str:
+    return "number" if kind == (int, float) else getattr(kind, "__name__", str(kind))
+
+
+def _frames(scene: dict) -> list[dict]:
+    raw = _get(scene, "key_times", list)
+    if len(raw) < 2:
+        raise RecordIssue(f"needs at least 2 frames, has {len(raw)}", field="key_times")
+    frames = []
+    previous = None
+    for i, frame in enumerate(raw):
+        where = f"key_times[{i}]"
+        if not isinstance(frame, dict):
+            raise RecordIssue("expected an object", field=where)
+        t = float(_get(frame, "time", float, where))
+        if previous is not None and t <= previous:
+            raise RecordIssue(f"time {t} does not increase (previous {previous})",
+                              field=f"{where}.time")
+        previous = t
+        ego = _get(frame, "ego_vehicle", dict, where)
+        for key in EGO_FIELDS:
+            _get(ego, key, float, f"{where}.ego_vehicle")
+        _get(frame, "temporal_climatic", dict, where)
+        obstacles = _get(frame, "obstacles", list, where)
+        for j, obstacle in enumerate(obstacles):
+            if not isinstance(obstacle, dict):
+                raise RecordIssue("expected an object", field=f"{where}.obstacles[{j}]")
+            for key in OBSTACLE_FIELDS:
+                _get(obstacle, key, float, f"{where}.obstacles[{j}]")
+        frames.append(frame)
+    return frames
+
+
+# -- the parts of the record -------------------------------------------------------------------
+
+def _scenario_id(code: str, segment: dict, source: str) -> str:
+    record = segment.get("record") if isinstance(segment.get("record"), dict) else {}
+    stamp = re.sub(r"[^0-9T]", "", str(record.get("date_time", "")))[:15] or "undated"
+    stem = Path(source).stem.replace(".", "p")
+    return f"{code}_{stamp}_{stem}"
+
+
+def _metadata(segment: dict, source: str, times: list[float], scene: dict) -> dict:
+    record = segment.get("record") if isinstance(segment.get("record"), dict) else {}
+    steps = [b - a for a, b in zip(times, times[1:], strict=False)]
+    median = statistics.median(steps)
+    regular = max(abs(s - median) for s in steps) <= REGULAR_STEP_TOLERANCE * median
+    countries = [a.get("value") for a in scene.get("attributes", [])
+                 if isinstance(a, dict) and a.get("type") == "code_country"]
+    return {
+        "source_file": source,
+        "segment_type": segment.get("type"),
+        "campaign": record.get("campaign"),
+        "provider": record.get("provider"),
+        "recording": record.get("name"),
+        "recorded_at": record.get("date_time"),
+        "begin_time_s": _get(segment, "begin_time", float, "segment"),
+        "end_time_s": _get(segment, "end_time", float, "segment"),
+        "duration_s": round(times[-1] - times[0], 3),
+        "time_step": {"median_s": round(median, 4), "min_s": round(min(steps), 4),
+                      "max_s": round(max(steps), 4), "regular": regular},
+        "frames": len(times),
+        "country": decode("RT_CountryCode", countries[0]) if countries else None,
+    }
+
+
+def _infrastructure(scene: dict) -> dict:
+    environment = _get(scene, "environment", dict)
+    infra = _get(environment, "infrastructure", dict, "environment")
+    points = _get(infra, "way_points", list, "environment.infrastructure")
+    signs, profile, static = [], [], {}
+    for i, point in enumerate(points):
+        where = f"environment.infrastructure.way_points[{i}]"
+        if not isinstance(point, dict):
+            raise RecordIssue("expected an object", field=where)
+        at = float(_get(point, "position_longi_from_0", float, where))
+        elements = _get(point, "infrastructure_elements", list, where)
+        values = {}
+        for j, element in enumerate(elements):
+            at_element = f"{where}.infrastructure_elements[{j}]"
+            if not isinstance(element, dict):
+                raise RecordIssue("expected an object", field=at_element)
+            kind = _get(element, "type", str, at_element)
+            values[kind] = element.get("value")
+        if "TrafficSignType" in values:
+            code = values["TrafficSignType"]
+            signs.append({"position_m": at, "type_code": code,
+                          "label": decode("RT_TrafficSignType", code),
+                          "light_state": TRAFFIC_LIGHT_STATES.get(code)})
+        if "LaneWidth" in values:
+            profile.append({"position_m": at, "lane_width_m": values.get("LaneWidth"),
+                            "front_curvature": values.get("FrontCurvature"),
+                            "rear_curvature": values.get("RearCurvature"),
+                            "slope": values.get("Slope")})
+        for key in ("SpeedLimit", "RoadType", "NumberOfLanes", "GuardRail", "Junction",
+                    "PresenceOfEmergencyLane"):
+            if key in values and key not in static:
+                static[key] = values[key]
+    return {"traffic_signs": signs, "geometry_profile": profile, "static": static}
+
+
+def _environment(first: dict, infra: dict, scene: dict) -> dict:
+    climate = first["temporal_climatic"]
+    static = infra["static"]
+    night = climate.get("day_period") == 2
+    rain = climate.get("precipitation", 0) not in (0, None)
+    fog = bool(climate.get("fog"))
+    weather = "Rain" if rain else ("Cloudy" if fog and not night else "Clear")
+    widths = [p["lane_width_m"] for p in infra["geometry_profile"] if p["lane_width_m"]]
+    return {
+        "weather_key": f"{'Night' if night else 'Day'}_{weather}",
+        "day_period": decode("RT_DayPeriod", climate.get("day_period", 0)),
+        "temperature_c": climate.get("outside_temperature"),
+        "precipitation": decode("RT_Precipitation", climate.get("precipitation", 0)),
+        "fog": fog,
+        "dazzled": bool(climate.get("dazzled")),
+        "road_type": decode("RT_RoadType", static.get("RoadType", 0)),
+        "lane_count": static.get("NumberOfLanes"),
+        "speed_limit_kmh": static.get("SpeedLimit"),
+        "lane_width_m": round(statistics.median(widths), 3) if widths else None,
+        "junction": decode("RT_JunctionBifurcation", static.get("Junction", 0)),
+        "guard_rail": decode("RT_GuardRail", static.get("GuardRail", 0)),
+        "emergency_lane": decode("RT_PresenceOfEmergencyLane",
+                                 static.get("PresenceOfEmergencyLane", 0)),
+    }
+
+
+def _ego_state(frame: dict) -> dict:
+    ego = frame["ego_vehicle"]
+    return {
+        "time_s": frame["time"],
+        "speed_ms": round(ego["ego_speed"] / 3.6, 4),
+        "acceleration_ms2": ego["longitudinal_acceleration_wheels"],
+        "steer_deg": ego["steer_wheel_angle"],
+        "braking": ego["ego_brake"] != 0,
+        "lane": ego["ego_lane"],
+        "turning_signal": decode("RT_TurningSignalState", ego["turning_signal_state"]),
+    }
+
+
+def _ego_trajectory(frames: list[dict]) -> dict:
+    t0 = frames[0]["time"]
+    odo0 = frames[0]["ego_vehicle"]["covered_distance_by_ego"]
+    centre0 = _lane_centre_offset(frames[0]["ego_vehicle"])
+    return {
+        "t": [round(f["time"] - t0, 4) for f in frames],
+        "ds": [round(f["ego_vehicle"]["covered_distance_by_ego"] - odo0, 3) for f in frames],
+        "dl": [round(_lane_centre_offset(f["ego_vehicle"]) - centre0, 3) for f in frames],
+        "v": [round(f["ego_vehicle"]["ego_speed"] / 3.6, 4) for f in frames],
+        "yaw_rate": [f["ego_vehicle"]["yaw_rate"] for f in frames],
+    }
+
+
+def _lane_centre_offset(ego: dict) -> float:
+    # markings: left is negative, right positive; their midpoint is the ego's offset from centre
+    return -(ego["dist_to_marking_left"] + ego["dist_to_marking_right"]) / 2
+
+
+def _role(obstacle: dict) -> str:
+    if obstacle["mobile_object_classification"] == 4:
+        return "pedestrian"
+    if obstacle["absolute_velocity_x"] < -1.0:
+        return "oncoming"
+    lane = obstacle["obstacle_relative_lane"]
+    if lane == 0 and obstacle["pos_x"] > 0:
+        return "lead_vehicle"
+    toward_ego = -lane * obstacle.get("relative_velocity_y", 0.0) > 0.3
+    blinking_toward = obstacle.get("blinker") == (2 if lane < 0 else 1)
+    if abs(lane) == 1 and abs(obstacle["pos_x"]) < 50 and (toward_ego or blinking_toward):
+        return "adversary"
+    return "background"
+
+
+def _actor_state(obstacle: dict, role: str | None = None) -> dict:
+    ttc = obstacle.get("time_to_collision")
+    return {
+        "id": obstacle["unique_id"],
+        "role": role or _role(obstacle),
+        "classification": decode("RT_MobileObjectClassification",
+                                 obstacle["mobile_object_classification"]),
+        "pos_x_m": obstacle["pos_x"],
+        "pos_y_m": obstacle["pos_y"],
+        "speed_ms": obstacle["absolute_velocity_x"],
+        "rel_speed_ms": obstacle["relative_velocity_x"],
+        "relative_lane": obstacle["obstacle_relative_lane"],
+        "blinker": decode("RT_Blinker", obstacle.get("blinker", 0)),
+        "ttc_s": ttc if isinstance(ttc, int | float) and ttc > 0 else None,
+    }
+
+
+def _actors(frames: list[dict], ego_ds: list[float]) -> tuple[list[dict], list[dict]]:
+    """Actors at their first sighting (one lead: the nearest) and their trajectories."""
+    first_seen: dict[Any, tuple[int, dict]] = {}
+    for i, frame in enumerate(frames):
+        for obstacle in frame["obstacles"]:
+            first_seen.setdefault(obstacle["unique_id"], (i, obstacle))
+    states = [_actor_state(o) for _, o in first_seen.values()]
+    leads = sorted((s for s in states if s["role"] == "lead_vehicle"), key=lambda s: s["pos_x_m"])
+    for extra in leads[1:]:
+        extra["role"] = "background"
+    roles = {s["id"]: s["role"] for s in states}
+    tracks = [_actor_track(uid, roles[uid], frames, ego_ds) for uid in first_seen]
+    at_start = [s for s in states if first_seen[s["id"]][0] == 0]
+    return at_start, tracks
+
+
+def _actor_track(uid: Any, role: str, frames: list[dict], ego_ds: list[float]) -> dict:
+    t0 = frames[0]["time"]
+    t, ds, dl, v_rel, v = [], [], [], [], []
+    start = None
+    for frame, ego_s in zip(frames, ego_ds, strict=True):
+        obstacle = next((o for o in frame["obstacles"] if o["unique_id"] == uid), None)
+        if obstacle is None:
+            continue
+        along, across = ego_s + obstacle["pos_x"], obstacle["pos_y"]
+        start = start or (along, across)
+        t.append(round(frame["time"] - t0, 4))
+        ds.append(round(along - start[0], 3))
+        dl.append(round(across - start[1], 3))
+        v_rel.append(obstacle["relative_velocity_x"])
+        v.append(obstacle["absolute_velocity_x"])
+    return {"id": uid, "role": role, "t": t, "ds": ds, "dl": dl, "v_rel": v_rel, "v": v}
+
+
+def _min_ttc(frames: list[dict]) -> float | None:
+    values = [o.get("time_to_collision") for f in frames for o in f["obstacles"]]
+    positive = [v for v in values if isinstance(v, int | float) and v > 0]
+    return round(min(positive), 3) if positive else None
+
+
+def _summary(ego: dict) -> dict:
+    v = ego["v"]
+    stop_time = next((t for t, speed in zip(ego["t"], v, strict=True) if speed <= 0.1), None)
+    return {
+        "speed_min_ms": min(v), "speed_max_ms": max(v),
+        "speed_mean_ms": round(sum(v) / len(v), 4), "initial_speed_ms": v[0],
+        "final_speed_ms": v[-1], "drive_distance_m": ego["ds"][-1],
+        "stopped": stop_time is not None, "stop_time_s": stop_time,
+    }
+
+
+def _tags(code: str, environment: dict, actors: list[dict]) -> list[str]:
+    tags = [URBAN_TAGS[code], environment["weather_key"].lower()]
+    tags += sorted({a["role"] for a in actors if a["role"] != "background"})
+    return tags
+
+
+def _slug(label: str) -> str:
+    first = label.split("/")[0].strip().lower()
+    return re.sub(r"[^a-z0-9]+", "_", first).strip("_") or "unknown"
+
+
+def describe(record: dict) -> str:
+    """The deterministic two-sentence description (an LLM may replace it when configured)."""
+    code = record["maneuver_class"]
+    env = record["environment"]
+    v0 = record["initial_state"]["ego"]["speed_ms"] * 3.6
+    lights = [s for s in record["infrastructure"]["traffic_signs"] if s["light_state"]]
+    light = lights[0] if lights else None
+    road = env["road_type"].split("/")[0].strip().lower()
+    weather = env["weather_key"].replace("_", ", ").lower()
+    if light and code != "U1_1":
+        verb = {"U4_1": "stops before", "U4_2": "passes", "U4_3": "drives straight through",
+                "U4_4": "turns right at"}[code]
+        action = (f"{verb} the {light['light_state']} traffic light "
+                  f"{light['position_m']:.0f} m ahead")
+    else:
+        action = "keeps its lane"
+    article = "an" if road[:1] in "aeiou" else "a"
+    first = (f"{URBAN_NAMES[code]} on {article} {road} ({weather}): the ego starts at "
+             f"{v0:.0f} km/h and {action}.")
+    return f"{first} {_actors_sentence(record['initial_state']['actors'])}"
+
+
+def _actors_sentence(actors: list[dict]) -> str:
+    parts = []
+    for actor in actors:
+        if actor["role"] == "lead_vehicle":
+            parts.append(f"a lead {actor['classification'].lower()} {actor['pos_x_m']:.0f} m ahead "
+                         f"at {actor['speed_ms'] * 3.6:.0f} km/h")
+        elif actor["role"] == "pedestrian":
+            parts.append("a pedestrian")
+        elif actor["role"] in ("oncoming", "adversary"):
+            parts.append(f"an {actor['role']} {actor['classification'].lower()}")
+    if not parts:
+        return "No other road user takes part."
+    return f"Also present: {', '.join(parts)}."

@@ -111,9 +111,12 @@ def _follow(rng: np.random.Generator, n: int, code: str) -> Columns:
                            p=[0.25, 0.25, 0.35, 0.15])
     duration = np.round(rng.uniform(2.0, 10.0, n), 1)
     ego0 = _speeds_kmh(rng, n, 50, 130)
-    lead0 = ego0 + rng.normal(0, 2, n)
     closing = np.select([behaviour == "B1", behaviour == "B2"],
                         [rng.uniform(-12, -3, n), rng.uniform(3, 12, n)], rng.normal(0, 1, n))
+    # B1/B2: the initial speed difference already points the way the gap goes
+    offset = np.where(np.isin(behaviour, ["B1", "B2"]), -np.sign(closing) * np.abs(
+        rng.normal(0, 1.5, n)), rng.normal(0, 2, n))
+    lead0 = ego0 + offset
     lead1 = lead0 - closing / 2
     ego1 = ego0 + closing / 2
     gap0 = np.where(behaviour == "B4", rng.uniform(55, 110, n),

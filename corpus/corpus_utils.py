@@ -1,0 +1,366 @@
+"""Building blocks shared by every reference script: actors, actions, triggers, make_scenario().
+
+The reference scripts (``gen_hw_*.py``, ``gen_ur_*.py``) describe *what* happens in a
+manoeuvre; this module knows *how* that is written in OpenSCENARIO 1.0 for CARLA's
+scenario_runner. Every name, unit and formula used here is documented in
+``docs/scenario-conventions.md`` so that a validator can read the scenario back.
+
+This module runs inside the sandbox too, where only the ``corpus`` folder and
+``scenariogeneration`` exist: it imports nothing else from ScenWeave.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from scenariogeneration import xosc
+
+HERO = "hero"
+MAP_NAME = "Town04"
+AUTHOR = "ScenWeave"
+#: a fixed header date, so that the same params always give byte-identical files
+HEADER_DATE = dt.datetime(2026, 1, 1, 0, 0, 0)
+#: how long a light shows yellow before it turns red (s)
+YELLOW_PHASE_S = 3.0
+#: shortest lane change scenario_runner is asked for (m); below it the change is a jump
+LANE_CHANGE_MIN_LENGTH_M = 5.0
+#: the right-turn target: this far past the stop line (m) and this far to the right (m)
+TURN_PAST_STOP_LINE_M = 10.0
+TURN_RIGHT_OFFSET_M = 15.0
+#: distance to the stop line assumed when the spawn stage gave none (m)
+DEFAULT_STOP_LINE_DISTANCE_M = 20.0
+
+#: CARLA's RelativeTargetLane sign: scenario_runner turns value < 0 into a move to the left
+LANE_CHANGE_SIGN = {"left": -1, "right": 1}
+#: params colour of a light -> TrafficSignalStateAction state
+LIGHT_STATES = {"green": "green", "orange": "yellow", "yellow": "yellow", "red": "red"}
+
+
+@dataclass(frozen=True)
+class VehicleModel:
+    """A CARLA blueprint with the OpenSCENARIO category and dimensions that describe it."""
+
+    blueprint: str
+    category: Any
+    length_m: float
+    width_m: float
+    height_m: float
+    max_speed_ms: float
+
+
+VEHICLE_MODELS: dict[str, VehicleModel] = {
+    "ego": VehicleModel("vehicle.tesla.model3", xosc.VehicleCategory.car, 4.8, 2.1, 1.5, 69.0),
+    "car": VehicleModel("vehicle.audi.a2", xosc.VehicleCategory.car, 3.7, 1.8, 1.6, 55.0),
+    "truck": VehicleModel(
+        "vehicle.carlamotors.carlacola", xosc.VehicleCategory.truck, 5.2, 2.6, 2.5, 35.0
+    ),
+    "van": VehicleModel("vehicle.mercedes.sprinter", xosc.VehicleCategory.van, 5.9, 2.0, 2.6, 40.0),
+    "motorcycle": VehicleModel(
+        "vehicle.yamaha.yzf", xosc.VehicleCategory.motorbike, 2.2, 0.9, 1.5, 60.0
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Weather:
+    """How one ``weather_key`` is written: time of day, clouds, sun, rain."""
+
+    hour: int
+    clouds: Any
+    sun_intensity: float
+    sun_elevation_rad: float
+    rain_intensity: float
+
+
+WEATHERS: dict[str, Weather] = {
+    "Day_Clear": Weather(12, xosc.CloudState.free, 1.0, 1.0, 0.0),
+    "Day_Cloudy": Weather(12, xosc.CloudState.cloudy, 0.2, 1.0, 0.0),
+    "Day_Rain": Weather(12, xosc.CloudState.rainy, 0.1, 1.0, 0.6),
+    "Night_Clear": Weather(22, xosc.CloudState.free, 1.0, -0.5, 0.0),
+    "Night_Rain": Weather(22, xosc.CloudState.rainy, 0.1, -0.5, 0.6),
+}
+
+
+@dataclass(frozen=True)
+class Actor:
+    """One vehicle of the scenario: its role name, model, start position and start speed."""
+
+    name: str
+    vehicle_type: str
+    position: Any
+    speed_ms: float
+
+
+@dataclass(frozen=True)
+class StoryEvent:
+    """One storyboard event and the ManeuverGroup (entity or ``traffic_light``) it belongs to."""
+
+    group: str
+    event: xosc.Event
+
+
+# --- positions -------------------------------------------------------------------------------
+
+def lane_position(params: Mapping[str, Any], actor: str) -> xosc.LanePosition:
+    """The LanePosition the spawn stage chose for ``actor`` (``ego``, ``npc``, a FR slot)."""
+    return xosc.LanePosition(
+        params[f"{actor}_s"], 0, params[f"{actor}_lane_id"], params[f"{actor}_road_id"]
+    )
+
+
+def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:
+    """The WorldPosition (OpenSCENARIO frame) the spawn stage chose for ``actor``."""
+    return xosc.WorldPosition(
+        params[f"{actor}_x"], params[f"{actor}_y"], params[f"{actor}_z"], params[f"{actor}_h"]
+    )
+
+
+def position_from_ego(
+    params: Mapping[str, Any], ahead_m: float, right_m: float = 0.0, turn_rad: float = 0.0
+) -> xosc.WorldPosition:
+    """A point ``ahead_m`` along the ego's heading and ``right_m`` to its right."""
+    heading = params["ego_h"]
+    x = params["ego_x"] + ahead_m * math.cos(heading) + right_m * math.sin(heading)
+    y = params["ego_y"] + ahead_m * math.sin(heading) - right_m * math.cos(heading)
+    return xosc.WorldPosition(x, y, params["ego_z"], heading + turn_rad)
+
+
+# --- actors ----------------------------------------------------------------------------------
+
+def hero(position: Any, speed_ms: float) -> Actor:
+    """The ego vehicle, named ``hero`` as CARLA expects."""
+    return Actor(HERO, "ego", position, speed_ms)
+
+
+def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> Actor:
+    """A scripted vehicle; unknown types become a car."""
+    return Actor(name, vehicle_type if vehicle_type in VEHICLE_MODELS else "car", position,
+                 speed_ms)
+
+
+def highway_npc(params: Mapping[str, Any]) -> Actor:
+    """The highway NPC (lead, cutter or follower) at its spawn, with its start speed."""
+    return npc("npc", lane_position(params, "npc"), params["npc_speed_ms"],
+               params.get("npc_vehicle_type"))
+
+
+def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[StoryEvent]]:
+    """The vehicles of the present free-ride slots, each changing speed as recorded."""
+    actors, events = [], []
+    for slot in ("center", "right", "left"):
+        if not params.get(f"{slot}_present"):
+            continue
+        name = f"npc_{slot}"
+        actors.append(npc(name, lane_position(params, slot), params[f"{slot}_speed_ms"],
+                          params.get(f"{slot}_vehicle_type")))
+        events.append(speed_change(name, params[f"{slot}_end_speed_ms"], params["duration_s"],
+                                   params["maneuver_start_s"]))
+    return actors, events
+
+
+def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
+    """The urban lead vehicle ``lead_distance_m`` ahead of the ego, when the record had one."""
+    if not params.get("lead_present"):
+        return []
+    return [npc("lead", position_from_ego(params, params["lead_distance_m"]),
+                params["lead_speed_ms"], params.get("lead_vehicle_type"))]
+
+
+def _vehicle(actor: Actor) -> xosc.Vehicle:
+    model = VEHICLE_MODELS[actor.vehicle_type]
+    box = xosc.BoundingBox(model.width_m, model.length_m, model.height_m,
+                           model.length_m * 0.3, 0, model.height_m / 2)
+    front = xosc.Axle(0.5, 0.7, model.width_m * 0.85, model.length_m * 0.6, 0.35)
+    rear = xosc.Axle(0.0, 0.7, model.width_m * 0.85, 0.0, 0.35)
+    vehicle = xosc.Vehicle(model.blueprint, model.category, box, front, rear,
+                           model.max_speed_ms, 10, 10)
+    if actor.name == HERO:
+        vehicle.add_property("type", "ego_vehicle")
+    return vehicle
+
+
+# --- actions and events ----------------------------------------------------------------------
+
+def at_time(name: str, time_s: float, point: str = "start") -> xosc.ValueTrigger:
+    """A start (or ``point="stop"``) trigger firing once the simulation time exceeds ``time_s``."""
+    return xosc.ValueTrigger(name, 0, xosc.ConditionEdge.rising,
+                             xosc.SimulationTimeCondition(time_s, xosc.Rule.greaterThan), point)
+
+
+def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent:
+    """Event ``<key>_event`` holding action ``<key>``, started at ``start_s``."""
+    event = xosc.Event(f"{key}_event", xosc.Priority.overwrite)
+    event.add_action(key, action)
+    event.add_trigger(at_time(f"{key}_start", start_s))
+    return StoryEvent(group, event)
+
+
+def speed_change(entity: str, target_ms: float, duration_s: float, start_s: float) -> StoryEvent:
+    """``entity`` goes linearly to ``target_ms`` within ``duration_s`` from ``start_s``."""
+    dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.time,
+                                       duration_s)
+    return story_event(entity, f"{entity}_speed_change",
+                       xosc.AbsoluteSpeedAction(target_ms, dynamics), start_s)
+
+
+def lane_change_length_m(v_start_ms: float, v_end_ms: float, duration_s: float) -> float:
+    """Distance driven during a lane change of ``duration_s`` (scenario_runner wants metres)."""
+    return max(LANE_CHANGE_MIN_LENGTH_M, (v_start_ms + v_end_ms) / 2 * duration_s)
+
+
+def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
+                duration_s: float, start_s: float) -> StoryEvent:
+    """``entity`` moves one lane to ``direction`` (left/right) over ``duration_s``."""
+    if direction not in LANE_CHANGE_SIGN:
+        raise ValueError(f"lane_change_direction must be 'left' or 'right', not {direction!r}")
+    dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear,
+                                       xosc.DynamicsDimension.distance,
+                                       lane_change_length_m(v_start_ms, v_end_ms, duration_s))
+    action = xosc.RelativeLaneChangeAction(LANE_CHANGE_SIGN[direction], entity, dynamics)
+    return story_event(entity, f"{entity}_lane_change", action, start_s)
+
+
+def hero_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
+    """The recorded ego speed change: ``ego_end_speed_ms`` over ``duration_s``."""
+    return speed_change(HERO, params["ego_end_speed_ms"], params["duration_s"],
+                        params["maneuver_start_s"])
+
+
+def npc_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
+    """The recorded NPC speed change: ``npc_end_speed_ms`` over ``duration_s``."""
+    return speed_change("npc", params["npc_end_speed_ms"], params["duration_s"],
+                        params["maneuver_start_s"])
+
+
+def npc_lane_change(params: Mapping[str, Any]) -> StoryEvent:
+    """The NPC changes one lane toward ``lane_change_direction`` (cut-in or cut-out)."""
+    return lane_change("npc", params["lane_change_direction"], params["npc_speed_ms"],
+                       params["npc_end_speed_ms"], params["duration_s"],
+                       params["maneuver_start_s"])
+
+
+def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
+    """The ego changes one lane toward ``lane_change_direction``."""
+    return lane_change(HERO, params["lane_change_direction"], params["ego_speed_ms"],
+                       params["ego_end_speed_ms"], params["duration_s"],
+                       params["maneuver_start_s"])
+
+
+def drive_to(entity: str, key: str, position: Any, start_s: float) -> StoryEvent:
+    """``entity`` drives along the road network to ``position`` (AcquirePositionAction)."""
+    return story_event(entity, key, xosc.AcquirePositionAction(position), start_s)
+
+
+def right_turn_target(params: Mapping[str, Any]) -> xosc.WorldPosition:
+    """A point past the junction on the right of the ego, where a right turn ends."""
+    stop_line_m = (params.get("spawn_stop_line_distance_m") or params.get("tfl_ds_m")
+                   or DEFAULT_STOP_LINE_DISTANCE_M)
+    return position_from_ego(params, stop_line_m + TURN_PAST_STOP_LINE_M, TURN_RIGHT_OFFSET_M,
+                             -math.pi / 2)
+
+
+def traffic_light(params: Mapping[str, Any], key: str, state: str, at_s: float) -> StoryEvent:
+    """The controlling light (``pos=`` from ``tfl_x_carla/tfl_y_carla``) shows ``state``."""
+    name = f"pos={params['tfl_x_carla']:.3f},{params['tfl_y_carla']:.3f}"
+    action = xosc.TrafficSignalStateAction(name, LIGHT_STATES[state])
+    return story_event("traffic_light", f"traffic_light_{key}", action, at_s)
+
+
+def light_turns_red(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """Yellow at ``yellow_delay_s`` (the ego is 5 m from the light), red after the phase."""
+    yellow_s = params["yellow_delay_s"]
+    return [traffic_light(params, "yellow", "yellow", yellow_s),
+            traffic_light(params, "red", "red", yellow_s + YELLOW_PHASE_S)]
+
+
+# --- the scenario ----------------------------------------------------------------------------
+
+def _environment(weather_key: str) -> xosc.EnvironmentAction:
+    weather = WEATHERS.get(weather_key)
+    if weather is None:
+        raise ValueError(f"weather_key must be one of {sorted(WEATHERS)}, not {weather_key!r}")
+    rain = (xosc.PrecipitationType.rain if weather.rain_intensity else xosc.PrecipitationType.dry)
+    environment = xosc.Environment(
+        weather_key,
+        xosc.TimeOfDay(False, HEADER_DATE.year, HEADER_DATE.month, HEADER_DATE.day,
+                       weather.hour, 0, 0),
+        xosc.Weather(weather.clouds, sun=xosc.Sun(weather.sun_intensity, 1.0,
+                                                  weather.sun_elevation_rad),
+                     fog=xosc.Fog(100000), precipitation=xosc.Precipitation(
+                         rain, weather.rain_intensity)),
+        xosc.RoadCondition(1.0),
+    )
+    return xosc.EnvironmentAction(environment)
+
+
+def _init(actors: list[Actor], weather_key: str) -> xosc.Init:
+    init = xosc.Init()
+    init.add_global_action(_environment(weather_key))
+    start = xosc.TransitionDynamics(xosc.DynamicsShapes.step, xosc.DynamicsDimension.time, 0)
+    for actor in actors:
+        init.add_init_action(actor.name, xosc.TeleportAction(actor.position))
+        init.add_init_action(actor.name, xosc.AbsoluteSpeedAction(actor.speed_ms, start))
+    return init
+
+
+def _act(tag: str, events: Iterable[StoryEvent]) -> xosc.Act:
+    act = xosc.Act(f"{tag}_act", at_time("act_start", 0))
+    maneuvers: dict[str, xosc.Maneuver] = {}
+    for item in events:
+        if item.group not in maneuvers:
+            maneuvers[item.group] = xosc.Maneuver(f"{item.group}_maneuver")
+            group = xosc.ManeuverGroup(f"{item.group}_group")
+            group.add_actor(HERO if item.group == "traffic_light" else item.group)
+            group.add_maneuver(maneuvers[item.group])
+            act.add_maneuver_group(group)
+        maneuvers[item.group].add_event(item.event)
+    return act
+
+
+def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
+                  events: list[StoryEvent]) -> xosc.Scenario:
+    """The OpenSCENARIO 1.0 scenario for CARLA Town04: entities, Init, one Story, stop trigger.
+
+    ``tag`` is the script's corpus tag (names the Story and Act); ``actors`` start where and
+    as fast as given, ``events`` run in the order given within their entity's ManeuverGroup,
+    and the scenario stops at ``timeout_s``.
+    """
+    entities = xosc.Entities()
+    for actor in actors:
+        entities.add_scenario_object(actor.name, _vehicle(actor))
+    story = xosc.Story(f"{tag}_story", xosc.ParameterDeclarations())
+    story.add_act(_act(tag, events))
+    storyboard = xosc.StoryBoard(_init(actors, params["weather_key"]),
+                                 at_time("timeout", params["timeout_s"], "stop"))
+    storyboard.add_story(story)
+    return xosc.Scenario(
+        f"ScenWeave {params['maneuver_class']} {params['scenario_id']}", AUTHOR,
+        xosc.ParameterDeclarations(), entities, storyboard, xosc.RoadNetwork(MAP_NAME),
+        xosc.Catalog(), osc_minor_version=0, creation_date=HEADER_DATE,
+    )
+
+
+def write_scenario(scenario: xosc.Scenario, out_path: str | os.PathLike[str]) -> Path:
+    """Write ``scenario`` to ``out_path`` atomically (temp file in the same folder, replace)."""
+    path = Path(out_path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    element = scenario.get_element()
+    ET.indent(element, space="  ")
+    data = ET.tostring(element, encoding="utf-8", xml_declaration=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path

@@ -1,0 +1,28 @@
+"""Highway hard braking: the lead vehicle ahead of the ego brakes (BRAKE, BR_BK).
+
+The ego drives on a multi-lane highway behind a lead vehicle in its own lane,
+npc_distance_m ahead. Both start at their recorded speeds. At maneuver_start_s the lead
+brakes hard (slams on the brakes, decelerates, slows down sharply) from npc_speed_ms to
+npc_end_speed_ms within duration_s, while the ego keeps or changes its speed as recorded.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "brake"
+
+
+def generate(params, out_path):
+    """Build the braking scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    lead = highway_npc(params)
+    events = [hero_speed_profile(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, lead], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,29 @@
+"""Highway cut-in in front (CINF): a car from the next lane cuts into my lane just ahead.
+
+The ego drives on a multi-lane highway. A vehicle in the adjacent lane, npc_distance_m
+ahead of the ego, cuts in: at maneuver_start_s it changes lanes toward lane_change_direction
+into the ego's lane within duration_s, squeezing in front of the ego, while its speed goes
+from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_lane_change,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "cut_in_front"
+
+
+def generate(params, out_path):
+    """Build the cut-in-in-front scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    cutter = highway_npc(params)
+    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, cutter], events=events)
+    return write_scenario(scenario, out_path)

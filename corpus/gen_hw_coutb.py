@@ -1,0 +1,29 @@
+"""Highway cut-out behind: the vehicle following the ego in its lane pulls out to the side (COUTB).
+
+The ego drives on a multi-lane highway with a vehicle behind it in the same lane
+(npc_distance_m is negative). At maneuver_start_s the follower cuts out: it changes lanes
+toward lane_change_direction within duration_s, leaving the ego's lane, while its speed goes
+from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_lane_change,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "cut_out_behind"
+
+
+def generate(params, out_path):
+    """Build the cut-out-behind scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    follower = highway_npc(params)
+    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, follower], events=events)
+    return write_scenario(scenario, out_path)

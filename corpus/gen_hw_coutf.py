@@ -1,0 +1,30 @@
+"""Highway cut-out in front (COUTF): the car ahead in my lane moves out to the next lane.
+
+The ego drives on a multi-lane highway behind a vehicle in its own lane, npc_distance_m
+ahead. At maneuver_start_s that vehicle cuts out: it changes lanes toward
+lane_change_direction within duration_s and clears the ego's lane, its speed going from
+npc_speed_ms to npc_end_speed_ms. With the lane ahead free, the ego speeds up slightly to
+ego_end_speed_ms.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_lane_change,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "cut_out_front"
+
+
+def generate(params, out_path):
+    """Build the cut-out-in-front scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    leaver = highway_npc(params)
+    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, leaver], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,28 @@
+"""Highway car following from behind: a vehicle follows the ego in its lane (FLB).
+
+The ego drives on a multi-lane highway with a following vehicle behind it in the same lane
+(npc_distance_m is negative, the follower tails the ego). From maneuver_start_s, over
+duration_s, the follower's speed goes from npc_speed_ms to npc_end_speed_ms and the ego's
+from ego_speed_ms to ego_end_speed_ms, so the follower closes in or falls back as recorded.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "follow_behind"
+
+
+def generate(params, out_path):
+    """Build the followed-from-behind scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    follower = highway_npc(params)
+    events = [hero_speed_profile(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, follower], events=events)
+    return write_scenario(scenario, out_path)

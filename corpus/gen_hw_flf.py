@@ -1,0 +1,28 @@
+"""Highway car following: the ego follows a lead vehicle ahead in its lane (FLF).
+
+The ego drives on a multi-lane highway behind a lead vehicle in the same lane,
+npc_distance_m ahead. From maneuver_start_s, over duration_s, the lead's speed goes from
+npc_speed_ms to npc_end_speed_ms and the ego's from ego_speed_ms to ego_end_speed_ms, so the
+gap between them opens or closes as recorded.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    highway_npc,
+    lane_position,
+    make_scenario,
+    npc_speed_profile,
+    write_scenario,
+)
+
+TAG = "follow_front"
+
+
+def generate(params, out_path):
+    """Build the following-a-lead scenario from ``params`` and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    lead = highway_npc(params)
+    events = [hero_speed_profile(params), npc_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, lead], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,27 @@
+"""Highway free ride with traffic ahead: the ego cruises with vehicles in front (FRF).
+
+The ego drives freely on a multi-lane highway. Up to three vehicles ride ahead of it: one
+in the ego lane (center), one in the lane to the right and one in the lane to the left,
+each present only when the record saw it. From maneuver_start_s, over duration_s, every
+vehicle goes from its start speed to its end speed, and so does the ego.
+"""
+
+from corpus.corpus_utils import (
+    free_ride_traffic,
+    hero,
+    hero_speed_profile,
+    lane_position,
+    make_scenario,
+    write_scenario,
+)
+
+TAG = "free_ride_front"
+
+
+def generate(params, out_path):
+    """Build the free-ride-with-traffic-ahead scenario and write it to ``out_path``."""
+    ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
+    traffic, traffic_events = free_ride_traffic(params)
+    events = [hero_speed_profile(params), *traffic_events]
+    scenario = make_scenario(params, TAG, actors=[ego, *traffic], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,25 @@
+"""Urban in-lane driving: the ego follows its lane through town, maybe behind a lead car (U1_1).
+
+The ego drives along its lane on an urban road, with no traffic light involved. It starts
+at init_speed_ms and its speed goes to final_speed_ms over duration_s. When the record had a
+lead vehicle, that vehicle drives lead_distance_m ahead of the ego at lead_speed_ms.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    make_scenario,
+    urban_lead,
+    world_position,
+    write_scenario,
+)
+
+TAG = "in_lane_driving"
+
+
+def generate(params, out_path):
+    """Build the urban in-lane driving scenario and write it to ``out_path``."""
+    ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
+    events = [hero_speed_profile(params)]
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    return write_scenario(scenario, out_path)

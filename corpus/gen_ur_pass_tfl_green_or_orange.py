@@ -1,0 +1,31 @@
+"""Urban pass at a green or orange traffic light: the ego drives through without stopping (U4_2).
+
+The ego approaches a signalised intersection at init_speed_ms and drives through it, its
+speed going to final_speed_ms over duration_s. The light is green; when the record saw it
+orange (tfl_state), it turns yellow after yellow_delay_s, as the ego is about 5 m before it,
+so the ego crosses on orange, and red a few seconds later. A lead vehicle drives ahead when
+the record had one.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    light_turns_red,
+    make_scenario,
+    traffic_light,
+    urban_lead,
+    world_position,
+    write_scenario,
+)
+
+TAG = "pass_tfl_green_or_orange"
+
+
+def generate(params, out_path):
+    """Build the pass-on-green-or-orange scenario and write it to ``out_path``."""
+    ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
+    events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
+    if params["tfl_state"] == "orange":
+        events += light_turns_red(params)
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    return write_scenario(scenario, out_path)

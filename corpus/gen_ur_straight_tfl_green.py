@@ -1,0 +1,26 @@
+"""Urban straight crossing at a green light (U4_3): the ego goes straight through the junction.
+
+The ego approaches a signalised intersection at init_speed_ms while the traffic light is
+green and goes straight across, its speed going to final_speed_ms over duration_s. A lead
+vehicle drives ahead when the record had one.
+"""
+
+from corpus.corpus_utils import (
+    hero,
+    hero_speed_profile,
+    make_scenario,
+    traffic_light,
+    urban_lead,
+    world_position,
+    write_scenario,
+)
+
+TAG = "straight_tfl_green"
+
+
+def generate(params, out_path):
+    """Build the straight-on-green scenario and write it to ``out_path``."""
+    ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
+    events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,34 @@
+"""Urban right turn at a green traffic light: the ego turns right at the intersection (U4_4).
+
+The ego approaches a signalised intersection at init_speed_ms while the traffic light is
+green and turns right into the crossing road: it is routed to a point past the junction on
+its right, its speed going to final_speed_ms over duration_s. A lead vehicle drives ahead
+when the record had one.
+"""
+
+from corpus.corpus_utils import (
+    HERO,
+    drive_to,
+    hero,
+    hero_speed_profile,
+    make_scenario,
+    right_turn_target,
+    traffic_light,
+    urban_lead,
+    world_position,
+    write_scenario,
+)
+
+TAG = "turn_right_at_tfl_green"
+
+
+def generate(params, out_path):
+    """Build the right-turn-on-green scenario and write it to ``out_path``."""
+    ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
+    events = [
+        hero_speed_profile(params),
+        drive_to(HERO, "hero_turn_right", right_turn_target(params), params["maneuver_start_s"]),
+        traffic_light(params, "initial", "green", 0.0),
+    ]
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    return write_scenario(scenario, out_path)

@@ -1,0 +1,197 @@
+"""Pick the reference script for a manoeuvre: keyword, then tag table, then semantic similarity.
+
+Thesis Table 5.4, with a real embedding model for the last level:
+1. keyword: the lower-cased ``maneuver_class`` is a substring of exactly one script name
+   (``CINF`` -> ``gen_hw_cinf.py``);
+2. tag: ``MANEUVER_TAGS`` maps ``maneuver_tag`` to a script (``BR_BK`` has tag ``brake``);
+3. semantic: cosine similarity between the query and the scripts' docstrings, embedded with
+   all-MiniLM-L6-v2 (see ``corpus.embedding``; the docstring embeddings are cached).
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import importlib
+import os
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from corpus.errors import CorpusError, ParamsError
+
+CORPUS_DIR = Path(__file__).resolve().parent
+
+#: maneuver_tag -> reference script (docs/params.md, "Corpus tags")
+MANEUVER_TAGS: dict[str, str] = {
+    "brake": "gen_hw_brake.py",
+    "cut_in_front": "gen_hw_cinf.py",
+    "cut_in_behind": "gen_hw_cinb.py",
+    "cut_out_front": "gen_hw_coutf.py",
+    "cut_out_behind": "gen_hw_coutb.py",
+    "lane_change_front": "gen_hw_lcf.py",
+    "lane_change_behind": "gen_hw_lcb.py",
+    "follow_front": "gen_hw_flf.py",
+    "follow_behind": "gen_hw_flb.py",
+    "free_ride_front": "gen_hw_frf.py",
+    "free_ride_behind": "gen_hw_frb.py",
+    "in_lane_driving": "gen_ur_in_lane_driving.py",
+    "stop_at_tfl_red": "gen_ur_stop_at_tfl_red.py",
+    "pass_tfl_green_or_orange": "gen_ur_pass_tfl_green_or_orange.py",
+    "straight_tfl_green": "gen_ur_straight_tfl_green.py",
+    "turn_right_at_tfl_green": "gen_ur_turn_right_at_tfl_green.py",
+}
+#: maneuver_class -> maneuver_tag (docs/params.md), for queries that give only a class code
+CLASS_TAGS: dict[str, str] = {
+    "BRAKE": "brake", "BR_BK": "brake", "CINF": "cut_in_front", "CINB": "cut_in_behind",
+    "COUTF": "cut_out_front", "COUTB": "cut_out_behind", "LCF": "lane_change_front",
+    "LCB": "lane_change_behind", "FLF": "follow_front", "FLB": "follow_behind",
+    "FRF": "free_ride_front", "FRB": "free_ride_behind", "U1_1": "in_lane_driving",
+    "U4_1": "stop_at_tfl_red", "U4_2": "pass_tfl_green_or_orange",
+    "U4_3": "straight_tfl_green", "U4_4": "turn_right_at_tfl_green",
+}
+
+
+@dataclass(frozen=True)
+class Retrieval:
+    """The chosen reference script, its source, how it was found and how sure that is (0..1)."""
+
+    script_path: Path
+    source: str
+    method: str
+    score: float
+
+
+def list_scripts() -> list[Path]:
+    """The reference scripts of the corpus, sorted by name."""
+    return sorted(CORPUS_DIR.glob("gen_*.py"))
+
+
+def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
+    """The reference script for a params dict or for a class code, tag or free-text query."""
+    if isinstance(params_or_query, str):
+        code = query = params_or_query.strip()
+        tag = CLASS_TAGS.get(code.upper(), code)
+    else:
+        code = str(params_or_query.get("maneuver_class") or "")
+        tag = str(params_or_query.get("maneuver_tag") or CLASS_TAGS.get(code.upper(), ""))
+        query = _params_query(params_or_query)
+    found = _by_keyword(code) or _by_tag(tag)
+    if found is not None:
+        return found
+    return retrieve_semantic(query)
+
+
+def generate(params: Mapping[str, Any], out_path: str | os.PathLike[str]) -> Path:
+    """Run the retrieved reference script in-process: the deterministic (``--no-llm``) path.
+
+    Params the script cannot use raise ``ParamsError`` naming the scenario, script and key.
+    """
+    script = retrieve(params).script_path
+    module = importlib.import_module(f"corpus.{script.stem}")
+    try:
+        return Path(module.generate(dict(params), out_path))
+    except KeyError as err:
+        raise ParamsError(f"{_who(params, script)}: missing params key {err.args[0]!r}") from err
+    except (TypeError, ValueError) as err:
+        raise ParamsError(f"{_who(params, script)}: {err}") from err
+
+
+def _who(params: Mapping[str, Any], script: Path) -> str:
+    return f"scenario {params.get('scenario_id', '?')} ({script.name})"
+
+
+def _read(path: Path, method: str, score: float) -> Retrieval:
+    return Retrieval(path, _source(path), method, score)
+
+
+@cache
+def _source(path: Path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+def _by_keyword(code: str) -> Retrieval | None:
+    key = code.lower()
+    if not key or " " in key:
+        return None
+    hits = [path for path in list_scripts() if key in path.stem]
+    if len(hits) > 1:  # several names contain it: only a whole name part is unambiguous
+        hits = [path for path in hits if key in path.stem.split("_")]
+    return _read(hits[0], "keyword", 1.0) if len(hits) == 1 else None
+
+
+def _by_tag(tag: str) -> Retrieval | None:
+    name = MANEUVER_TAGS.get(tag.lower())
+    return _read(CORPUS_DIR / name, "tag", 1.0) if name else None
+
+
+def _params_query(params: Mapping[str, Any]) -> str:
+    """Thesis query form: "{maneuver} speed {v} m/s distance {d} m"."""
+    maneuver = (params.get("description") or params.get("maneuver_tag") or
+                params.get("maneuver_class") or "driving")
+    speed = params.get("ego_speed_ms") or 0.0
+    distance = params.get("npc_distance_m") or params.get("lead_distance_m") or 0.0
+    return f"{str(maneuver).replace('_', ' ')} speed {speed:.1f} m/s distance {distance:.1f} m"
+
+
+def docstring(path: Path) -> str:
+    """The module docstring of a reference script: the text semantic retrieval compares with."""
+    return ast.get_docstring(ast.parse(_source(path))) or path.stem
+
+
+def retrieve_semantic(query: str) -> Retrieval:
+    """The script whose docstring is most similar to ``query`` (cosine, all-MiniLM-L6-v2)."""
+    from corpus.embedding import encoder
+
+    scripts, matrix = _docstring_embeddings()
+    scores = matrix @ encoder().encode([query])[0]
+    best = int(np.argmax(scores))
+    return _read(scripts[best], "semantic", float(scores[best]))
+
+
+@cache
+def _docstring_embeddings() -> tuple[list[Path], np.ndarray]:
+    scripts = list_scripts()
+    if not scripts:
+        raise CorpusError(f"no reference scripts gen_*.py in {CORPUS_DIR}")
+    texts = [docstring(path) for path in scripts]
+    cache_file = _cache_dir() / f"corpus-docstrings-{_digest(texts)}.npy"
+    if cache_file.exists():
+        return scripts, np.load(cache_file)
+    from corpus.embedding import encoder
+
+    matrix = encoder().encode(texts)
+    _save_atomically(cache_file, matrix)
+    return scripts, matrix
+
+
+def _cache_dir() -> Path:
+    home = os.environ.get("SCENWEAVE_HOME") or Path.home() / ".scenweave"
+    return Path(home) / "cache"
+
+
+def _digest(texts: list[str]) -> str:
+    from corpus.embedding import model_dir
+
+    weights = model_dir() / "model.safetensors"
+    key = "\0".join([str(weights.stat().st_size), *texts])
+    return hashlib.sha256(key.encode("utf-8")).hexdigest()[:16]
+
+
+def _save_atomically(path: Path, matrix: np.ndarray) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError:
+        return  # a read-only home only costs recomputing the 16 embeddings next time
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            np.save(handle, matrix)
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)

@@ -1,0 +1,280 @@
+"""Every reference script writes a valid OpenSCENARIO 1.0 file whose numbers are the params'.
+
+The expected storyboard below restates docs/scenario-conventions.md independently of
+corpus_utils, so a change of convention on one side only makes these tests fail.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from lxml import etree
+from scenariogeneration import xosc
+
+import corpus
+from corpus import CorpusError
+from tests.corpus.params_examples import HIGHWAY_CLASSES, TAGS, example_params
+
+ALL_CLASSES = list(TAGS)
+BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
+              "van": "vehicle.mercedes.sprinter", "motorcycle": "vehicle.yamaha.yzf"}
+
+
+def _write(code: str, tmp_path: Path, **changes) -> tuple[dict, etree._ElementTree]:
+    params = example_params(code) | changes
+    path = corpus.generate(params, tmp_path / f"{code}.xosc")
+    return params, etree.parse(str(path))
+
+
+def _action(doc: etree._ElementTree, name: str) -> etree._Element:
+    (action,) = doc.findall(f".//Story//Action[@name='{name}']")
+    return action
+
+
+def _start_time(doc: etree._ElementTree, key: str) -> float:
+    (condition,) = doc.findall(f".//Condition[@name='{key}_start']")
+    return float(condition.find(".//SimulationTimeCondition").get("value"))
+
+
+def _expected_events(p: dict) -> dict[str, tuple]:
+    """Action name -> the values the conventions promise for it."""
+    code, start, dur = p["maneuver_class"], p["maneuver_start_s"], p["duration_s"]
+    events = {"hero_speed_change": ("speed", p["ego_end_speed_ms"], dur, start)}
+
+    def lane_change(entity: str, v0: float, v1: float) -> tuple:
+        sign = -1 if p["lane_change_direction"] == "left" else 1
+        return ("lane", sign, max(5.0, (v0 + v1) / 2 * dur), start)
+
+    if code in ("BRAKE", "BR_BK", "FLF", "FLB", "CINF", "CINB", "COUTF", "COUTB"):
+        events["npc_speed_change"] = ("speed", p["npc_end_speed_ms"], dur, start)
+    if code in ("CINF", "CINB", "COUTF", "COUTB"):
+        events["npc_lane_change"] = lane_change("npc", p["npc_speed_ms"], p["npc_end_speed_ms"])
+    if code in ("LCF", "LCB"):
+        events["hero_lane_change"] = lane_change("hero", p["ego_speed_ms"], p["ego_end_speed_ms"])
+    if code in ("FRF", "FRB"):
+        for slot in ("center", "right", "left"):
+            if p[f"{slot}_present"]:
+                events[f"npc_{slot}_speed_change"] = ("speed", p[f"{slot}_end_speed_ms"], dur,
+                                                      start)
+    if code == "U4_1":
+        events["hero_speed_change"] = ("speed", 0.0, p["brake_time_s"], start)
+    if code in ("U4_1", "U4_2", "U4_3", "U4_4"):
+        events["traffic_light_initial"] = ("light", "green", 0.0)
+    if code == "U4_1" or (code == "U4_2" and p["tfl_state"] == "orange"):
+        events["traffic_light_yellow"] = ("light", "yellow", p["yellow_delay_s"])
+        events["traffic_light_red"] = ("light", "red", p["yellow_delay_s"] + 3.0)
+    if code == "U4_4":
+        events["hero_turn_right"] = ("route", start)
+    return events
+
+
+@pytest.mark.parametrize("code", ALL_CLASSES)
+def test_scenario_validates_against_the_1_0_xsd(code, tmp_path, xsd_1_0):
+    _, doc = _write(code, tmp_path)
+    assert xsd_1_0.validate(doc), xsd_1_0.error_log
+    header = doc.find("FileHeader")
+    assert (header.get("revMajor"), header.get("revMinor")) == ("1", "0")
+    assert doc.find("RoadNetwork/LogicFile").get("filepath") == "Town04"
+
+
+@pytest.mark.parametrize("code", ALL_CLASSES)
+def test_scenario_round_trips_through_the_scenariogeneration_parser(code, tmp_path):
+    path = corpus.generate(example_params(code), tmp_path / "a.xosc")
+    parsed = xosc.ParseOpenScenario(str(path))
+    rewritten = etree.fromstring(ET.tostring(parsed.get_element(), encoding="utf-8"))
+    assert _first_difference(rewritten, etree.parse(str(path)).getroot()) is None
+
+
+def _first_difference(a: etree._Element, b: etree._Element, where: str = "") -> str | None:
+    """Where two trees first differ (numbers compared as numbers), or None when they match."""
+    where = f"{where}/{a.tag}"
+    if a.tag != b.tag or set(a.attrib) != set(b.attrib) or len(a) != len(b):
+        return f"{where}: {a.tag}{dict(a.attrib)}[{len(a)}] vs {b.tag}{dict(b.attrib)}[{len(b)}]"
+    for key, value in a.attrib.items():
+        if (a.tag, key) == ("FileHeader", "date"):  # the parser does not keep the header date
+            continue
+        other = b.get(key)
+        try:
+            same = math.isclose(float(value), float(other), abs_tol=1e-9)
+        except ValueError:
+            same = value == other
+        if not same:
+            return f"{where}@{key}: {value} vs {other}"
+    for x, y in zip(a, b, strict=True):
+        found = _first_difference(x, y, where)
+        if found:
+            return found
+    return None
+
+
+@pytest.mark.parametrize("code", ALL_CLASSES)
+def test_entities_and_init_carry_the_spawn_and_start_speeds(code, tmp_path):
+    p, doc = _write(code, tmp_path)
+    names = [obj.get("name") for obj in doc.findall("Entities/ScenarioObject")]
+    assert names[0] == "hero"
+    hero = doc.find("Entities/ScenarioObject[@name='hero']/Vehicle")
+    assert hero.get("name") == "vehicle.tesla.model3"
+    assert hero.find("Properties/Property[@name='type']").get("value") == "ego_vehicle"
+    expected = {"hero": ("ego", p["ego_speed_ms"])}
+    if p.get("has_npc"):
+        expected["npc"] = ("npc", p["npc_speed_ms"])
+    for slot in ("center", "right", "left"):
+        if p.get(f"{slot}_present"):
+            expected[f"npc_{slot}"] = (slot, p[f"{slot}_speed_ms"])
+    if p.get("lead_present"):
+        expected["lead"] = (None, p["lead_speed_ms"])
+    assert names == list(expected)
+    for name, (actor, speed) in expected.items():
+        private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
+        assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
+        position = private.find(".//TeleportAction/Position")[0]
+        if p["domain"] == "highway":
+            assert position.tag == "LanePosition"
+            assert (int(position.get("roadId")), int(position.get("laneId")),
+                    float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],
+                                                  p[f"{actor}_s"])
+        elif name == "hero":
+            assert position.tag == "WorldPosition"
+            assert [float(position.get(k)) for k in "xyzh"] == [p[f"ego_{k}"] for k in "xyzh"]
+        else:  # the urban lead, lead_distance_m along the ego heading
+            x, y = (float(position.get(k)) for k in "xy")
+            assert math.hypot(x - p["ego_x"], y - p["ego_y"]) == pytest.approx(
+                p["lead_distance_m"])
+            assert math.atan2(y - p["ego_y"], x - p["ego_x"]) == pytest.approx(p["ego_h"])
+        if actor in ("npc", "center", "right", "left"):
+            vehicle_type = p[f"{actor}_vehicle_type"]
+            blueprint = doc.find(f"Entities/ScenarioObject[@name='{name}']/Vehicle").get("name")
+            assert blueprint == BLUEPRINTS[vehicle_type]
+
+
+@pytest.mark.parametrize("code", ALL_CLASSES)
+def test_storyboard_events_carry_the_params(code, tmp_path):
+    p, doc = _write(code, tmp_path)
+    expected = _expected_events(p)
+    actions = {a.get("name") for a in doc.findall(".//Story//Action")}
+    assert actions == set(expected)
+    for name, (kind, *values) in expected.items():
+        action = _action(doc, name)
+        if kind == "speed":
+            target, duration, start = values
+            assert float(action.find(".//AbsoluteTargetSpeed").get("value")) == target
+            dynamics = action.find(".//SpeedActionDynamics")
+            assert dynamics.get("dynamicsDimension") == "time"
+            assert float(dynamics.get("value")) == duration
+        elif kind == "lane":
+            sign, length, start = values
+            assert int(action.find(".//RelativeTargetLane").get("value")) == sign
+            dynamics = action.find(".//LaneChangeActionDynamics")
+            assert dynamics.get("dynamicsDimension") == "distance"
+            assert float(dynamics.get("value")) == pytest.approx(length)
+        elif kind == "light":
+            state, start = values
+            signal = action.find(".//TrafficSignalStateAction")
+            assert signal.get("state") == state
+            x, y = signal.get("name").removeprefix("pos=").split(",")
+            assert (float(x), float(y)) == (p["tfl_x_carla"], p["tfl_y_carla"])
+        else:
+            (start,) = values
+            assert action.find(".//AcquirePositionAction/Position/WorldPosition") is not None
+        assert _start_time(doc, name) == start
+    stop = doc.find("Storyboard/StopTrigger//Condition[@name='timeout']")
+    assert float(stop.find(".//SimulationTimeCondition").get("value")) == p["timeout_s"]
+
+
+@pytest.mark.parametrize(("code", "direction", "sign"),
+                         [("CINF", "right", 1), ("COUTB", "left", -1), ("LCB", "left", -1)])
+def test_lane_change_goes_to_the_recorded_side(code, direction, sign, tmp_path):
+    _, doc = _write(code, tmp_path, lane_change_direction=direction)
+    entity = "hero" if code.startswith("LC") else "npc"
+    target = _action(doc, f"{entity}_lane_change").find(".//RelativeTargetLane")
+    assert int(target.get("value")) == sign
+    assert target.get("entityRef") == entity
+
+
+def test_pass_on_green_keeps_the_light_green(tmp_path):
+    _, doc = _write("U4_2", tmp_path, tfl_state="green")
+    states = [s.get("state") for s in doc.findall(".//TrafficSignalStateAction")]
+    assert states == ["green"]
+
+
+def test_right_turn_target_lies_ahead_and_to_the_right_of_the_ego(tmp_path):
+    p, doc = _write("U4_4", tmp_path)
+    target = _action(doc, "hero_turn_right").find(".//WorldPosition")
+    dx, dy = float(target.get("x")) - p["ego_x"], float(target.get("y")) - p["ego_y"]
+    heading = p["ego_h"]
+    ahead = dx * math.cos(heading) + dy * math.sin(heading)
+    right = dx * math.sin(heading) - dy * math.cos(heading)
+    assert ahead > p["spawn_stop_line_distance_m"]
+    assert right > 0
+
+
+@pytest.mark.parametrize("weather", ["Day_Clear", "Day_Cloudy", "Day_Rain", "Night_Clear",
+                                     "Night_Rain"])
+def test_weather_key_names_the_environment(weather, tmp_path, xsd_1_0):
+    _, doc = _write("FLF", tmp_path, weather_key=weather)
+    assert xsd_1_0.validate(doc)
+    environment = doc.find("Storyboard/Init/Actions/GlobalAction/EnvironmentAction/Environment")
+    assert environment.get("name") == weather
+    rain = environment.find("Weather/Precipitation").get("precipitationType")
+    assert (rain == "rain") == weather.endswith("Rain")
+    hour = environment.find("TimeOfDay").get("dateTime")[11:13]
+    assert (hour == "22") == weather.startswith("Night")
+
+
+def test_same_params_give_byte_identical_files(tmp_path):
+    first = corpus.generate(example_params("CINB"), tmp_path / "a.xosc").read_bytes()
+    second = corpus.generate(example_params("CINB"), tmp_path / "b.xosc").read_bytes()
+    assert first == second
+
+
+def test_write_is_atomic_and_creates_the_folder(tmp_path):
+    out = tmp_path / "new" / "folder" / "s.xosc"
+    corpus.generate(example_params("BRAKE"), out)
+    assert [f.name for f in out.parent.iterdir()] == ["s.xosc"]
+
+
+def test_missing_param_names_the_key_and_the_scenario(tmp_path):
+    params = example_params("CINF")
+    del params["npc_speed_ms"]
+    with pytest.raises(CorpusError, match=r"CINF_example_row000007.*npc_speed_ms"):
+        corpus.generate(params, tmp_path / "x.xosc")
+    assert not list(tmp_path.iterdir())
+
+
+def test_bad_direction_is_a_clear_error(tmp_path):
+    params = example_params("LCF") | {"lane_change_direction": "up"}
+    with pytest.raises(CorpusError, match="lane_change_direction"):
+        corpus.generate(params, tmp_path / "x.xosc")
+
+
+@pytest.mark.parametrize("script", corpus.list_scripts(), ids=lambda p: p.stem)
+def test_scripts_import_only_corpus_utils(script):
+    """They also run in the sandbox, where only ``corpus`` and scenariogeneration exist."""
+    tree = ast.parse(script.read_text(encoding="utf-8"))
+    modules = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    modules |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
+                for alias in node.names}
+    assert modules <= {"corpus.corpus_utils", "pathlib"}
+    assert ast.get_docstring(tree)
+    assert any(isinstance(n, ast.FunctionDef) and n.name == "generate" for n in tree.body)
+
+
+def test_corpus_utils_imports_nothing_else_from_scenweave():
+    source = Path(corpus.__file__).with_name("corpus_utils.py").read_text(encoding="utf-8")
+    tree = ast.parse(source)
+    roots = {(node.module or "").split(".")[0] for node in ast.walk(tree)
+             if isinstance(node, ast.ImportFrom)}
+    roots |= {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
+              for alias in node.names}
+    assert not roots & {"scenweave", "ingest", "agent", "sandbox", "schemas", "spawn_db"}
+
+
+def test_there_are_sixteen_scripts_covering_every_class():
+    names = {path.name for path in corpus.list_scripts()}
+    assert len(names) == 16
+    for code in HIGHWAY_CLASSES:
+        assert corpus.retrieve(code).script_path.name in names

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ingest.atomic import write_json_atomic
-from ingest.extract import extract_params
 from ingest.highway import DEFAULT_BINNING, canonicalize_highway_file, iter_highway_files
 from ingest.issues import IngestError, IngestReport, Issue, RecordIssue
 from ingest.layouts import HighwayLayouts, load_layouts
@@ -59,7 +58,6 @@ def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[R
         row = record.get("source", {}).get("row_index")
         try:
             check_record(record)
-            extract_params(record)
         except RecordIssue as issue:
             report.add([Issue(file=file, row=row, field=issue.field, message=issue.message)])
             continue

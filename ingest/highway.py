@@ -65,8 +65,10 @@ def canonicalize_highway_file(path: Path, layouts: HighwayLayouts,
                                  rows=array.shape[0] if array.ndim else 0)
     columns, issues = _parse_columns(array, layout, name)
     bad_rows = {i.row for i in issues}
-    records = [_record(layout, columns, row, path.stem, name, binning)
-               for row in range(array.shape[0]) if row not in bad_rows]
+    as_lists = [columns[n].tolist() for n in layout.names]  # Python floats/str, once per column
+    records = [_record(layout, dict(zip(layout.names, values, strict=True)), row, path.stem,
+                       name, binning)
+               for row, values in enumerate(zip(*as_lists, strict=True)) if row not in bad_rows]
     return HighwayFileResult(code, records, issues, rows=array.shape[0])
 
 
@@ -137,9 +139,8 @@ def _parse_enum(cells: np.ndarray, column: Column) -> tuple[np.ndarray, list[tup
     return stripped, problems
 
 
-def _record(layout: ClassLayout, columns: dict[str, np.ndarray], row: int, stem: str,
-            file: str, binning: str) -> dict:
-    params = {name: _plain(columns[name][row]) for name in layout.names}
+def _record(layout: ClassLayout, params: dict, row: int, stem: str, file: str,
+            binning: str) -> dict:
     has_npc, npc_position = _npc_presence(layout, params)
     return {
         "schema_version": SCHEMA_VERSION,
@@ -154,10 +155,6 @@ def _record(layout: ClassLayout, columns: dict[str, np.ndarray], row: int, stem:
         "behavior_type": params.get("behavior_type") if layout.family == "FL" else None,
         "params": params,
     }
-
-
-def _plain(value: object) -> object:
-    return float(value) if isinstance(value, np.floating) else value
 
 
 def _npc_presence(layout: ClassLayout, params: dict) -> tuple[bool, str | None]:

@@ -18,6 +18,7 @@ COMMANDS: dict[str, str] = {
     "sample-data": "scenweave.commands.sample_data:sample_data",
     "ingest": "scenweave.commands.ingest:ingest",
     "demo": "scenweave.commands.demo:demo",
+    "run": "scenweave.commands.run:run",
 }
 
 

@@ -1,0 +1,49 @@
+"""``scenweave run DATA``: records in, validated scenarios out, in ``runs/<run_id>/``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from scenweave.inputs import InputSelection
+from scenweave.pipeline import PipelineSettings
+from scenweave.runner import run_batch
+
+
+@click.command("run")
+@click.argument("data", type=click.Path(exists=True, path_type=Path))
+@click.option("--out", "out_root", default="runs", show_default=True,
+              type=click.Path(file_okay=False, path_type=Path), help="Folder for run folders.")
+@click.option("--no-llm", is_flag=True, help="Run the reference scripts directly (thesis §5).")
+@click.option("--run-id", help="Name of the run folder; an existing one is resumed.")
+@click.option("--classes", help="Comma-separated class codes to run, e.g. BRAKE,CINF,U4_1.")
+@click.option("--per-class", type=click.IntRange(1), help="At most N records per class.")
+@click.option("--limit", type=click.IntRange(1), help="At most N scenarios in all.")
+@click.option("--variants", default=0, show_default=True, type=click.IntRange(0),
+              help="Perturbed copies per record (extract_with_variants).")
+@click.option("--seed", default=0, show_default=True, help="Seed for the variants.")
+@click.option("--layout", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Highway column-layout JSON for raw .npy input.")
+@click.option("--top-n", default=5, show_default=True, type=click.IntRange(1),
+              help="Spawn candidates shared round robin per class.")
+@click.option("--retry-failed", is_flag=True, help="On resume, run failed scenarios again.")
+@click.option("--json", "as_json", is_flag=True, help="Print summary.json instead of a line.")
+def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: str | None,
+        per_class: int | None, limit: int | None, variants: int, seed: int,
+        layout: Path | None, top_n: int, retry_failed: bool, as_json: bool) -> None:
+    """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios."""
+    if not no_llm:
+        raise click.UsageError("only --no-llm is available in this build; pass --no-llm")
+    selection = InputSelection(
+        classes=tuple(c.strip() for c in classes.split(",")) if classes else (),
+        per_class=per_class, limit=limit, variants=variants, seed=seed, layout=layout)
+    result = run_batch(data, out_root, selection, PipelineSettings(no_llm=True, top_n=top_n),
+                       run_id=run_id, retry_failed=retry_failed)
+    if as_json:
+        click.echo(json.dumps(result.summary, indent=1))
+    else:
+        for issue in result.input_issues[:10]:
+            click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
+        click.echo(result.line())

@@ -1,0 +1,101 @@
+"""What ``scenweave run DATA`` reads: raw MOOVE data or canonical records, as params dicts."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ingest import (
+    IngestReport,
+    Issue,
+    extract_params,
+    extract_with_variants,
+    iter_raw_records,
+    load_layouts,
+    load_records,
+)
+from ingest.issues import IngestError, RecordIssue
+
+
+@dataclass
+class InputSelection:
+    """Which records to turn into scenarios."""
+
+    classes: tuple[str, ...] = ()
+    per_class: int | None = None
+    limit: int | None = None
+    variants: int = 0
+    seed: int = 0
+    layout: Path | None = None
+
+
+@dataclass
+class LoadedInput:
+    """Params to run, in input order, and the problems met while reading the input."""
+
+    params: list[dict] = field(default_factory=list)
+    report: IngestReport = field(default_factory=IngestReport)
+    kind: str = "raw"
+
+
+def is_raw(data: Path) -> bool:
+    """Raw MOOVE data has .npy files or urban class folders; canonical data has JSON records."""
+    if data.is_file():
+        return data.suffix == ".npy"
+    candidates = [data, data / "highway", data / "urban"]
+    if any(any(c.glob("*.npy")) for c in candidates if c.is_dir()):
+        return True
+    return any(p.is_dir() and p.name.startswith("U") for c in candidates if c.is_dir()
+               for p in c.iterdir())
+
+
+def load_input(data: Path, selection: InputSelection) -> LoadedInput:
+    """Read ``data`` and return the selected params (variants included) and input issues."""
+    loaded = LoadedInput(kind="raw" if is_raw(data) else "canonical")
+    counts: dict[str, int] = {}
+    for record, file in _records(data, loaded, selection):
+        code = record.get("maneuver_class")
+        if selection.classes and code not in selection.classes:
+            continue
+        if selection.per_class is not None and counts.get(code, 0) >= selection.per_class:
+            continue
+        try:
+            params = _with_variants(record, selection)
+        except (RecordIssue, KeyError, TypeError) as err:
+            loaded.report.add([_issue(record, file, err)])
+            continue
+        counts[code] = counts.get(code, 0) + 1
+        loaded.params.extend(params)
+        if selection.limit is not None and len(loaded.params) >= selection.limit:
+            del loaded.params[selection.limit:]
+            break
+    return loaded
+
+
+def _records(data: Path, loaded: LoadedInput,
+             selection: InputSelection) -> Iterator[tuple[dict, str]]:
+    if loaded.kind == "raw":
+        if data.is_file():
+            raise IngestError(f"{data}: give the folder that holds the .npy files")
+        layouts = load_layouts(selection.layout)
+        for item in iter_raw_records(data, loaded.report, layouts):
+            yield item.record, item.file
+    else:
+        for record in load_records(data):
+            yield record, str(record.get("source", {}).get("file") or data)
+
+
+def _with_variants(record: dict, selection: InputSelection) -> list[dict]:
+    base = extract_params(record)
+    if not selection.variants:
+        return [base]
+    return [base, *extract_with_variants(record, selection.variants, selection.seed)]
+
+
+def _issue(record: dict, file: str, err: Exception) -> Issue:
+    field_name = getattr(err, "field", None) or (str(err.args[0]) if isinstance(err, KeyError)
+                                                 else None)
+    message = getattr(err, "message", None) or f"cannot extract params: {err}"
+    return Issue(file=file, row=record.get("source", {}).get("row_index"), field=field_name,
+                 message=f"{record.get('scenario_id', '?')}: {message}")

@@ -1,0 +1,132 @@
+"""One scenario, start to finish: spawn -> scenario (reference script or agent) -> validate.
+
+``process_scenario`` is what both ``scenweave run`` and the queue worker call for each
+scenario; it never raises for a problem of the scenario itself — that becomes a ``failed``
+outcome with the error — so a batch always goes on.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+XOSC_NAME = "scenario.xosc"
+CODE_NAME = "scenario.py"
+PARAMS_NAME = "params.json"
+TRACE_NAME = "trace.jsonl"
+
+
+@dataclass
+class PipelineSettings:
+    """How scenarios are made: the reference script (``no_llm``) or the agent."""
+
+    no_llm: bool = True
+    top_n: int = 5
+    agent: Any = None  # agent.AgentSettings when no_llm is False
+
+
+class Trace:
+    """A readable event log, one JSON object per line, for the deterministic path."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.started = time.perf_counter()
+
+    def event(self, node: str, **fields: Any) -> None:
+        entry = {"node": node, "t_s": round(time.perf_counter() - self.started, 4), **fields}
+        with open(self.path, "a", encoding="utf-8") as fh:
+            fh.write(json.dumps(entry, default=str) + "\n")
+
+
+def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,
+                     matcher: Any) -> dict:
+    """Make, validate and describe one scenario in ``out_dir``; return its outcome."""
+    started = time.perf_counter()
+    timings: dict[str, float] = {}
+    trace = Trace(out_dir / TRACE_NAME)
+    outcome = _base_outcome(params)
+    try:
+        placed = _timed(timings, "spawn",
+                        lambda: matcher.assign(params, index, top_n=settings.top_n))
+        outcome["spawn_id"] = placed.get("spawn_id")
+        trace.event("spawn", spawn_id=placed.get("spawn_id"), index=index)
+        (out_dir / PARAMS_NAME).write_text(json.dumps(placed, indent=1), encoding="utf-8")
+        if settings.no_llm:
+            outcome.update(_reference_scenario(placed, out_dir, timings, trace))
+        else:
+            outcome.update(_agent_scenario(placed, out_dir, settings, timings))
+    except Exception as err:  # noqa: BLE001 - a scenario's failure is a value, not a crash
+        outcome.update(status="failed", error=f"{type(err).__name__}: {err}",
+                       error_taxonomy=[_taxonomy_of(err)])
+        trace.event("error", error=outcome["error"], traceback=traceback.format_exc())
+    timings["total"] = time.perf_counter() - started
+    outcome["timings_s"] = {k: round(v, 4) for k, v in timings.items()}
+    return outcome
+
+
+def _base_outcome(params: dict) -> dict:
+    return {
+        "scenario_id": params["scenario_id"], "maneuver_class": params["maneuver_class"],
+        "domain": params["domain"], "status": "failed", "attempts": 0,
+        "first_attempt_success": False, "fallback": False, "spawn_id": None,
+        "tokens_in": 0, "tokens_out": 0, "error_taxonomy": [], "error": None,
+        "validation": None,
+    }
+
+
+def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace) -> dict:
+    import corpus
+    from schemas import validate_xosc
+
+    retrieval = _timed(timings, "retrieve", lambda: corpus.retrieve(params))
+    trace.event("retrieve", script=retrieval.script_path.name, method=retrieval.method)
+    (out_dir / CODE_NAME).write_text(retrieval.source, encoding="utf-8")
+    xosc = out_dir / XOSC_NAME
+    _timed(timings, "generate", lambda: corpus.generate(params, xosc))
+    result = _timed(timings, "validate", lambda: validate_xosc(xosc, params))
+    validation = result.to_dict()
+    trace.event("validate", valid=validation["valid"], errors=validation["errors"])
+    errors = [e for e in validation["errors"] if e.get("severity") == "error"]
+    return {
+        "status": "ok" if validation["valid"] else "failed",
+        "retrieval": retrieval.method,
+        "validation": {"valid": validation["valid"], "fixes_applied": validation["fixes_applied"],
+                       "errors": errors[:20], "domain": validation.get("domain")},
+        "error_taxonomy": [] if validation["valid"] else _validation_taxonomy(errors),
+        "error": None if validation["valid"] else "; ".join(e["code"] for e in errors[:5]),
+    }
+
+
+def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
+                    timings: dict) -> dict:
+    import agent
+
+    result = _timed(timings, "agent", lambda: agent.run_scenario(params, out_dir, settings.agent))
+    return result.to_dict()
+
+
+def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:
+    start = time.perf_counter()
+    try:
+        return work()
+    finally:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
+
+
+def _validation_taxonomy(errors: list[dict]) -> list[str]:
+    return sorted({"fidelity" if e["code"].startswith("FIDELITY") else "validation"
+                   for e in errors}) or ["validation"]
+
+
+def _taxonomy_of(err: Exception) -> str:
+    name = type(err).__name__
+    if "Spawn" in name:
+        return "spawn"
+    if name in ("ParamsError", "KeyError"):
+        return "params"
+    return "infrastructure"

@@ -1,0 +1,109 @@
+"""A batch: input -> params -> one scenario folder each -> ``summary.json``.
+
+Scenarios of one manoeuvre class take spawn points round robin (thesis §5.2): the n-th
+scenario of a class gets candidate ``n % top_n``, counted in input order so a resumed run
+assigns the same spawns as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from scenweave.inputs import InputSelection, LoadedInput, load_input
+from scenweave.pipeline import PipelineSettings, process_scenario
+from scenweave.progress import progress
+from scenweave.run_folder import RUN_FILE, STATUSES, SUMMARY_FILE, RunFolder
+
+
+@dataclass
+class RunResult:
+    """What a batch did: where it wrote, and its summary."""
+
+    folder: RunFolder
+    summary: dict
+    skipped: int = 0
+    input_issues: list = field(default_factory=list)
+
+    def line(self) -> str:
+        """The one-line summary printed at the end of a run."""
+        counts = self.summary["counts"]
+        parts = ", ".join(f"{counts[s]} {s}" for s in STATUSES)
+        resumed = f" ({self.skipped} already done)" if self.skipped else ""
+        issues = f", {len(self.input_issues)} input issues" if self.input_issues else ""
+        return (f"run {self.folder.run_id}: {self.summary['total']} scenarios: {parts}{resumed}"
+                f"{issues} -> {self.folder.root}")
+
+
+def default_matcher() -> Any:
+    """The Town04 spawn matcher (imported here so ``scenweave --help`` stays fast)."""
+    from spawn_db import SpawnMatcher
+
+    return SpawnMatcher()
+
+
+def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: PipelineSettings,
+              run_id: str | None = None, retry_failed: bool = False,
+              matcher: Any = None) -> RunResult:
+    """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists."""
+    loaded = load_input(Path(data), selection)
+    folder = RunFolder.open(out_root, run_id)
+    folder.write(RUN_FILE, _run_description(data, loaded, selection, settings, folder))
+    matcher = matcher or default_matcher()
+    skipped = 0
+    per_class: Counter[str] = Counter()
+    for params in progress(loaded.params, desc="scenarios", total=len(loaded.params)):
+        index = per_class[params["maneuver_class"]]
+        per_class[params["maneuver_class"]] += 1
+        done = folder.outcome(params["scenario_id"])
+        if done and not (retry_failed and done.get("status") == "failed"):
+            skipped += 1
+            continue
+        staging = folder.staging(params["scenario_id"])
+        outcome = process_scenario(params, index, staging, settings, matcher)
+        folder.commit(params["scenario_id"], staging, outcome)
+    issues = [i.to_dict() for i in loaded.report.issues]
+    summary = summarize(folder, issues)
+    folder.write(SUMMARY_FILE, summary)
+    return RunResult(folder, summary, skipped, issues)
+
+
+def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
+    """Totals, per-class counts and the error taxonomy over every finished scenario."""
+    outcomes = folder.outcomes()
+    counts = Counter(o["status"] for o in outcomes)
+    by_class: dict[str, Counter] = {}
+    for o in outcomes:
+        by_class.setdefault(o["maneuver_class"], Counter())[o["status"]] += 1
+    taxonomy = Counter(t for o in outcomes for t in o.get("error_taxonomy", []))
+    return {
+        "run_id": folder.run_id,
+        "written_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "total": len(outcomes),
+        "counts": {s: counts.get(s, 0) for s in STATUSES},
+        "by_class": {code: {s: c.get(s, 0) for s in STATUSES}
+                     for code, c in sorted(by_class.items())},
+        "error_taxonomy": dict(sorted(taxonomy.items())),
+        "tokens_in": sum(o.get("tokens_in", 0) for o in outcomes),
+        "tokens_out": sum(o.get("tokens_out", 0) for o in outcomes),
+        "input_issues": input_issues,
+        "scenarios": outcomes,
+    }
+
+
+def _run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
+                     settings: PipelineSettings, folder: RunFolder) -> dict:
+    agent_settings = settings.agent
+    return {
+        "run_id": folder.run_id,
+        "started_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "input": str(data), "input_kind": loaded.kind, "scenarios": len(loaded.params),
+        "selection": {k: (str(v) if isinstance(v, Path) else v)
+                      for k, v in asdict(selection).items()},
+        "mode": "no-llm" if settings.no_llm else "agent",
+        "top_n": settings.top_n,
+        "agent": agent_settings.to_dict() if hasattr(agent_settings, "to_dict") else None,
+    }

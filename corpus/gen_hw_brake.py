@@ -1,9 +1,9 @@
-"""Highway hard braking: the lead vehicle ahead of the ego brakes (BRAKE, BR_BK).
+"""Highway hard braking (BRAKE, BR_BK): the lead car ahead of the ego brakes hard.
 
 The ego drives on a multi-lane highway behind a lead vehicle in its own lane,
-npc_distance_m ahead. Both start at their recorded speeds. At maneuver_start_s the lead
-brakes hard (slams on the brakes, decelerates, slows down sharply) from npc_speed_ms to
-npc_end_speed_ms within duration_s, while the ego keeps or changes its speed as recorded.
+npc_distance_m ahead. At maneuver_start_s the lead slams on the brakes and decelerates from
+npc_speed_ms to npc_end_speed_ms within duration_s (an emergency stop or sharp slow-down in
+front of the ego), while the ego keeps or changes its speed as recorded.
 """
 
 from corpus.corpus_utils import (

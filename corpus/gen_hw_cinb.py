@@ -1,10 +1,9 @@
-"""Highway cut-in from behind: a faster vehicle overtakes and merges into the ego lane (CINB).
+"""Highway cut-in from behind (CINB): a faster car overtakes the ego and cuts in.
 
-The ego drives on a multi-lane highway. A vehicle in the adjacent lane starts behind the
-ego (npc_distance_m is negative), overtakes it and, at maneuver_start_s, changes lanes
-toward lane_change_direction into the ego's lane within duration_s, ending up in front of
-the ego; its speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its
-speed as recorded.
+A vehicle in the adjacent lane starts behind the ego (npc_distance_m is negative), passes
+it and, at maneuver_start_s, swerves into the ego's lane toward lane_change_direction
+within duration_s, ending up right in front of the ego after the overtake; its speed goes
+from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,10 @@
 """Highway cut-in in front (CINF): a car from the next lane cuts into my lane just ahead.
 
-The ego drives on a multi-lane highway. A vehicle in the adjacent lane, npc_distance_m
-ahead of the ego, cuts in: at maneuver_start_s it changes lanes toward lane_change_direction
-into the ego's lane within duration_s, squeezing in front of the ego, while its speed goes
-from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+A vehicle driving in the adjacent lane, npc_distance_m ahead of the ego, merges into the
+ego's lane in front of it: at maneuver_start_s it changes lanes toward
+lane_change_direction within duration_s, squeezing into the gap ahead of the ego, while its
+speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as
+recorded.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,9 @@
-"""Highway cut-out behind: the vehicle following the ego in its lane pulls out to the side (COUTB).
+"""Highway cut-out behind (COUTB): the car tailgating the ego pulls out of its lane.
 
-The ego drives on a multi-lane highway with a vehicle behind it in the same lane
-(npc_distance_m is negative). At maneuver_start_s the follower cuts out: it changes lanes
-toward lane_change_direction within duration_s, leaving the ego's lane, while its speed goes
-from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+A vehicle drives behind the ego in the same lane (npc_distance_m is negative). At
+maneuver_start_s this follower pulls out, changing lanes toward lane_change_direction
+within duration_s and leaving the ego's lane from behind, while its speed goes from
+npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
 """
 
 from corpus.corpus_utils import (

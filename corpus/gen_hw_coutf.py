@@ -1,9 +1,9 @@
 """Highway cut-out in front (COUTF): the car ahead in my lane moves out to the next lane.
 
-The ego drives on a multi-lane highway behind a vehicle in its own lane, npc_distance_m
-ahead. At maneuver_start_s that vehicle cuts out: it changes lanes toward
-lane_change_direction within duration_s and clears the ego's lane, its speed going from
-npc_speed_ms to npc_end_speed_ms. With the lane ahead free, the ego speeds up slightly to
+The ego follows a vehicle in its own lane, npc_distance_m ahead. At maneuver_start_s that
+vehicle leaves the ego's lane, changing lanes toward lane_change_direction within
+duration_s and clearing the road ahead, its speed going from npc_speed_ms to
+npc_end_speed_ms. With the lane in front now free, the ego speeds up slightly to
 ego_end_speed_ms.
 """
 

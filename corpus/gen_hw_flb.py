@@ -1,9 +1,9 @@
-"""Highway car following from behind: a vehicle follows the ego in its lane (FLB).
+"""Highway followed from behind (FLB): a vehicle follows the ego closely in its lane.
 
-The ego drives on a multi-lane highway with a following vehicle behind it in the same lane
-(npc_distance_m is negative, the follower tails the ego). From maneuver_start_s, over
-duration_s, the follower's speed goes from npc_speed_ms to npc_end_speed_ms and the ego's
-from ego_speed_ms to ego_end_speed_ms, so the follower closes in or falls back as recorded.
+Another vehicle drives behind the ego in the same lane (npc_distance_m is negative), a
+follower in the ego's mirror. From maneuver_start_s, over duration_s, the follower's speed
+goes from npc_speed_ms to npc_end_speed_ms and the ego's from ego_speed_ms to
+ego_end_speed_ms, so the follower closes in or falls back as recorded.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,9 @@
-"""Highway car following: the ego follows a lead vehicle ahead in its lane (FLF).
+"""Highway car following (FLF): the ego follows a slower or faster lead car in its lane.
 
-The ego drives on a multi-lane highway behind a lead vehicle in the same lane,
-npc_distance_m ahead. From maneuver_start_s, over duration_s, the lead's speed goes from
-npc_speed_ms to npc_end_speed_ms and the ego's from ego_speed_ms to ego_end_speed_ms, so the
-gap between them opens or closes as recorded.
+The ego drives behind a lead vehicle in the same lane, npc_distance_m ahead, keeping a
+following distance on the motorway. From maneuver_start_s, over duration_s, the lead's
+speed goes from npc_speed_ms to npc_end_speed_ms and the ego's from ego_speed_ms to
+ego_end_speed_ms, so the gap to the car in front opens or closes as recorded.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,9 @@
-"""Highway free ride with traffic behind: the ego cruises with vehicles following it (FRB).
+"""Highway free ride with traffic behind (FRB): the ego cruises with cars behind in several lanes.
 
-The ego drives freely on a multi-lane highway. Up to three vehicles ride behind it: one in
-the ego lane (center), one in the lane to the right and one in the lane to the left, each
-present only when the record saw it. From maneuver_start_s, over duration_s, every vehicle
-goes from its start speed to its end speed, and so does the ego.
+The ego cruises freely on a multi-lane highway with surrounding traffic behind it: up to
+three vehicles to its rear, one in the ego lane (center), one in the right lane and one in
+the left lane, each present only when the record saw it. From maneuver_start_s, over
+duration_s, every vehicle goes from its start speed to its end speed, and so does the ego.
 """
 
 from corpus.corpus_utils import (

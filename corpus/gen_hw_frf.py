@@ -1,9 +1,9 @@
-"""Highway free ride with traffic ahead: the ego cruises with vehicles in front (FRF).
+"""Highway free ride with traffic ahead (FRF): the ego cruises with cars in front in several lanes.
 
-The ego drives freely on a multi-lane highway. Up to three vehicles ride ahead of it: one
-in the ego lane (center), one in the lane to the right and one in the lane to the left,
-each present only when the record saw it. From maneuver_start_s, over duration_s, every
-vehicle goes from its start speed to its end speed, and so does the ego.
+The ego cruises freely on a multi-lane highway with surrounding traffic ahead: up to three
+vehicles in front of it, one in the ego lane (center), one in the right lane and one in the
+left lane, each present only when the record saw it. From maneuver_start_s, over
+duration_s, every vehicle goes from its start speed to its end speed, and so does the ego.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,9 @@
-"""Highway lane change of the ego in front of the traffic behind in the neighbouring lane (LCB).
+"""Highway ego lane change ahead of traffic behind (LCB): I pull out in front of cars coming up.
 
-The ego drives on a multi-lane highway and, at maneuver_start_s, changes one lane toward
-lane_change_direction (left or right) within duration_s, pulling out into the adjacent lane
-ahead of whatever follows there, while its speed goes from ego_speed_ms to
-ego_end_speed_ms. No scripted vehicle takes part.
+The ego itself changes lanes on a multi-lane highway: at maneuver_start_s it moves one lane
+toward lane_change_direction (left or right) within duration_s, pulling out into the
+adjacent lane in front of the traffic approaching from behind there, and its speed goes from
+ego_speed_ms to ego_end_speed_ms. No scripted vehicle takes part.
 """
 
 from corpus.corpus_utils import (

@@ -1,9 +1,9 @@
-"""Highway lane change of the ego toward free space ahead in the neighbouring lane (LCF).
+"""Highway ego lane change into a free gap ahead (LCF): I move over to the next lane.
 
-The ego drives alone on a multi-lane highway. At maneuver_start_s it changes one lane
-toward lane_change_direction (left or right) within duration_s, moving into the adjacent
-lane ahead, and its speed goes from ego_speed_ms to ego_end_speed_ms. No scripted vehicle
-takes part.
+The ego itself changes lanes on a multi-lane highway: at maneuver_start_s it moves one lane
+toward lane_change_direction (left or right) within duration_s, into open space ahead in
+the adjacent lane, and its speed goes from ego_speed_ms to ego_end_speed_ms. No scripted
+vehicle takes part.
 """
 
 from corpus.corpus_utils import (

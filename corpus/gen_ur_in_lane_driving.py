@@ -1,8 +1,9 @@
-"""Urban in-lane driving: the ego follows its lane through town, maybe behind a lead car (U1_1).
+"""Urban in-lane driving (U1_1): the ego drives along a city street, staying in its lane.
 
-The ego drives along its lane on an urban road, with no traffic light involved. It starts
-at init_speed_ms and its speed goes to final_speed_ms over duration_s. When the record had a
-lead vehicle, that vehicle drives lead_distance_m ahead of the ego at lead_speed_ms.
+The ego follows its lane through town, with no traffic light involved, maybe behind another
+car. It starts at init_speed_ms and its speed goes to final_speed_ms over duration_s. When
+the record had a lead vehicle, that vehicle drives lead_distance_m ahead of the ego at
+lead_speed_ms.
 """
 
 from corpus.corpus_utils import (

@@ -1,10 +1,10 @@
-"""Urban pass at a green or orange traffic light: the ego drives through without stopping (U4_2).
+"""Urban pass at a green or amber light (U4_2): the ego crosses the junction without stopping.
 
-The ego approaches a signalised intersection at init_speed_ms and drives through it, its
-speed going to final_speed_ms over duration_s. The light is green; when the record saw it
-orange (tfl_state), it turns yellow after yellow_delay_s, as the ego is about 5 m before it,
-so the ego crosses on orange, and red a few seconds later. A lead vehicle drives ahead when
-the record had one.
+The ego approaches a signalised intersection at init_speed_ms and crosses it, its speed
+going to final_speed_ms over duration_s. The light is green; when the record saw it orange
+(amber, tfl_state), it turns yellow after yellow_delay_s, as the ego is about 5 m before
+it, so the ego passes on orange, and red a few seconds later. A lead vehicle drives ahead
+when the record had one.
 """
 
 from corpus.corpus_utils import (

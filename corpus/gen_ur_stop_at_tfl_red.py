@@ -2,7 +2,7 @@
 
 The ego approaches a signalised intersection at init_speed_ms. The traffic light ahead is
 green, turns yellow after yellow_delay_s (when the ego is about 5 m before it) and red a
-few seconds later. The ego brakes and comes to a full stop: its speed falls to 0 within
+few seconds later. The ego brakes and waits at the stop line: its speed falls to 0 within
 brake_time_s. A lead vehicle drives ahead when the record had one.
 """
 

@@ -1,8 +1,8 @@
-"""Urban straight crossing at a green light (U4_3): the ego goes straight through the junction.
+"""Urban straight crossing at a green light (U4_3): the ego goes straight across the junction.
 
 The ego approaches a signalised intersection at init_speed_ms while the traffic light is
-green and goes straight across, its speed going to final_speed_ms over duration_s. A lead
-vehicle drives ahead when the record had one.
+green and goes straight on through the crossing, its speed going to final_speed_ms over
+duration_s. A lead vehicle drives ahead when the record had one.
 """
 
 from corpus.corpus_utils import (

@@ -1,4 +1,4 @@
-"""Urban right turn at a green traffic light: the ego turns right at the intersection (U4_4).
+"""Urban right turn at a green light (U4_4): the ego turns right at the signalised intersection.
 
 The ego approaches a signalised intersection at init_speed_ms while the traffic light is
 green and turns right into the crossing road: it is routed to a point past the junction on

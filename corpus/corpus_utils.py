@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
+import numbers
 import os
 import tempfile
 import xml.etree.ElementTree as ET
@@ -24,6 +25,7 @@ from typing import Any
 from scenariogeneration import xosc
 
 HERO = "hero"
+XML_DECLARATION = '<?xml version="1.0" encoding="utf-8"?>\n'
 MAP_NAME = "Town04"
 AUTHOR = "ScenWeave"
 #: a fixed header date, so that the same params always give byte-identical files
@@ -107,48 +109,65 @@ class StoryEvent:
     event: xosc.Event
 
 
+# --- params ----------------------------------------------------------------------------------
+
+def number(params: Mapping[str, Any], key: str) -> float:
+    """``params[key]`` when it is a finite number; otherwise an error naming the key."""
+    return finite(f"params key {key!r}", params[key])
+
+
+def finite(what: str, value: Any) -> Any:
+    """``value`` when it is a finite number; otherwise a ValueError naming ``what``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        hint = " (spawn keys stay null until spawn_db fills them)" if value is None else ""
+        raise ValueError(f"{what} must be a finite number, not {value!r}{hint}")
+    return value
+
+
+def manoeuvre_timing(params: Mapping[str, Any]) -> tuple[float, float]:
+    """``(duration_s, maneuver_start_s)``: how long the manoeuvre lasts and when it starts."""
+    return number(params, "duration_s"), number(params, "maneuver_start_s")
+
+
 # --- positions -------------------------------------------------------------------------------
 
 def lane_position(params: Mapping[str, Any], actor: str) -> xosc.LanePosition:
     """The LanePosition the spawn stage chose for ``actor`` (``ego``, ``npc``, a FR slot)."""
-    return xosc.LanePosition(
-        params[f"{actor}_s"], 0, params[f"{actor}_lane_id"], params[f"{actor}_road_id"]
-    )
+    s, lane_id, road_id = (number(params, f"{actor}_{key}") for key in ("s", "lane_id", "road_id"))
+    return xosc.LanePosition(s, 0, lane_id, road_id)
 
 
 def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:
     """The WorldPosition (OpenSCENARIO frame) the spawn stage chose for ``actor``."""
-    return xosc.WorldPosition(
-        params[f"{actor}_x"], params[f"{actor}_y"], params[f"{actor}_z"], params[f"{actor}_h"]
-    )
+    return xosc.WorldPosition(*(number(params, f"{actor}_{axis}") for axis in "xyzh"))
 
 
 def position_from_ego(
     params: Mapping[str, Any], ahead_m: float, right_m: float = 0.0, turn_rad: float = 0.0
 ) -> xosc.WorldPosition:
     """A point ``ahead_m`` along the ego's heading and ``right_m`` to its right."""
-    heading = params["ego_h"]
-    x = params["ego_x"] + ahead_m * math.cos(heading) + right_m * math.sin(heading)
-    y = params["ego_y"] + ahead_m * math.sin(heading) - right_m * math.cos(heading)
-    return xosc.WorldPosition(x, y, params["ego_z"], heading + turn_rad)
+    heading = number(params, "ego_h")
+    x = number(params, "ego_x") + ahead_m * math.cos(heading) + right_m * math.sin(heading)
+    y = number(params, "ego_y") + ahead_m * math.sin(heading) - right_m * math.cos(heading)
+    return xosc.WorldPosition(x, y, number(params, "ego_z"), heading + turn_rad)
 
 
 # --- actors ----------------------------------------------------------------------------------
 
 def hero(position: Any, speed_ms: float) -> Actor:
     """The ego vehicle, named ``hero`` as CARLA expects."""
-    return Actor(HERO, "ego", position, speed_ms)
+    return Actor(HERO, "ego", position, finite("the hero's start speed", speed_ms))
 
 
 def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> Actor:
     """A scripted vehicle; unknown types become a car."""
     return Actor(name, vehicle_type if vehicle_type in VEHICLE_MODELS else "car", position,
-                 speed_ms)
+                 finite(f"the start speed of {name}", speed_ms))
 
 
 def highway_npc(params: Mapping[str, Any]) -> Actor:
     """The highway NPC (lead, cutter or follower) at its spawn, with its start speed."""
-    return npc("npc", lane_position(params, "npc"), params["npc_speed_ms"],
+    return npc("npc", lane_position(params, "npc"), number(params, "npc_speed_ms"),
                params.get("npc_vehicle_type"))
 
 
@@ -159,10 +178,10 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
         if not params.get(f"{slot}_present"):
             continue
         name = f"npc_{slot}"
-        actors.append(npc(name, lane_position(params, slot), params[f"{slot}_speed_ms"],
+        actors.append(npc(name, lane_position(params, slot), number(params, f"{slot}_speed_ms"),
                           params.get(f"{slot}_vehicle_type")))
-        events.append(speed_change(name, params[f"{slot}_end_speed_ms"], params["duration_s"],
-                                   params["maneuver_start_s"]))
+        events.append(speed_change(name, number(params, f"{slot}_end_speed_ms"),
+                                   *manoeuvre_timing(params)))
     return actors, events
 
 
@@ -170,8 +189,8 @@ def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
     """The urban lead vehicle ``lead_distance_m`` ahead of the ego, when the record had one."""
     if not params.get("lead_present"):
         return []
-    return [npc("lead", position_from_ego(params, params["lead_distance_m"]),
-                params["lead_speed_ms"], params.get("lead_vehicle_type"))]
+    return [npc("lead", position_from_ego(params, number(params, "lead_distance_m")),
+                number(params, "lead_speed_ms"), params.get("lead_vehicle_type"))]
 
 
 def _vehicle(actor: Actor) -> xosc.Vehicle:
@@ -197,6 +216,7 @@ def at_time(name: str, time_s: float, point: str = "start") -> xosc.ValueTrigger
 
 def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent:
     """Event ``<key>_event`` holding action ``<key>``, started at ``start_s``."""
+    finite(f"the start time of {key}", start_s)
     event = xosc.Event(f"{key}_event", xosc.Priority.overwrite)
     event.add_action(key, action)
     event.add_trigger(at_time(f"{key}_start", start_s))
@@ -205,6 +225,8 @@ def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent
 
 def speed_change(entity: str, target_ms: float, duration_s: float, start_s: float) -> StoryEvent:
     """``entity`` goes linearly to ``target_ms`` within ``duration_s`` from ``start_s``."""
+    finite(f"the target speed of {entity}", target_ms)
+    finite(f"the speed change duration of {entity}", duration_s)
     dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.time,
                                        duration_s)
     return story_event(entity, f"{entity}_speed_change",
@@ -230,28 +252,24 @@ def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
 
 def hero_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
     """The recorded ego speed change: ``ego_end_speed_ms`` over ``duration_s``."""
-    return speed_change(HERO, params["ego_end_speed_ms"], params["duration_s"],
-                        params["maneuver_start_s"])
+    return speed_change(HERO, number(params, "ego_end_speed_ms"), *manoeuvre_timing(params))
 
 
 def npc_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
     """The recorded NPC speed change: ``npc_end_speed_ms`` over ``duration_s``."""
-    return speed_change("npc", params["npc_end_speed_ms"], params["duration_s"],
-                        params["maneuver_start_s"])
+    return speed_change("npc", number(params, "npc_end_speed_ms"), *manoeuvre_timing(params))
 
 
 def npc_lane_change(params: Mapping[str, Any]) -> StoryEvent:
     """The NPC changes one lane toward ``lane_change_direction`` (cut-in or cut-out)."""
-    return lane_change("npc", params["lane_change_direction"], params["npc_speed_ms"],
-                       params["npc_end_speed_ms"], params["duration_s"],
-                       params["maneuver_start_s"])
+    return lane_change("npc", params["lane_change_direction"], number(params, "npc_speed_ms"),
+                       number(params, "npc_end_speed_ms"), *manoeuvre_timing(params))
 
 
 def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
     """The ego changes one lane toward ``lane_change_direction``."""
-    return lane_change(HERO, params["lane_change_direction"], params["ego_speed_ms"],
-                       params["ego_end_speed_ms"], params["duration_s"],
-                       params["maneuver_start_s"])
+    return lane_change(HERO, params["lane_change_direction"], number(params, "ego_speed_ms"),
+                       number(params, "ego_end_speed_ms"), *manoeuvre_timing(params))
 
 
 def drive_to(entity: str, key: str, position: Any, start_s: float) -> StoryEvent:
@@ -269,14 +287,14 @@ def right_turn_target(params: Mapping[str, Any]) -> xosc.WorldPosition:
 
 def traffic_light(params: Mapping[str, Any], key: str, state: str, at_s: float) -> StoryEvent:
     """The controlling light (``pos=`` from ``tfl_x_carla/tfl_y_carla``) shows ``state``."""
-    name = f"pos={params['tfl_x_carla']:.3f},{params['tfl_y_carla']:.3f}"
+    name = f"pos={number(params, 'tfl_x_carla'):.3f},{number(params, 'tfl_y_carla'):.3f}"
     action = xosc.TrafficSignalStateAction(name, LIGHT_STATES[state])
     return story_event("traffic_light", f"traffic_light_{key}", action, at_s)
 
 
 def light_turns_red(params: Mapping[str, Any]) -> list[StoryEvent]:
     """Yellow at ``yellow_delay_s`` (the ego is 5 m from the light), red after the phase."""
-    yellow_s = params["yellow_delay_s"]
+    yellow_s = number(params, "yellow_delay_s")
     return [traffic_light(params, "yellow", "yellow", yellow_s),
             traffic_light(params, "red", "red", yellow_s + YELLOW_PHASE_S)]
 
@@ -339,7 +357,7 @@ def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
     story = xosc.Story(f"{tag}_story", xosc.ParameterDeclarations())
     story.add_act(_act(tag, events))
     storyboard = xosc.StoryBoard(_init(actors, params["weather_key"]),
-                                 at_time("timeout", params["timeout_s"], "stop"))
+                                 at_time("timeout", number(params, "timeout_s"), "stop"))
     storyboard.add_story(story)
     return xosc.Scenario(
         f"ScenWeave {params['maneuver_class']} {params['scenario_id']}", AUTHOR,
@@ -354,7 +372,8 @@ def write_scenario(scenario: xosc.Scenario, out_path: str | os.PathLike[str]) ->
     path.parent.mkdir(parents=True, exist_ok=True)
     element = scenario.get_element()
     ET.indent(element, space="  ")
-    data = ET.tostring(element, encoding="utf-8", xml_declaration=True)
+    # serialising to str and encoding once is ~2x faster than ET's utf-8 stream writer
+    data = (XML_DECLARATION + ET.tostring(element, encoding="unicode")).encode("utf-8")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as handle:

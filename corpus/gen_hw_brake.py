@@ -6,6 +6,8 @@ npc_speed_ms to npc_end_speed_ms within duration_s (an emergency stop or sharp s
 front of the ego), while the ego keeps or changes its speed as recorded.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -19,7 +21,7 @@ from corpus.corpus_utils import (
 TAG = "brake"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the braking scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     lead = highway_npc(params)

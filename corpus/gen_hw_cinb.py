@@ -6,6 +6,8 @@ within duration_s, ending up right in front of the ego after the overtake; its s
 from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -20,7 +22,7 @@ from corpus.corpus_utils import (
 TAG = "cut_in_behind"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the cut-in-from-behind scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     overtaker = highway_npc(params)

@@ -7,6 +7,8 @@ speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its s
 recorded.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -21,7 +23,7 @@ from corpus.corpus_utils import (
 TAG = "cut_in_front"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the cut-in-in-front scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     cutter = highway_npc(params)

@@ -7,6 +7,8 @@ npc_end_speed_ms. With the lane in front now free, the ego speeds up slightly to
 ego_end_speed_ms.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -21,7 +23,7 @@ from corpus.corpus_utils import (
 TAG = "cut_out_front"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the cut-out-in-front scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     leaver = highway_npc(params)

@@ -6,6 +6,8 @@ goes from npc_speed_ms to npc_end_speed_ms and the ego's from ego_speed_ms to
 ego_end_speed_ms, so the follower closes in or falls back as recorded.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -19,7 +21,7 @@ from corpus.corpus_utils import (
 TAG = "follow_behind"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the followed-from-behind scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     follower = highway_npc(params)

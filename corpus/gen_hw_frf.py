@@ -6,6 +6,8 @@ left lane, each present only when the record saw it. From maneuver_start_s, over
 duration_s, every vehicle goes from its start speed to its end speed, and so does the ego.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     free_ride_traffic,
     hero,
@@ -18,7 +20,7 @@ from corpus.corpus_utils import (
 TAG = "free_ride_front"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the free-ride-with-traffic-ahead scenario and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     traffic, traffic_events = free_ride_traffic(params)

@@ -6,6 +6,8 @@ adjacent lane in front of the traffic approaching from behind there, and its spe
 ego_speed_ms to ego_end_speed_ms. No scripted vehicle takes part.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_lane_change,
@@ -18,7 +20,7 @@ from corpus.corpus_utils import (
 TAG = "lane_change_behind"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the ego lane-change scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_lane_change(params), hero_speed_profile(params)]

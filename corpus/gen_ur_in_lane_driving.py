@@ -6,6 +6,8 @@ the record had a lead vehicle, that vehicle drives lead_distance_m ahead of the 
 lead_speed_ms.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -18,7 +20,7 @@ from corpus.corpus_utils import (
 TAG = "in_lane_driving"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the urban in-lane driving scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params)]

@@ -7,6 +7,8 @@ it, so the ego passes on orange, and red a few seconds later. A lead vehicle dri
 when the record had one.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -21,7 +23,7 @@ from corpus.corpus_utils import (
 TAG = "pass_tfl_green_or_orange"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the pass-on-green-or-orange scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]

@@ -6,6 +6,8 @@ few seconds later. The ego brakes and waits at the stop line: its speed falls to
 brake_time_s. A lead vehicle drives ahead when the record had one.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     HERO,
     hero,
@@ -21,7 +23,7 @@ from corpus.corpus_utils import (
 TAG = "stop_at_tfl_red"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the stop-at-red-light scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [

@@ -5,6 +5,8 @@ green and goes straight on through the crossing, its speed going to final_speed_
 duration_s. A lead vehicle drives ahead when the record had one.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
@@ -18,7 +20,7 @@ from corpus.corpus_utils import (
 TAG = "straight_tfl_green"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the straight-on-green scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]

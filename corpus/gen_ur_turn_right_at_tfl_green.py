@@ -6,6 +6,8 @@ its right, its speed going to final_speed_ms over duration_s. A lead vehicle dri
 when the record had one.
 """
 
+from pathlib import Path
+
 from corpus.corpus_utils import (
     HERO,
     drive_to,
@@ -22,7 +24,7 @@ from corpus.corpus_utils import (
 TAG = "turn_right_at_tfl_green"
 
 
-def generate(params, out_path):
+def generate(params: dict, out_path: str) -> Path:
     """Build the right-turn-on-green scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [

@@ -69,7 +69,12 @@ class Retrieval:
 
 def list_scripts() -> list[Path]:
     """The reference scripts of the corpus, sorted by name."""
-    return sorted(CORPUS_DIR.glob("gen_*.py"))
+    return list(_scripts())
+
+
+@cache
+def _scripts() -> tuple[Path, ...]:
+    return tuple(sorted(CORPUS_DIR.glob("gen_*.py")))
 
 
 def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
@@ -119,7 +124,7 @@ def _by_keyword(code: str) -> Retrieval | None:
     key = code.lower()
     if not key or " " in key:
         return None
-    hits = [path for path in list_scripts() if key in path.stem]
+    hits = [path for path in _scripts() if key in path.stem]
     if len(hits) > 1:  # several names contain it: only a whole name part is unambiguous
         hits = [path for path in hits if key in path.stem.split("_")]
     return _read(hits[0], "keyword", 1.0) if len(hits) == 1 else None

@@ -187,3 +187,17 @@ def test_there_are_sixteen_scripts_covering_every_class():
     assert len(names) == 16
     for code in HIGHWAY_CLASSES:
         assert corpus.retrieve(code).script_path.name in names
+
+
+@pytest.mark.parametrize(("code", "key"), [("BRAKE", "npc_s"), ("U4_1", "ego_x"),
+                                           ("U4_2", "tfl_x_carla")])
+def test_unfilled_spawn_key_is_a_clear_error(code, key, tmp_path):
+    params = example_params(code) | {key: None}
+    with pytest.raises(CorpusError, match=rf"'{key}' must be a finite number.*spawn_db"):
+        corpus.generate(params, tmp_path / "x.xosc")
+
+
+def test_nan_speed_is_refused(tmp_path):
+    params = example_params("FLF") | {"npc_end_speed_ms": float("nan")}
+    with pytest.raises(CorpusError, match="npc_end_speed_ms"):
+        corpus.generate(params, tmp_path / "x.xosc")

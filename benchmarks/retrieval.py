@@ -3,7 +3,8 @@
 Run: ``.venv/bin/python benchmarks/retrieval.py``. Prints R@1 for the 17 class codes and the
 16 tags (goal 1.0, keyword and tag levels), R@1 of the semantic fallback alone on free-text
 queries written by a person who did not look at the docstrings' wording, the misses, and
-timings (model load, docstring embeddings, one query, one scenario built in-process).
+timings (model load, docstring embeddings, one query) and the build speed of
+``corpus.generate`` (the deterministic path) over the example params of every class.
 """
 
 from __future__ import annotations
@@ -95,6 +96,24 @@ def main() -> None:
     for _ in range(2000):
         corpus.retrieve("CINF")
     print(f"keyword retrieval                 {(time.perf_counter() - start) / 2 * 1e3:.1f} us")
+    print_build_speed()
+
+
+def print_build_speed(rounds: int = 30) -> None:
+    """corpus.generate() (retrieve + build + atomic write) on one core, all 17 classes."""
+    from tests.corpus.params_examples import TAGS, example_params
+
+    examples = [example_params(code) for code in TAGS]
+    with tempfile.TemporaryDirectory() as out:
+        for params in examples:  # warm up: imports of the 16 scripts
+            corpus.generate(params, Path(out) / "warm.xosc")
+        start = time.perf_counter()
+        for _ in range(rounds):
+            for params in examples:
+                corpus.generate(params, Path(out) / f"{params['maneuver_class']}.xosc")
+        elapsed = (time.perf_counter() - start) / (rounds * len(examples))
+    print(f"corpus.generate (build + write)   {elapsed * 1e3:.2f} ms/scenario "
+          f"= {1 / elapsed:.0f} scenarios/s on one core")
 
 
 if __name__ == "__main__":

@@ -201,3 +201,39 @@ def test_nan_speed_is_refused(tmp_path):
     params = example_params("FLF") | {"npc_end_speed_ms": float("nan")}
     with pytest.raises(CorpusError, match="npc_end_speed_ms"):
         corpus.generate(params, tmp_path / "x.xosc")
+
+
+SANDBOX_RUN = """
+import importlib.abc, json, sys
+OURS = {"scenweave", "ingest", "agent", "sandbox", "schemas", "spawn_db", "tests"}
+class Forbid(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.split(".")[0] in OURS:
+            raise ImportError(f"the sandbox has no {name}")
+sys.meta_path.insert(0, Forbid())
+import corpus, importlib
+assert corpus.__file__.startswith(sys.argv[1]), corpus.__file__
+script = importlib.import_module("corpus." + sys.argv[2])
+print(script.generate(json.loads(sys.argv[3]), sys.argv[4]))
+"""
+
+
+@pytest.mark.parametrize("code", ["CINF", "FRB", "U4_4"])
+def test_a_copy_of_the_corpus_folder_runs_alone(code, tmp_path, xsd_1_0):
+    """As in the sandbox: only the ``corpus`` folder and scenariogeneration are there."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+
+    shutil.copytree(Path(corpus.__file__).parent, tmp_path / "corpus",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    script = corpus.retrieve(code).script_path.stem
+    out = tmp_path / "out" / "s.xosc"
+    run = subprocess.run(
+        [sys.executable, "-c", SANDBOX_RUN, str(tmp_path), script,
+         json.dumps(example_params(code)), str(out)],
+        cwd=tmp_path, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
+        capture_output=True, text=True, timeout=120, check=False)
+    assert run.returncode == 0, run.stderr
+    assert xsd_1_0.validate(etree.parse(str(out)))

@@ -40,8 +40,9 @@ TURN_RIGHT_OFFSET_M = 15.0
 #: distance to the stop line assumed when the spawn stage gave none (m)
 DEFAULT_STOP_LINE_DISTANCE_M = 20.0
 
-#: CARLA's RelativeTargetLane sign: scenario_runner turns value < 0 into a move to the left
-LANE_CHANGE_SIGN = {"left": -1, "right": 1}
+#: RelativeTargetLane sign: +1 is one lane to the left of the driving direction, as in the
+#: OpenSCENARIO standard and scenario_runner since 0.9.12 (its issue #767; before, it was mirrored)
+LANE_CHANGE_SIGN = {"left": 1, "right": -1}
 #: params colour of a light -> TrafficSignalStateAction state
 LIGHT_STATES = {"green": "green", "orange": "yellow", "yellow": "yellow", "red": "red"}
 

@@ -24,7 +24,7 @@ def expected_events(p: dict) -> dict[str, tuple]:
     events = {"hero_speed_change": ("speed", p["ego_end_speed_ms"], dur, start)}
 
     def lane_change(entity: str, v0: float, v1: float) -> tuple:
-        sign = -1 if p["lane_change_direction"] == "left" else 1
+        sign = 1 if p["lane_change_direction"] == "left" else -1
         return ("lane", sign, max(5.0, (v0 + v1) / 2 * dur), start)
 
     if code in ("BRAKE", "BR_BK", "FLF", "FLB", "CINF", "CINB", "COUTF", "COUTB"):

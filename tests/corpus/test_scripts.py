@@ -95,7 +95,7 @@ def test_storyboard_events_carry_the_params(code, tmp_path):
 
 
 @pytest.mark.parametrize(("code", "direction", "sign"),
-                         [("CINF", "right", 1), ("COUTB", "left", -1), ("LCB", "left", -1)])
+                         [("CINF", "right", -1), ("COUTB", "left", 1), ("LCB", "left", 1)])
 def test_lane_change_goes_to_the_recorded_side(code, direction, sign, tmp_path):
     _, doc = _write(code, tmp_path, lane_change_direction=direction)
     entity = "hero" if code.startswith("LC") else "npc"

@@ -237,3 +237,35 @@ def test_a_copy_of_the_corpus_folder_runs_alone(code, tmp_path, xsd_1_0):
         capture_output=True, text=True, timeout=120, check=False)
     assert run.returncode == 0, run.stderr
     assert xsd_1_0.validate(etree.parse(str(out)))
+
+
+#: what scenario_runner supports for OpenSCENARIO 1.0 (its Docs/openscenario_support.md)
+CARLA_INIT_ACTIONS = {"TeleportAction", "SpeedAction", "EnvironmentAction"}
+CARLA_STORY_ACTIONS = {"SpeedAction", "LaneChangeAction", "AcquirePositionAction",
+                       "TrafficSignalStateAction"}
+CARLA_CONDITIONS = {"SimulationTimeCondition"}
+
+
+def _action_kinds(actions: list[etree._Element]) -> set[str]:
+    kinds = set()
+    for action in actions:
+        node = action
+        while len(node) == 1 and node[0].tag in (
+                "PrivateAction", "GlobalAction", "LongitudinalAction", "LateralAction",
+                "RoutingAction", "InfrastructureAction", "TrafficSignalAction"):
+            node = node[0]
+        kinds.add(node[0].tag)
+    return kinds
+
+
+@pytest.mark.parametrize("code", ALL_CLASSES)
+def test_only_actions_and_conditions_scenario_runner_supports(code, tmp_path):
+    _, doc = _write(code, tmp_path)
+    init = doc.findall("Storyboard/Init/Actions/Private/PrivateAction")
+    init += doc.findall("Storyboard/Init/Actions/GlobalAction")
+    assert _action_kinds(init) <= CARLA_INIT_ACTIONS
+    assert _action_kinds(doc.findall(".//Story//Action")) <= CARLA_STORY_ACTIONS
+    conditions = {c[0][0].tag for c in doc.iter("Condition")}
+    assert conditions <= CARLA_CONDITIONS
+    for target in doc.iter("LaneChangeTarget"):
+        assert target[0].tag == "RelativeTargetLane"  # the only target scenario_runner reads

@@ -11,7 +11,6 @@ from lxml import etree
 
 import corpus
 from ingest import IngestReport, extract_params, iter_raw_records
-from ingest.samples import write_highway_samples, write_urban_samples
 from tests.corpus.conventions import assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}
@@ -33,12 +32,9 @@ def _place(params: dict) -> dict:
 
 
 @pytest.fixture(scope="module")
-def sample_params(tmp_path_factory) -> list[dict]:
-    root = tmp_path_factory.mktemp("raw")
-    write_highway_samples(root / "highway", seed=7, per_class=3)
-    write_urban_samples(root / "urban", seed=7, per_class=3)
+def sample_params(sample_raw) -> list[dict]:
     report = IngestReport()
-    return [_place(extract_params(item.record)) for item in iter_raw_records(root, report)]
+    return [_place(extract_params(item.record)) for item in iter_raw_records(sample_raw, report)]
 
 
 def test_sample_data_covers_every_class(sample_params):

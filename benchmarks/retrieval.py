@@ -2,7 +2,8 @@
 
 Run: ``.venv/bin/python benchmarks/retrieval.py``. Prints R@1 for the 17 class codes and the
 16 tags (goal 1.0, keyword and tag levels), R@1 of the semantic fallback alone on free-text
-queries written by a person who did not look at the docstrings' wording, the misses, and
+queries (``QUERIES``, which guided one rewrite of the docstrings, and ``HELD_OUT``, which did
+not), the misses, and
 timings (model load, docstring embeddings, one query) and the build speed of
 ``corpus.generate`` (the deterministic path) over the example params of every class.
 """
@@ -44,6 +45,28 @@ QUERIES: dict[str, str] = {
         "gen_ur_turn_right_at_tfl_green.py"),
 }
 
+#: written after the docstrings were last edited and never used to edit them: an honest figure
+HELD_OUT: dict[str, str] = {
+    "lead vehicle performs an emergency stop in front of me": "gen_hw_brake.py",
+    "a truck squeezes into the gap in front of my car": "gen_hw_cinf.py",
+    "someone passes me on the left and swerves in right in front": "gen_hw_cinb.py",
+    "the vehicle I was following changes lane and clears the way": "gen_hw_coutf.py",
+    "the car behind me moves over to the other lane": "gen_hw_coutb.py",
+    "ego merges into the adjacent lane with room ahead": "gen_hw_lcf.py",
+    "ego changes lane in front of vehicles approaching from behind": "gen_hw_lcb.py",
+    "keeping a safe gap to the car ahead as it slows down": "gen_hw_flf.py",
+    "a car tails me in my lane and closes the gap": "gen_hw_flb.py",
+    "free driving on the motorway with traffic in front in neighbouring lanes": "gen_hw_frf.py",
+    "free driving with vehicles behind in my lane and the lane to the right": "gen_hw_frb.py",
+    "urban road, no junction, I simply keep my lane": "gen_ur_in_lane_driving.py",
+    "approaching a junction the signal goes red so I halt at the line": (
+        "gen_ur_stop_at_tfl_red.py"),
+    "crossing just as the signal changes to orange": "gen_ur_pass_tfl_green_or_orange.py",
+    "green signal, I continue straight over the crossroads": "gen_ur_straight_tfl_green.py",
+    "at the lights I take the right turn while they are green": (
+        "gen_ur_turn_right_at_tfl_green.py"),
+}
+
 
 def recall_at_1(pairs: list[tuple[str, str]], find) -> tuple[float, list[str]]:
     """Share of queries whose first hit is the expected script, and the misses."""
@@ -64,6 +87,8 @@ def main() -> None:
     for label, pairs, find in [("class codes", codes, corpus.retrieve),
                                ("tags", tags, corpus.retrieve),
                                ("semantic fallback, free text", list(QUERIES.items()),
+                                retrieve_semantic),
+                               ("semantic fallback, held out", list(HELD_OUT.items()),
                                 retrieve_semantic)]:
         score, misses = recall_at_1(pairs, find)
         print(f"R@1 {label:30s} {score:.3f}  ({len(pairs) - len(misses)}/{len(pairs)})")

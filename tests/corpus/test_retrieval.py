@@ -93,7 +93,6 @@ def test_embedding_matches_published_sentence_transformers_similarities():
     ("the traffic light turns red and I stop", "gen_ur_stop_at_tfl_red.py"),
     ("I turn right at the junction on a green light", "gen_ur_turn_right_at_tfl_green.py"),
     ("I move over into the next lane where there is space ahead", "gen_hw_lcf.py"),
-    ("a faster car overtakes me and then cuts into my lane", "gen_hw_cinb.py"),
 ])
 def test_semantic_fallback_finds_the_manoeuvre(query, script):
     found = corpus.retrieve(query)

@@ -7,6 +7,10 @@ import math
 import pytest
 from lxml import etree
 
+SINGLE_NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
+BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
+              "van": "vehicle.mercedes.sprinter", "motorcycle": "vehicle.yamaha.yzf"}
+
 
 def action_named(doc: etree._ElementTree, name: str) -> etree._Element:
     (action,) = doc.findall(f".//Story//Action[@name='{name}']")
@@ -27,7 +31,7 @@ def expected_events(p: dict) -> dict[str, tuple]:
         sign = 1 if p["lane_change_direction"] == "left" else -1
         return ("lane", sign, max(5.0, (v0 + v1) / 2 * dur), start)
 
-    if code in ("BRAKE", "BR_BK", "FLF", "FLB", "CINF", "CINB", "COUTF", "COUTB"):
+    if code in SINGLE_NPC_CLASSES:
         events["npc_speed_change"] = ("speed", p["npc_end_speed_ms"], dur, start)
     if code in ("CINF", "CINB", "COUTF", "COUTB"):
         events["npc_lane_change"] = lane_change("npc", p["npc_speed_ms"], p["npc_end_speed_ms"])
@@ -104,3 +108,44 @@ def assert_storyboard_matches(doc: etree._ElementTree, p: dict) -> None:
         assert start_time(doc, name) == start
     stop = doc.find("Storyboard/StopTrigger//Condition[@name='timeout']")
     assert float(stop.find(".//SimulationTimeCondition").get("value")) == p["timeout_s"]
+
+
+def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
+    """The entities the params call for, in order, with their blueprint, spawn and start speed."""
+    names = [obj.get("name") for obj in doc.findall("Entities/ScenarioObject")]
+    assert names[0] == "hero"
+    hero = doc.find("Entities/ScenarioObject[@name='hero']/Vehicle")
+    assert hero.get("name") == "vehicle.tesla.model3"
+    assert hero.find("Properties/Property[@name='type']").get("value") == "ego_vehicle"
+    expected = {"hero": ("ego", p["ego_speed_ms"])}
+    if p["maneuver_class"] in SINGLE_NPC_CLASSES:
+        expected["npc"] = ("npc", p["npc_speed_ms"])
+    for slot in ("center", "right", "left"):
+        if p.get(f"{slot}_present"):
+            expected[f"npc_{slot}"] = (slot, p[f"{slot}_speed_ms"])
+    if p.get("lead_present"):
+        expected["lead"] = (None, p["lead_speed_ms"])
+    assert names == list(expected)
+    for name, (actor, speed) in expected.items():
+        private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
+        assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
+        position = private.find(".//TeleportAction/Position")[0]
+        if p["domain"] == "highway":
+            assert position.tag == "LanePosition"
+            assert (int(position.get("roadId")), int(position.get("laneId")),
+                    float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],
+                                                  p[f"{actor}_s"])
+        elif name == "hero":
+            assert position.tag == "WorldPosition"
+            assert [float(position.get(k)) for k in "xyzh"] == [p[f"ego_{k}"] for k in "xyzh"]
+        else:  # the urban lead, lead_distance_m along the ego heading
+            x, y = (float(position.get(k)) for k in "xy")
+            assert math.hypot(x - p["ego_x"], y - p["ego_y"]) == pytest.approx(
+                p["lead_distance_m"])
+            heading = math.atan2(y - p["ego_y"], x - p["ego_x"])
+            assert (math.cos(heading), math.sin(heading)) == pytest.approx(
+                (math.cos(p["ego_h"]), math.sin(p["ego_h"])))
+        if actor in ("npc", "center", "right", "left"):
+            vehicle_type = p[f"{actor}_vehicle_type"]
+            blueprint = doc.find(f"Entities/ScenarioObject[@name='{name}']/Vehicle").get("name")
+            assert blueprint == BLUEPRINTS.get(vehicle_type, BLUEPRINTS["car"])

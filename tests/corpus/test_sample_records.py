@@ -1,7 +1,7 @@
 """Real sample records end to end: MOOVE sample data -> ingest -> params -> every script.
 
-The spawn keys are filled here by hand (Town04 road 45 / an urban pose) so this test does not
-depend on the spawn database; the params themselves come from ``ingest.extract_params``.
+Twice: with spawn keys filled here by hand (Town04 road 45 / an urban pose), so the corpus is
+tested on its own, and with spawns from ``spawn_db.SpawnMatcher`` once that package is there.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from lxml import etree
 
 import corpus
 from ingest import IngestReport, extract_params, iter_raw_records
-from tests.corpus.conventions import assert_storyboard_matches
+from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}
 
@@ -47,4 +47,20 @@ def test_every_sample_record_becomes_a_valid_faithful_scenario(sample_params, tm
         path = corpus.generate(params, tmp_path / f"{params['scenario_id']}.xosc")
         doc = etree.parse(str(path))
         assert xsd_1_0.validate(doc), (params["scenario_id"], xsd_1_0.error_log)
+        assert_entities_match(doc, params)
+        assert_storyboard_matches(doc, params)
+
+
+def test_scenarios_at_spawns_from_the_spawn_database(sample_raw, tmp_path, xsd_1_0):
+    spawn_db = pytest.importorskip("spawn_db")
+    if not hasattr(spawn_db, "SpawnMatcher"):
+        pytest.skip("spawn_db.SpawnMatcher is not there yet")
+    matcher = spawn_db.SpawnMatcher()
+    records = iter_raw_records(sample_raw, IngestReport())
+    for index, item in enumerate(records):
+        params = matcher.assign(extract_params(item.record), index)
+        path = corpus.generate(params, tmp_path / f"{params['scenario_id']}.xosc")
+        doc = etree.parse(str(path))
+        assert xsd_1_0.validate(doc), (params["scenario_id"], xsd_1_0.error_log)
+        assert_entities_match(doc, params)
         assert_storyboard_matches(doc, params)

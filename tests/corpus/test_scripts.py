@@ -17,12 +17,15 @@ from scenariogeneration import xosc
 
 import corpus
 from corpus import CorpusError
-from tests.corpus.conventions import action_named, assert_storyboard_matches, first_difference
+from tests.corpus.conventions import (
+    action_named,
+    assert_entities_match,
+    assert_storyboard_matches,
+    first_difference,
+)
 from tests.corpus.params_examples import HIGHWAY_CLASSES, TAGS, example_params
 
 ALL_CLASSES = list(TAGS)
-BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
-              "van": "vehicle.mercedes.sprinter", "motorcycle": "vehicle.yamaha.yzf"}
 
 
 def _write(code: str, tmp_path: Path, **changes) -> tuple[dict, etree._ElementTree]:
@@ -51,41 +54,7 @@ def test_scenario_round_trips_through_the_scenariogeneration_parser(code, tmp_pa
 @pytest.mark.parametrize("code", ALL_CLASSES)
 def test_entities_and_init_carry_the_spawn_and_start_speeds(code, tmp_path):
     p, doc = _write(code, tmp_path)
-    names = [obj.get("name") for obj in doc.findall("Entities/ScenarioObject")]
-    assert names[0] == "hero"
-    hero = doc.find("Entities/ScenarioObject[@name='hero']/Vehicle")
-    assert hero.get("name") == "vehicle.tesla.model3"
-    assert hero.find("Properties/Property[@name='type']").get("value") == "ego_vehicle"
-    expected = {"hero": ("ego", p["ego_speed_ms"])}
-    if p.get("has_npc"):
-        expected["npc"] = ("npc", p["npc_speed_ms"])
-    for slot in ("center", "right", "left"):
-        if p.get(f"{slot}_present"):
-            expected[f"npc_{slot}"] = (slot, p[f"{slot}_speed_ms"])
-    if p.get("lead_present"):
-        expected["lead"] = (None, p["lead_speed_ms"])
-    assert names == list(expected)
-    for name, (actor, speed) in expected.items():
-        private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
-        assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
-        position = private.find(".//TeleportAction/Position")[0]
-        if p["domain"] == "highway":
-            assert position.tag == "LanePosition"
-            assert (int(position.get("roadId")), int(position.get("laneId")),
-                    float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],
-                                                  p[f"{actor}_s"])
-        elif name == "hero":
-            assert position.tag == "WorldPosition"
-            assert [float(position.get(k)) for k in "xyzh"] == [p[f"ego_{k}"] for k in "xyzh"]
-        else:  # the urban lead, lead_distance_m along the ego heading
-            x, y = (float(position.get(k)) for k in "xy")
-            assert math.hypot(x - p["ego_x"], y - p["ego_y"]) == pytest.approx(
-                p["lead_distance_m"])
-            assert math.atan2(y - p["ego_y"], x - p["ego_x"]) == pytest.approx(p["ego_h"])
-        if actor in ("npc", "center", "right", "left"):
-            vehicle_type = p[f"{actor}_vehicle_type"]
-            blueprint = doc.find(f"Entities/ScenarioObject[@name='{name}']/Vehicle").get("name")
-            assert blueprint == BLUEPRINTS[vehicle_type]
+    assert_entities_match(doc, p)
 
 
 @pytest.mark.parametrize("code", ALL_CLASSES)

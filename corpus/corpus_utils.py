@@ -125,6 +125,14 @@ def finite(what: str, value: Any) -> Any:
     return value
 
 
+def integer(params: Mapping[str, Any], key: str) -> int:
+    """``params[key]`` as an int (OpenDRIVE ids; scenario_runner parses them with int())."""
+    value = number(params, key)
+    if value != int(value):
+        raise ValueError(f"params key {key!r} must be a whole number, not {value!r}")
+    return int(value)
+
+
 def manoeuvre_timing(params: Mapping[str, Any]) -> tuple[float, float]:
     """``(duration_s, maneuver_start_s)``: how long the manoeuvre lasts and when it starts."""
     return number(params, "duration_s"), number(params, "maneuver_start_s")
@@ -134,8 +142,8 @@ def manoeuvre_timing(params: Mapping[str, Any]) -> tuple[float, float]:
 
 def lane_position(params: Mapping[str, Any], actor: str) -> xosc.LanePosition:
     """The LanePosition the spawn stage chose for ``actor`` (``ego``, ``npc``, a FR slot)."""
-    s, lane_id, road_id = (number(params, f"{actor}_{key}") for key in ("s", "lane_id", "road_id"))
-    return xosc.LanePosition(s, 0, lane_id, road_id)
+    return xosc.LanePosition(number(params, f"{actor}_s"), 0, integer(params, f"{actor}_lane_id"),
+                             integer(params, f"{actor}_road_id"))
 
 
 def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:

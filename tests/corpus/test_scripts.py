@@ -238,3 +238,11 @@ def test_only_actions_and_conditions_scenario_runner_supports(code, tmp_path):
     assert conditions <= CARLA_CONDITIONS
     for target in doc.iter("LaneChangeTarget"):
         assert target[0].tag == "RelativeTargetLane"  # the only target scenario_runner reads
+
+
+def test_lane_ids_are_written_as_integers(tmp_path):
+    _, doc = _write("BRAKE", tmp_path, ego_lane_id=-3.0, ego_road_id=45.0)
+    position = doc.find("Storyboard/Init/Actions/Private[@entityRef='hero']//LanePosition")
+    assert (position.get("laneId"), position.get("roadId")) == ("-3", "45")
+    with pytest.raises(CorpusError, match="ego_lane_id"):
+        _write("BRAKE", tmp_path, ego_lane_id=-2.5)

@@ -81,8 +81,9 @@ def _scripts() -> tuple[Path, ...]:
 def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
     """The reference script for a params dict or for a class code, tag or free-text query."""
     if isinstance(params_or_query, str):
-        code = query = params_or_query.strip()
-        tag = CLASS_TAGS.get(code.upper(), code)
+        query = params_or_query.strip()
+        code = query if query.upper() in CLASS_TAGS else ""  # free text is never a keyword
+        tag = CLASS_TAGS.get(query.upper(), query)
     else:
         code = str(params_or_query.get("maneuver_class") or "")
         tag = str(params_or_query.get("maneuver_tag") or CLASS_TAGS.get(code.upper(), ""))

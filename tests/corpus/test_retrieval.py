@@ -138,3 +138,8 @@ def test_missing_model_is_one_clear_error_naming_the_setup(monkeypatch):
     finally:
         retrieval._docstring_embeddings.cache_clear()
         cached_encoder.cache_clear()
+
+
+@pytest.mark.parametrize("query", ["lane", "in", "driving"])
+def test_a_word_of_a_script_name_is_not_a_class_keyword(query):
+    assert corpus.retrieve(query).method == "semantic"

@@ -1,0 +1,66 @@
+"""Spawn points: an OpenDRIVE reader, the Town04 spawn database and the SpawnMatcher.
+
+Public API:
+- ``SpawnMatcher(db_path=DEFAULT_DB_PATH)`` with ``.find(params, top_n)`` (ranked
+  ``SpawnCandidate`` list), ``.assess(params)`` (every spawn's score or rejections) and
+  ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys filled).
+- ``lane_position_to_world(road_id, lane_id, s, offset=0)`` -> ``(x, y, z, h)`` and
+  ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
+  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame).
+- ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``.
+- ``load_opendrive(path)`` and ``RoadNetwork`` for any other map.
+- Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``OpenDriveError``,
+  ``LaneEndsError``, ``SpawnDatabaseError``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
+from spawn_db.database import build_database, load_database, mark_reviewed, write_database
+from spawn_db.errors import (
+    LaneEndsError,
+    NoSpawnFits,
+    OpenDriveError,
+    ParamsError,
+    SpawnDatabaseError,
+    SpawnDbError,
+)
+from spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
+from spawn_db.opendrive import load_opendrive
+from spawn_db.road_network import RoadNetwork
+
+
+def lane_position_to_world(road_id: int | str, lane_id: int, s: float, offset: float = 0.0,
+                           map_path: str | Path | None = None
+                           ) -> tuple[float, float, float, float]:
+    """``(x, y, z, h)`` of a lane position, OpenSCENARIO frame; ``h`` along the lane's traffic.
+
+    ``offset`` is lateral, along OpenDRIVE's ``t`` (positive = left of the road's reference
+    direction). Default map: the bundled Town04.
+    """
+    pose = road_network(map_path).lane_to_world(road_id, lane_id, s, offset)
+    return pose.x, pose.y, pose.z, pose.h
+
+
+def advance_along_lane(road_id: int | str, lane_id: int, s: float, distance: float,
+                       map_path: str | Path | None = None) -> tuple[int | str, int, float]:
+    """The lane position ``distance`` metres further along the lane (negative: behind).
+
+    The distance is measured along the lane centre, following successors across road and
+    junction boundaries (straightest continuation). Raises :class:`LaneEndsError` if the
+    drivable lane ends first.
+    """
+    point = road_network(map_path).advance(road_id, lane_id, s, distance)
+    road = int(point.road_id) if point.road_id.lstrip("-").isdigit() else point.road_id
+    return road, point.lane_id, point.s
+
+
+__all__ = [
+    "DEFAULT_DB_PATH", "DEFAULT_MAP_PATH", "Assessment", "LaneEndsError", "NoSpawnFits",
+    "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
+    "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
+    "build_database", "lane_position_to_world", "load_database", "load_opendrive",
+    "mark_reviewed", "road_network", "write_database",
+]

@@ -1,0 +1,27 @@
+"""The exceptions of ``spawn_db``: one root, :class:`SpawnDbError`, for everything it raises."""
+
+from __future__ import annotations
+
+
+class SpawnDbError(Exception):
+    """Root of every error raised by ``spawn_db``."""
+
+
+class OpenDriveError(SpawnDbError):
+    """The OpenDRIVE file is missing, malformed or uses a feature this reader does not support."""
+
+
+class LaneEndsError(SpawnDbError):
+    """A walk along a lane ran into the end of the drivable network."""
+
+
+class SpawnDatabaseError(SpawnDbError):
+    """The spawn database file is missing or does not match its JSON Schema."""
+
+
+class NoSpawnFits(SpawnDbError):
+    """No spawn point of the database satisfies the scenario's constraints."""
+
+
+class ParamsError(SpawnDbError, ValueError):
+    """A params dict lacks a key the matcher needs, or holds a value of the wrong kind."""

@@ -1,0 +1,379 @@
+"""SpawnMatcher: choose where a scenario starts (thesis §5.2, Table 5.3, plus manoeuvre fit).
+
+Two phases. Hard filters reject spawn points that cannot host the scenario: wrong context, on
+a junction, (highway) an intersection or light nearby, (urban) no light where the manoeuvre
+needs one or a manoeuvre not in ``suitable_for``; and, beyond the thesis, the manoeuvre must
+fit: a same-direction lane on every side ``required_lane_sides`` names, for as long as the
+manoeuvre lasts, and enough drivable lane ahead for the gap plus the distance the fastest
+actor travels until the stop trigger, and behind for the gap to the rearmost actor. The
+survivors are scored with Table 5.3 and ranked; ``assign`` picks candidate
+``index % len(candidates)`` (round robin) and fills the params' spawn keys in the
+OpenSCENARIO frame (``y = -y_carla``, ``h = -radians(yaw_carla)``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
+from spawn_db.database import load_database
+from spawn_db.errors import NoSpawnFits, ParamsError
+from spawn_db.road_network import LanePoint, RoadNetwork
+
+#: length of a vehicle plus a little room, added to every required drivable length (m)
+VEHICLE_MARGIN_M = 6.0
+#: urban manoeuvres that need a traffic light, and the movement the light must control
+LIGHT_MOVEMENT_BY_TAG = {
+    "stop_at_tfl_red": "straight", "pass_tfl_green_or_orange": "straight",
+    "straight_tfl_green": "straight", "turn_right_at_tfl_green": "right",
+}
+#: free-ride slots and the lane each stands in relative to the ego
+FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
+CUT_IN_CLASSES = ("CINF", "CINB")
+#: free-ride classes place their NPCs by slot, not as one ``npc``
+FREE_RIDE_CLASSES = ("FRF", "FRB")
+
+
+@dataclass(frozen=True)
+class Rejection:
+    """Why one spawn point cannot host the scenario: the constraint and the numbers."""
+
+    constraint: str
+    detail: str
+
+    def __str__(self) -> str:
+        return f"{self.constraint}: {self.detail}"
+
+
+@dataclass(frozen=True)
+class SpawnCandidate:
+    """A spawn point that passed the hard filters, with its score and OpenSCENARIO pose."""
+
+    spawn_id: int
+    score: float
+    entry: dict[str, Any] = field(repr=False)
+
+    @property
+    def x(self) -> float:
+        """OpenSCENARIO x (= CARLA x)."""
+        return self.entry["transform"]["x"]
+
+    @property
+    def y(self) -> float:
+        """OpenSCENARIO y = -y_carla."""
+        return -self.entry["transform"]["y"]
+
+    @property
+    def z(self) -> float:
+        """Height (same in both frames)."""
+        return self.entry["transform"]["z"]
+
+    @property
+    def h(self) -> float:
+        """OpenSCENARIO heading = -radians(yaw_carla)."""
+        return -math.radians(self.entry["transform"]["yaw"])
+
+    @property
+    def lane_point(self) -> LanePoint:
+        """Road, lane and ``s`` of the spawn point."""
+        geometry = self.entry["geometry"]
+        return LanePoint(str(geometry["road_id"]), geometry["lane_id"], geometry["s"])
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """One spawn point judged against one scenario: its score, or why it was rejected."""
+
+    spawn_id: int
+    score: float
+    rejections: tuple[Rejection, ...]
+
+    @property
+    def accepted(self) -> bool:
+        """Whether the spawn point passed every hard filter."""
+        return not self.rejections
+
+
+@dataclass(frozen=True)
+class Requirements:
+    """What a scenario asks of its spawn point, derived from its params."""
+
+    scenario_id: str
+    domain: str
+    tag: str
+    sides: tuple[str, ...]
+    ahead_m: float
+    behind_m: float
+    side_ahead_m: float
+    side_behind_m: float
+    speed_kmh: float
+    speed_limit_kmh: float | None
+    tfl_ds_m: float | None
+
+    @classmethod
+    def from_params(cls, params: dict[str, Any]) -> Requirements:
+        """Read the contract keys (docs/params.md) the matcher needs."""
+        scenario_id = str(params.get("scenario_id", "<no scenario_id>"))
+        number = _NumberReader(params, scenario_id)
+        domain = params.get("domain")
+        if domain not in ("highway", "urban"):
+            raise ParamsError(f"{scenario_id}: domain must be 'highway' or 'urban', got {domain!r}")
+        sides = tuple(params.get("required_lane_sides") or ())
+        if any(side not in ("left", "right") for side in sides):
+            raise ParamsError(f"{scenario_id}: required_lane_sides must hold 'left'/'right', "
+                              f"got {list(sides)!r}")
+        max_speed = number("max_speed_ms")
+        gap_ahead, gap_behind = number("gap_ahead_m"), number("gap_behind_m")
+        manoeuvre_end = number("maneuver_start_s", 0.0) + number("duration_s", 0.0)
+        ahead = gap_ahead + max_speed * number("timeout_s") + VEHICLE_MARGIN_M
+        return cls(
+            scenario_id=scenario_id, domain=domain, tag=str(params.get("maneuver_tag", "")),
+            sides=sides, ahead_m=ahead, behind_m=gap_behind + VEHICLE_MARGIN_M,
+            side_ahead_m=min(ahead, gap_ahead + max_speed * manoeuvre_end + VEHICLE_MARGIN_M),
+            side_behind_m=gap_behind + VEHICLE_MARGIN_M, speed_kmh=max_speed * 3.6,
+            speed_limit_kmh=number.optional("speed_limit_kmh"),
+            tfl_ds_m=number.optional("tfl_ds_m"))
+
+    @property
+    def light_movement(self) -> str | None:
+        """The movement whose light the manoeuvre plays with (``None``: no light needed)."""
+        return LIGHT_MOVEMENT_BY_TAG.get(self.tag) if self.domain == "urban" else None
+
+
+class _NumberReader:
+    def __init__(self, params: dict[str, Any], scenario_id: str):
+        self.params, self.scenario_id = params, scenario_id
+
+    def __call__(self, key: str, default: float | None = None) -> float:
+        value = self.params.get(key, default)
+        if value is None:
+            raise ParamsError(f"{self.scenario_id}: params lack {key!r} (docs/params.md)")
+        return self._number(key, value)
+
+    def optional(self, key: str) -> float | None:
+        value = self.params.get(key)
+        return None if value is None else self._number(key, value)
+
+    def _number(self, key: str, value: Any) -> float:
+        numeric = isinstance(value, int | float) and not isinstance(value, bool)
+        if not numeric or not math.isfinite(value):
+            raise ParamsError(f"{self.scenario_id}: {key}={value!r} is not a finite number")
+        return float(value)
+
+
+class SpawnMatcher:
+    """Ranks the spawn points of a database for a params dict and assigns one."""
+
+    def __init__(self, db_path: str | Path = DEFAULT_DB_PATH,
+                 map_path: str | Path | None = None):
+        self.db_path = Path(db_path)
+        self.database = load_database(self.db_path)
+        self.entries: list[dict[str, Any]] = self.database["spawn_points"]
+        self.map_path = Path(map_path) if map_path else (
+            self.db_path.parent / "maps" / self.database["metadata"]["source_map"])
+        if not self.map_path.exists():
+            self.map_path = DEFAULT_MAP_PATH
+        #: the rejections of the last ``find``, by spawn id (for debugging)
+        self.last_rejections: dict[int, tuple[Rejection, ...]] = {}
+
+    @property
+    def network(self) -> RoadNetwork:
+        """The lane graph of the database's map (loaded on first use)."""
+        return road_network(self.map_path)
+
+    def assess(self, params: dict[str, Any]) -> list[Assessment]:
+        """Every spawn point judged against ``params``, in database order."""
+        needs = Requirements.from_params(params)
+        assessments = []
+        for entry in self.entries:
+            rejections = tuple(_hard_filters(entry, needs))
+            score = -1.0 if rejections else _score(entry, needs)
+            assessments.append(Assessment(entry["spawn_id"], score, rejections))
+        return assessments
+
+    def find(self, params: dict[str, Any], top_n: int = 5) -> list[SpawnCandidate]:
+        """The ``top_n`` best spawn points for ``params``, best first.
+
+        Raises :class:`NoSpawnFits` naming the constraint that ruled most spawn points out.
+        """
+        if top_n < 1:
+            raise ParamsError(f"top_n must be at least 1, got {top_n}")
+        assessments = self.assess(params)
+        self.last_rejections = {a.spawn_id: a.rejections for a in assessments if not a.accepted}
+        by_id = {entry["spawn_id"]: entry for entry in self.entries}
+        accepted = [a for a in assessments if a.accepted]
+        if not accepted:
+            raise NoSpawnFits(_no_fit_message(params, self.db_path, assessments))
+        ranked = _spread_over_roads(accepted, by_id)
+        return [SpawnCandidate(a.spawn_id, a.score, by_id[a.spawn_id]) for a in ranked[:top_n]]
+
+    def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
+        """A new params dict with the spawn keys filled from candidate ``index % len``."""
+        candidates = self.find(params, top_n)
+        candidate = candidates[index % len(candidates)]
+        result = dict(params)
+        result["spawn_id"] = candidate.spawn_id
+        ego = candidate.lane_point
+        result.update(_pose_keys("ego", candidate.x, candidate.y, candidate.z, candidate.h))
+        result.update(_lane_keys("ego", ego))
+        for actor, side, distance in _placed_actors(params):
+            point = self._place(ego, side, distance, params)
+            pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
+            result.update(_pose_keys(actor, pose.x, pose.y, pose.z, pose.h))
+            result.update(_lane_keys(actor, point))
+        if params.get("domain") == "urban":
+            result.update(_light_keys(candidate.entry, Requirements.from_params(params)))
+        return result
+
+    def _place(self, ego: LanePoint, side: str | None, distance: float,
+               params: dict[str, Any]) -> LanePoint:
+        key = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
+        if side is not None:
+            neighbour = self.network.neighbour(key, side)
+            if neighbour is None:
+                raise NoSpawnFits(f"{params.get('scenario_id')}: spawn on road {ego.road_id} "
+                                  f"lane {ego.lane_id} has no lane on the {side}")
+            key = neighbour
+        return self.network.advance(key.road_id, key.lane_id, ego.s, distance)
+
+
+def _hard_filters(entry: dict[str, Any], needs: Requirements):
+    features, drivable = entry["features"], entry["drivable"]
+    if entry["context"] != needs.domain:
+        yield Rejection("context", f"spawn is {entry['context']}, scenario is {needs.domain}")
+        return
+    if features["is_junction"]:
+        yield Rejection("junction", "spawn is on a junction")
+    if needs.domain == "highway":
+        if features["is_intersection"] or features["is_intersection_w_traffic_light"]:
+            yield Rejection("intersection", "an intersection or traffic light is within reach")
+        signal = drivable["signal_ahead_m"]
+        if signal is not None and signal < needs.ahead_m:
+            yield Rejection("traffic_light_on_route",
+                            f"a signalised junction {signal:.0f} m ahead, inside the "
+                            f"{needs.ahead_m:.0f} m the scenario drives")
+    else:
+        yield from _urban_filters(entry, needs)
+    for side in needs.sides:
+        lane = entry["lanes"][side]
+        if lane["count"] == 0:
+            yield Rejection(f"{side}_lane", f"no same-direction lane on the {side}")
+        elif lane["ahead_m"] < needs.side_ahead_m or lane["behind_m"] < needs.side_behind_m:
+            yield Rejection(f"{side}_lane",
+                            f"the {side} lane runs {lane['behind_m']:.0f} m back and "
+                            f"{lane['ahead_m']:.0f} m on, {needs.side_behind_m:.0f} m and "
+                            f"{needs.side_ahead_m:.0f} m needed")
+    if drivable["ahead_m"] < needs.ahead_m:
+        yield Rejection("length_ahead", f"{drivable['ahead_m']:.0f} m drivable ahead, "
+                                        f"{needs.ahead_m:.0f} m needed")
+    if drivable["behind_m"] < needs.behind_m:
+        yield Rejection("length_behind", f"{drivable['behind_m']:.0f} m drivable behind, "
+                                         f"{needs.behind_m:.0f} m needed")
+
+
+def _urban_filters(entry: dict[str, Any], needs: Requirements):
+    movement = needs.light_movement
+    if movement is not None and not entry["surroundings"]["traffic_lights"]:
+        yield Rejection("traffic_light", "no traffic light ahead of the spawn")
+    elif movement is not None and _light_for(entry, movement) is None:
+        yield Rejection("traffic_light", f"no light controls the {movement} movement")
+    if needs.tag not in entry["annotations"]["suitable_for"]:
+        yield Rejection("suitable_for", f"{needs.tag!r} is not in suitable_for")
+
+
+def _score(entry: dict[str, Any], needs: Requirements) -> float:
+    priority = 10.0 * entry["annotations"]["priority"]
+    limit = entry["surroundings"]["speed_limit_kmh"]
+    if needs.domain == "highway":
+        return (30.0 + max(0.0, 20.0 - 0.5 * abs(limit - needs.speed_kmh))
+                + 15.0 * entry["features"]["is_straight"]
+                + 10.0 * entry["surroundings"]["is_highway_layout"]
+                + 15.0 * (entry["drivable"]["ahead_m"] > 100.0) + priority)
+    score = 30.0 + priority + 10.0 * entry["annotations"]["manually_reviewed"]
+    if needs.speed_limit_kmh is not None:
+        score += max(0.0, 20.0 - abs(limit - needs.speed_limit_kmh))
+    light = _light_for(entry, needs.light_movement) if needs.light_movement else None
+    if light is not None:
+        if needs.tfl_ds_m is not None:
+            score += max(0.0, 30.0 - abs(light["distance_m"] - needs.tfl_ds_m))
+        if entry["surroundings"]["stop_line_distance_m"] is not None:
+            score += 15.0
+    return score
+
+
+def _light_for(entry: dict[str, Any], movement: str) -> dict[str, Any] | None:
+    """The light controlling ``movement`` out of the spawn's lane, nearest first."""
+    for light in entry["surroundings"]["traffic_lights"]:
+        if movement in light.get("movements", []):
+            return light
+    return None
+
+
+def _spread_over_roads(accepted: list[Assessment], by_id: dict[int, dict]) -> list[Assessment]:
+    """Best score first; among equal scores, alternate roads so the top N is spread out."""
+    ordered = sorted(accepted, key=lambda a: (-a.score, a.spawn_id))
+    seen: Counter = Counter()
+    rank = {}
+    for assessment in ordered:
+        group = (assessment.score, by_id[assessment.spawn_id]["geometry"]["road_id"])
+        rank[assessment.spawn_id] = seen[group]
+        seen[group] += 1
+    return sorted(ordered, key=lambda a: (-a.score, rank[a.spawn_id], a.spawn_id))
+
+
+def _placed_actors(params: dict[str, Any]):
+    """``(actor, adjacent side or None, signed distance along the lane)`` of every NPC."""
+    if params.get("domain") != "highway":
+        return
+    if params.get("has_npc") and params.get("maneuver_class") not in FREE_RIDE_CLASSES:
+        side = None
+        if params.get("maneuver_class") in CUT_IN_CLASSES:
+            sides = params.get("required_lane_sides") or []
+            side = sides[0] if sides else None
+        yield "npc", side, float(params.get("npc_distance_m") or 0.0)
+    for slot, side in FREE_RIDE_SLOTS.items():
+        if params.get(f"{slot}_present"):
+            yield slot, side, float(params.get(f"{slot}_distance_m") or 0.0)
+
+
+def _pose_keys(actor: str, x: float, y: float, z: float, h: float) -> dict[str, float]:
+    return {f"{actor}_x": round(x, 4), f"{actor}_y": round(y, 4), f"{actor}_z": round(z, 4),
+            f"{actor}_h": round(math.remainder(h, 2 * math.pi), 6)}
+
+
+def _lane_keys(actor: str, point: LanePoint) -> dict[str, Any]:
+    road_id = int(point.road_id) if point.road_id.lstrip("-").isdigit() else point.road_id
+    return {f"{actor}_road_id": road_id, f"{actor}_lane_id": point.lane_id,
+            f"{actor}_s": round(point.s, 4)}
+
+
+def _light_keys(entry: dict[str, Any], needs: Requirements) -> dict[str, Any]:
+    light = _light_for(entry, needs.light_movement or "straight")
+    if light is None:
+        light = (entry["surroundings"]["traffic_lights"] or [None])[0]
+    return {
+        "tfl_x_carla": light["x"] if light else None,
+        "tfl_y_carla": light["y"] if light else None,
+        "spawn_tfl_distance_m": light["distance_m"] if light else None,
+        "spawn_stop_line_distance_m": entry["surroundings"]["stop_line_distance_m"],
+    }
+
+
+def _no_fit_message(params: dict[str, Any], db_path: Path,
+                    assessments: list[Assessment]) -> str:
+    scenario = params.get("scenario_id", "<no scenario_id>")
+    in_context = [a for a in assessments
+                  if not any(r.constraint == "context" for r in a.rejections)]
+    if not in_context:
+        return (f"{scenario}: no {params.get('domain')} spawn point in {db_path.name}")
+    counts = Counter(r.constraint for a in in_context for r in a.rejections)
+    constraint, count = counts.most_common(1)[0]
+    example = next(r for a in in_context for r in a.rejections if r.constraint == constraint)
+    return (f"{scenario} ({params.get('maneuver_class')}): no spawn point of {db_path.name} "
+            f"fits; {constraint} rules out {count} of {len(in_context)} "
+            f"{params.get('domain')} spawn points (e.g. {example.detail})")
+

@@ -10,14 +10,8 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-TAGS = {
-    "BRAKE": "brake", "BR_BK": "brake", "CINF": "cut_in_front", "CINB": "cut_in_behind",
-    "COUTF": "cut_out_front", "COUTB": "cut_out_behind", "LCF": "lane_change_front",
-    "LCB": "lane_change_behind", "FLF": "follow_front", "FLB": "follow_behind",
-    "FRF": "free_ride_front", "FRB": "free_ride_behind", "U1_1": "in_lane_driving",
-    "U4_1": "stop_at_tfl_red", "U4_2": "pass_tfl_green_or_orange",
-    "U4_3": "straight_tfl_green", "U4_4": "turn_right_at_tfl_green",
-}
+from corpus.retrieval import CLASS_TAGS as TAGS  # checked against docs/params.md
+
 HIGHWAY_CLASSES = [code for code in TAGS if not code.startswith("U")]
 URBAN_CLASSES = [code for code in TAGS if code.startswith("U")]
 

@@ -1,7 +1,8 @@
 """Every reference script writes a valid OpenSCENARIO 1.0 file whose numbers are the params'.
 
-The expected storyboard below restates docs/scenario-conventions.md independently of
-corpus_utils, so a change of convention on one side only makes these tests fail.
+What the file must contain is restated from docs/scenario-conventions.md in
+``tests/corpus/conventions.py``, independently of corpus_utils, so a convention changed on
+one side only makes these tests fail.
 """
 
 from __future__ import annotations

@@ -338,8 +338,10 @@ def _init(actors: list[Actor], weather_key: str) -> xosc.Init:
     return init
 
 
-def _act(tag: str, events: Iterable[StoryEvent]) -> xosc.Act:
-    act = xosc.Act(f"{tag}_act", at_time("act_start", 0))
+def _act(tag: str, events: Iterable[StoryEvent], timeout_s: float) -> xosc.Act:
+    # scenario_runner reads only criteria_* conditions from the Storyboard StopTrigger and ends
+    # a scenario through its Acts, so the timeout is stated on the Act as well
+    act = xosc.Act(f"{tag}_act", at_time("act_start", 0), at_time("act_stop", timeout_s, "stop"))
     maneuvers: dict[str, xosc.Maneuver] = {}
     for item in events:
         if item.group not in maneuvers:
@@ -364,9 +366,10 @@ def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
     for actor in actors:
         entities.add_scenario_object(actor.name, _vehicle(actor))
     story = xosc.Story(f"{tag}_story", xosc.ParameterDeclarations())
-    story.add_act(_act(tag, events))
+    timeout_s = number(params, "timeout_s")
+    story.add_act(_act(tag, events, timeout_s))
     storyboard = xosc.StoryBoard(_init(actors, params["weather_key"]),
-                                 at_time("timeout", number(params, "timeout_s"), "stop"))
+                                 at_time("timeout", timeout_s, "stop"))
     storyboard.add_story(story)
     return xosc.Scenario(
         f"ScenWeave {params['maneuver_class']} {params['scenario_id']}", AUTHOR,

@@ -106,8 +106,9 @@ def assert_storyboard_matches(doc: etree._ElementTree, p: dict) -> None:
             (start,) = values
             assert action.find(".//AcquirePositionAction/Position/WorldPosition") is not None
         assert start_time(doc, name) == start
-    stop = doc.find("Storyboard/StopTrigger//Condition[@name='timeout']")
-    assert float(stop.find(".//SimulationTimeCondition").get("value")) == p["timeout_s"]
+    for stop in (doc.find("Storyboard/StopTrigger//Condition[@name='timeout']"),
+                 doc.find(".//Act/StopTrigger//Condition[@name='act_stop']")):
+        assert float(stop.find(".//SimulationTimeCondition").get("value")) == p["timeout_s"]
 
 
 def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:

@@ -1,0 +1,102 @@
+"""For every record of the sample data, the assigned spawn fits the manoeuvre.
+
+The fit is checked on the map itself (lane graph walks), not on the database's own numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+
+import pytest
+
+from ingest import IngestReport, extract_params, iter_raw_records
+from ingest.samples import write_highway_samples, write_urban_samples
+from spawn_db import SpawnMatcher
+from spawn_db.signals import is_traffic_light, junction_approach, signal_position
+
+PER_CLASS = 12
+
+
+@pytest.fixture(scope="module")
+def assigned(tmp_path_factory) -> list[tuple[dict, dict]]:
+    raw = tmp_path_factory.mktemp("spawn_samples")
+    write_highway_samples(raw / "highway", seed=11, per_class=PER_CLASS)
+    write_urban_samples(raw / "urban", seed=11, per_class=PER_CLASS)
+    report = IngestReport()
+    params = [extract_params(item.record) for item in iter_raw_records(raw, report)]
+    matcher = SpawnMatcher()
+    per_class: Counter = Counter()
+    pairs = []
+    for p in params:
+        pairs.append((p, matcher.assign(p, per_class[p["maneuver_class"]])))
+        per_class[p["maneuver_class"]] += 1
+    return pairs
+
+
+def test_every_class_of_the_sample_data_is_placed(assigned):
+    classes = Counter(p["maneuver_class"] for p, _ in assigned)
+    assert len(classes) == 17 and min(classes.values()) >= PER_CLASS - 2
+
+
+def test_highway_spawns_fit_the_manoeuvre(assigned, town04):
+    for params, result in assigned:
+        if params["domain"] != "highway":
+            continue
+        ego = (str(result["ego_road_id"]), result["ego_lane_id"], result["ego_s"])
+        key = town04.key_at(*ego)
+        assert town04.road(ego[0]).sections[key.section].lanes[ego[1]].type == "driving"
+        needed = params["gap_ahead_m"] + params["max_speed_ms"] * params["timeout_s"]
+        assert town04.drivable_length(*ego, forward=True, cap=needed + 1) > needed
+        assert town04.drivable_length(*ego, forward=False, cap=1000) > params["gap_behind_m"]
+        for side in params["required_lane_sides"]:
+            assert town04.neighbour(key, side) is not None, (params["scenario_id"], side)
+        for actor, distance_key in (("npc", "npc_distance_m"), ("center", "center_distance_m"),
+                                    ("right", "right_distance_m"), ("left", "left_distance_m")):
+            if f"{actor}_s" not in result:
+                continue
+            back = town04.advance(str(result[f"{actor}_road_id"]), result[f"{actor}_lane_id"],
+                                  result[f"{actor}_s"], -params[distance_key])
+            assert back.s == pytest.approx(ego[2], abs=1e-3), params["scenario_id"]
+            assert back.road_id == ego[0]
+
+
+def test_cut_ins_start_beside_the_ego_and_others_behind_or_ahead_of_it(assigned, town04):
+    for params, result in assigned:
+        if params["domain"] != "highway" or not params["has_npc"] \
+                or params["maneuver_class"] in ("FRF", "FRB"):
+            continue
+        ego = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
+        back = town04.advance(result["npc_road_id"], result["npc_lane_id"], result["npc_s"],
+                              -params["npc_distance_m"])
+        if params["maneuver_class"] in ("CINF", "CINB"):
+            side = params["required_lane_sides"][0]
+            assert back.lane_id == town04.neighbour(ego, side).lane_id
+        else:
+            assert back.lane_id == ego.lane_id
+
+
+def test_urban_spawns_fit_the_manoeuvre(assigned, town04):
+    lights = [signal_position(town04, s) for r in town04.map.roads.values() for s in r.signals
+              if is_traffic_light(s)]
+    for params, result in assigned:
+        if params["domain"] != "urban":
+            continue
+        key = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
+        assert not town04.road(key.road_id).in_junction
+        if params["maneuver_tag"] == "in_lane_driving":
+            needed = params["max_speed_ms"] * params["timeout_s"]
+            assert town04.drivable_length(*key[::2], result["ego_s"], forward=True,
+                                          cap=needed + 1) > needed
+            continue
+        # the light named in the params is a dynamic signal of the map (so pos=x,y resolves)
+        nearest = min(math.hypot(p.x - result["tfl_x_carla"], -p.y - result["tfl_y_carla"])
+                      for p in lights)
+        assert nearest < 1e-3
+        last = town04.road(key.road_id).sections
+        approach = junction_approach(town04, key._replace(
+            section=len(last) - 1 if key.lane_id < 0 else 0))
+        movements = {m.movement for m in approach.movements if m.signal is not None}
+        needed = "right" if params["maneuver_tag"] == "turn_right_at_tfl_green" else "straight"
+        assert needed in movements, params["scenario_id"]
+        assert result["spawn_stop_line_distance_m"] > 0

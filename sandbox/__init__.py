@@ -1,0 +1,66 @@
+"""Running LLM-written scenario scripts in a throwaway sandbox: one interface, two backends.
+
+``get_sandbox(SandboxSettings(backend="docker"|"bwrap"|"auto")).run(code, params, out_dir)``
+returns an :class:`ExecResult`; infrastructure failures raise :class:`SandboxError`.
+"""
+
+from __future__ import annotations
+
+from sandbox.base import Sandbox
+from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from sandbox.result import ExecResult
+from sandbox.settings import BACKENDS, SandboxSettings
+
+__all__ = ["ExecResult", "ImageNotFound", "Sandbox", "SandboxError", "SandboxSettings",
+           "SandboxUnavailable", "backend_names", "check_backends", "get_sandbox"]
+
+
+def backend_names() -> tuple[str, ...]:
+    """The choices of ``--sandbox``: every backend plus ``auto``."""
+    return (*BACKENDS, "auto")
+
+
+def _make(name: str, settings: SandboxSettings) -> Sandbox:
+    if name == "docker":
+        from sandbox.container import DockerSandbox  # the docker SDK loads only when used
+
+        return DockerSandbox(settings)
+    from sandbox.bwrap import BwrapSandbox
+
+    return BwrapSandbox(settings)
+
+
+def check_backends(settings: SandboxSettings | None = None) -> dict[str, str | None]:
+    """Each backend's name -> None when it works here, else the reason it does not."""
+    settings = settings or SandboxSettings()
+    reasons: dict[str, str | None] = {}
+    for name in BACKENDS:
+        box = _make(name, settings)
+        try:
+            box.probe()
+            reasons[name] = None
+        except SandboxError as err:
+            reasons[name] = str(err)
+        finally:
+            box.close()
+    return reasons
+
+
+def get_sandbox(settings: SandboxSettings | None = None) -> Sandbox:
+    """The sandbox of ``settings.backend``, checked to work; ``auto`` prefers a container
+    engine that answers and has the image, else bubblewrap.
+
+    Raises :class:`SandboxUnavailable` naming the setting to change when it cannot run.
+    """
+    settings = settings or SandboxSettings()
+    names = ["docker", "bwrap"] if settings.backend == "auto" else [settings.backend]
+    reasons = []
+    for name in names:
+        box = _make(name, settings)
+        try:
+            box.probe()
+            return box
+        except SandboxUnavailable as err:
+            box.close()
+            reasons.append(f"{name}: {err}")
+    raise SandboxUnavailable("no sandbox backend works here: " + "; ".join(reasons))

@@ -1,0 +1,161 @@
+"""The bubblewrap backend, for hosts without a container engine.
+
+Traps this avoids (measured, see notes/sandbox.md): bwrap started as root stays escapable, so
+it is started as an unprivileged uid through ``setpriv``; the launcher's environment would leak
+through ``/proc/1/environ``, so bwrap gets the sandbox environment only and ``--as-pid-1``;
+bwrap sets no resource limits, so a per-run cgroup and ``prlimit`` do.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+from sandbox.base import (
+    CORPUS_MOUNT,
+    JOB_MOUNT,
+    OUT_MOUNT,
+    RESULT_MOUNT,
+    SANDBOX_ENV,
+    Attempt,
+    RawRun,
+    Sandbox,
+)
+from sandbox.capture import CappedBuffer, drain_in_background
+from sandbox.cgroups import RunCgroup
+from sandbox.errors import SandboxUnavailable
+from sandbox.settings import MIB
+
+#: joins the run's cgroups (as root, before dropping privileges), then execs the rest
+JOIN_CGROUPS = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
+SYSTEM_DIRS = ("bin", "sbin", "lib", "lib32", "lib64")
+
+
+class BwrapSandbox(Sandbox):
+    """One bubblewrap sandbox per attempt: no network, read-only system, sized tmpfs outputs."""
+
+    name = "bwrap"
+
+    def probe(self) -> None:
+        """Check bwrap, setpriv, prlimit and the sandbox Python, then run a trivial sandbox."""
+        for tool in ("bwrap", "prlimit", *(["setpriv"] if os.geteuid() == 0 else [])):
+            if shutil.which(tool) is None:
+                raise SandboxUnavailable(f"{tool} not found: install the Debian packages in "
+                                         "scripts/apt-packages.txt (bubblewrap, util-linux)")
+        python = Path(self.settings.python)
+        if not python.exists():
+            raise SandboxUnavailable(f"sandbox Python {python} not found: create it with "
+                                     "`bash scripts/setup.d/20-sandbox.sh` or set "
+                                     "SandboxSettings.python")
+        command = [*self._privilege_drop(), "bwrap", *self._mounts(None), "--", str(python),
+                   "-I", "-c", "import scenariogeneration"]
+        done = subprocess.run(command, env=SANDBOX_ENV, capture_output=True, timeout=60,
+                              check=False)
+        if done.returncode != 0:
+            raise SandboxUnavailable(
+                f"bwrap cannot start {python} with scenariogeneration as uid "
+                f"{self.settings.sandbox_uid}: {done.stderr.decode(errors='replace').strip()} "
+                "(unprivileged user namespaces and SandboxSettings.python readable by "
+                "SandboxSettings.sandbox_uid are needed)")
+
+    def _execute(self, attempt: Attempt) -> RawRun:
+        s = self.settings
+        cgroup = None
+        if RunCgroup.unavailable_reason(s.cgroup_root) is None:
+            cgroup = RunCgroup(s.cgroup_root, s.memory_mb * MIB, s.pids, s.cpus)
+            cgroup.create()
+        try:
+            return self._launch(attempt, cgroup)
+        finally:
+            if cgroup is not None:
+                cgroup.kill_all()
+                cgroup.remove()
+
+    def _launch(self, attempt: Attempt, cgroup: RunCgroup | None) -> RawRun:
+        s = self.settings
+        join = (["/bin/sh", "-c", JOIN_CGROUPS, "join", *map(str, cgroup.procs_files()), "--"]
+                if cgroup else [])
+        command = [*join, *self._privilege_drop(), *self._rlimits(cgroup is None), "bwrap",
+                   *self._mounts(attempt), "--", *attempt.harness_command(s.python)]
+        stdout, stderr = CappedBuffer(s.stdout_max_bytes), CappedBuffer(s.stderr_max_bytes)
+        started = time.monotonic()
+        proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, bufsize=0, env=SANDBOX_ENV,
+                                close_fds=True, start_new_session=True)
+        readers = [drain_in_background(proc.stdout, stdout),
+                   drain_in_background(proc.stderr, stderr)]
+        timed_out = False
+        try:
+            proc.wait(timeout=s.wall_time_s)
+        except subprocess.TimeoutExpired:
+            timed_out = True
+        finally:
+            _kill_group(proc)
+        duration = time.monotonic() - started
+        if cgroup is not None:
+            cgroup.kill_all()  # readers end once nothing holds the pipes open
+        for reader in readers:
+            reader.join(timeout=5)
+        code = proc.returncode
+        return RawRun(exit_code=128 - code if code < 0 else code, stdout=stdout.text(),
+                      stderr=stderr.text(), timed_out=timed_out, duration_s=duration)
+
+    def _privilege_drop(self) -> list[str]:
+        if os.geteuid() != 0:
+            return []
+        uid = self.settings.sandbox_uid
+        return ["setpriv", f"--reuid={uid}", f"--regid={uid}", "--clear-groups",
+                "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs"]
+
+    def _rlimits(self, without_cgroup: bool) -> list[str]:
+        s = self.settings
+        limits = ["prlimit", f"--fsize={s.file_size_limit}", "--core=0", "--nofile=256",
+                  f"--cpu={math.ceil(s.wall_time_s) + 1}"]
+        if without_cgroup:  # weaker stand-ins: per-uid process count, address space
+            limits += [f"--nproc={s.pids}", f"--as={4 * s.memory_mb * MIB}"]
+        return [*limits, "--"]
+
+    def _mounts(self, attempt: Attempt | None) -> list[str]:
+        s = self.settings
+        args = ["--unshare-all", "--die-with-parent", "--new-session", "--as-pid-1",
+                "--cap-drop", "ALL", "--hostname", "sandbox",
+                "--ro-bind", "/usr", "/usr", *_system_dir_args(),
+                "--ro-bind", str(_venv_root(s.python)), str(_venv_root(s.python)),
+                "--proc", "/proc", "--ro-bind", "/proc/sys", "/proc/sys", "--dev", "/dev",
+                "--size", str(s.tmpfs_mb * MIB), "--tmpfs", "/tmp",
+                "--size", str(s.output_max_bytes), "--tmpfs", OUT_MOUNT,
+                "--chdir", "/tmp"]
+        if attempt is not None:
+            args += ["--ro-bind", str(attempt.job), JOB_MOUNT,
+                     "--bind", str(attempt.report), RESULT_MOUNT]
+        corpus = s.corpus_path()
+        if corpus is not None and corpus.is_dir():
+            args += ["--ro-bind", str(corpus), CORPUS_MOUNT]
+        return args
+
+
+def _system_dir_args() -> list[str]:
+    args: list[str] = []
+    for name in SYSTEM_DIRS:
+        path = Path("/") / name
+        if path.is_symlink():
+            args += ["--symlink", os.readlink(path), str(path)]
+        elif path.is_dir():
+            args += ["--ro-bind", str(path), str(path)]
+    return args
+
+
+def _venv_root(python: str) -> Path:
+    return Path(python).parent.parent
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()

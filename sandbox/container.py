@@ -1,0 +1,150 @@
+"""The Docker backend: one throwaway container per attempt, through the ``docker`` SDK.
+
+Works against Docker or podman's Docker-compatible API. Traps this avoids (measured, see
+notes/sandbox.md): podman ignores ``network_disabled`` (``network_mode="none"`` instead),
+container logs are unbounded unless ``max-size`` is set, ``read_only`` silently adds writable
+unsized ``/tmp``, ``/var/tmp`` and ``/run`` (each gets a sized tmpfs here), swap doubles the
+memory allowance unless ``memswap_limit`` equals ``mem_limit``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import docker
+import requests
+from docker.errors import DockerException, NotFound
+from docker.types import LogConfig, Ulimit
+
+from sandbox.base import (
+    CORPUS_MOUNT,
+    JOB_MOUNT,
+    OUT_MOUNT,
+    RESULT_MOUNT,
+    SANDBOX_ENV,
+    Attempt,
+    RawRun,
+    Sandbox,
+)
+from sandbox.capture import capped_text
+from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from sandbox.settings import MIB, SandboxSettings
+
+SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
+LOG_MAX_SIZE = "1m"
+BUILD_HINT = "build it with `bash scripts/setup.d/20-sandbox.sh` or set SandboxSettings.image"
+
+
+class DockerSandbox(Sandbox):
+    """One container per attempt, removed afterwards, whatever happened."""
+
+    name = "docker"
+
+    def __init__(self, settings: SandboxSettings) -> None:
+        super().__init__(settings)
+        self._client: docker.DockerClient | None = None
+
+    @property
+    def client(self) -> docker.DockerClient:
+        """The engine connection, opened on first use."""
+        if self._client is None:
+            url = self.settings.engine_url()
+            try:
+                self._client = docker.DockerClient(base_url=url, timeout=30)
+                self._client.ping()
+            except (DockerException, requests.RequestException) as err:
+                self._client = None
+                raise SandboxUnavailable(
+                    f"no container engine answers at {url}: start one (e.g. `podman system "
+                    "service --time=0 unix:///run/podman/podman.sock`) or set "
+                    "SandboxSettings.docker_host / DOCKER_HOST") from err
+        return self._client
+
+    def probe(self) -> None:
+        """Check that the engine answers and the sandbox image exists."""
+        try:
+            self.client.images.get(self.settings.image)
+        except NotFound as err:
+            raise ImageNotFound(f"image {self.settings.image} not found: {BUILD_HINT}") from err
+        except (DockerException, requests.RequestException) as err:
+            raise SandboxUnavailable(f"container engine error: {err}") from err
+
+    def _execute(self, attempt: Attempt) -> RawRun:
+        started = time.monotonic()
+        container = self._create(attempt)
+        try:
+            container.start()
+            timed_out, code = self._wait(container, started)
+            duration = time.monotonic() - started
+            stdout = container.logs(stdout=True, stderr=False)
+            stderr = container.logs(stdout=False, stderr=True)
+        except (DockerException, requests.RequestException) as err:
+            raise SandboxError(f"container engine failed during the run: {err}") from err
+        finally:
+            _remove(container)
+        s = self.settings
+        return RawRun(exit_code=code, stdout=capped_text(stdout, s.stdout_max_bytes),
+                      stderr=capped_text(stderr, s.stderr_max_bytes), timed_out=timed_out,
+                      duration_s=duration)
+
+    def _wait(self, container, started: float) -> tuple[bool, int | None]:
+        remaining = self.settings.wall_time_s - (time.monotonic() - started)
+        try:
+            status = container.wait(timeout=max(remaining, 0.1))
+            return False, int(status.get("StatusCode", -1))
+        except requests.RequestException:  # the wait timed out: hard kill
+            container.kill()
+            status = container.wait(timeout=30)
+            return True, int(status.get("StatusCode", -1))
+
+    def _create(self, attempt: Attempt):
+        s = self.settings
+        volumes = {str(attempt.job): {"bind": JOB_MOUNT, "mode": "ro"},
+                   str(attempt.report): {"bind": RESULT_MOUNT, "mode": "rw"}}
+        corpus = s.corpus_path()
+        if corpus is not None and corpus.is_dir():
+            volumes[str(corpus)] = {"bind": CORPUS_MOUNT, "mode": "ro"}
+        small_tmpfs = f"size={s.tmpfs_mb}m,mode=1777"
+        try:
+            return self.client.containers.create(
+                s.image, command=attempt.harness_command(SANDBOX_PYTHON),
+                user=f"{s.sandbox_uid}:{s.sandbox_uid}", network_mode="none", read_only=True,
+                mem_limit=s.memory_mb * MIB, memswap_limit=s.memory_mb * MIB,
+                pids_limit=s.pids, nano_cpus=int(s.cpus * 1e9), cap_drop=["ALL"],
+                security_opt=["no-new-privileges"], environment=SANDBOX_ENV,
+                tmpfs={"/tmp": small_tmpfs, "/var/tmp": small_tmpfs, "/run": small_tmpfs,
+                       OUT_MOUNT: f"size={s.output_max_bytes},mode=1777"},
+                ulimits=self._ulimits(), volumes=volumes, working_dir="/tmp",
+                hostname="sandbox", labels={"scenweave.sandbox": "attempt"},
+                log_config=LogConfig(type="json-file", config={"max-size": LOG_MAX_SIZE}),
+                stdin_open=False, detach=True)
+        except docker.errors.ImageNotFound as err:
+            raise ImageNotFound(f"image {s.image} not found: {BUILD_HINT}") from err
+        except (DockerException, requests.RequestException) as err:
+            raise SandboxError(f"cannot create the sandbox container: {err}") from err
+
+    def _ulimits(self) -> list[Ulimit]:
+        s = self.settings
+        cpu_s = math.ceil(s.wall_time_s) + 1
+        return [Ulimit(name="nofile", soft=256, hard=256),
+                Ulimit(name="nproc", soft=s.pids, hard=s.pids),
+                Ulimit(name="fsize", soft=s.file_size_limit, hard=s.file_size_limit),
+                Ulimit(name="core", soft=0, hard=0),
+                Ulimit(name="cpu", soft=cpu_s, hard=cpu_s)]
+
+    def close(self) -> None:
+        """Close the engine connection."""
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+
+def _remove(container) -> None:
+    try:
+        container.remove(force=True)
+    except NotFound:
+        pass
+    except (DockerException, requests.RequestException) as err:
+        raise SandboxError(f"could not remove sandbox container {container.id[:12]}: {err}; "
+                           "remove it with `podman rm -f` / `docker rm -f`") from err

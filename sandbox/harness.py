@@ -1,0 +1,81 @@
+"""Runs inside the sandbox: import the LLM-written script, call ``generate``, report back.
+
+Standard library only, and never imported by the host: the host mounts this file into the
+sandbox. It writes one JSON document to the result file: the script's error (type, message,
+traceback), its own duration and the files it left in the output folder (base64). The script
+runs in this same process and can tamper with all of it, so the host trusts nothing it reads.
+"""
+
+import base64
+import importlib.util
+import json
+import os
+import stat
+import sys
+import time
+import traceback
+
+JOB = "/sandbox/job"
+LIB = "/sandbox/lib"  # holds the read-only `corpus` package
+RESULT = "/sandbox/result.json"
+OUT = "/out"
+SCENARIO = OUT + "/scenario.xosc"
+
+
+def run_script() -> dict:
+    """Import ``script.py`` as a module and call ``generate(params, SCENARIO)``."""
+    with open(os.path.join(JOB, "params.json"), encoding="utf-8") as handle:
+        params = json.load(handle)
+    sys.path.insert(0, LIB)
+    started = time.perf_counter()
+    report = {"error_type": None, "error_message": None, "traceback": None}
+    try:
+        spec = importlib.util.spec_from_file_location("llm_script", os.path.join(JOB, "script.py"))
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["llm_script"] = module
+        spec.loader.exec_module(module)
+        module.generate(params, SCENARIO)
+    except BaseException as err:  # noqa: BLE001 - SystemExit from the script is an error too
+        report["error_type"] = type(err).__name__
+        report["error_message"] = str(err)
+        report["traceback"] = traceback.format_exc()
+    report["script_duration_s"] = time.perf_counter() - started
+    return report
+
+
+def produced_files(limit_bytes: int) -> list:
+    """Regular files under the output folder (never following links), up to ``limit_bytes``."""
+    files, total = [], 0
+    for folder, dirs, names in os.walk(OUT, followlinks=False):
+        for name in sorted(names):
+            path = os.path.join(folder, name)
+            info = os.lstat(path)
+            if not stat.S_ISREG(info.st_mode) or total + info.st_size > limit_bytes:
+                continue
+            with open(path, "rb") as handle:
+                data = handle.read(info.st_size)
+            total += len(data)
+            files.append({"name": os.path.relpath(path, OUT),
+                          "data": base64.b64encode(data).decode("ascii")})
+        dirs.sort()
+    return files
+
+
+def main() -> int:
+    """Run the job and write the report; exit 0 when the script raised nothing."""
+    limit = int(sys.argv[1]) if len(sys.argv) > 1 else 16 * 1024 * 1024
+    report = run_script()
+    try:
+        report["files"] = produced_files(limit)
+    except Exception as err:  # noqa: BLE001 - e.g. a tree too deep to walk: report it
+        report["files"] = []
+        if report["error_type"] is None:
+            report["error_type"] = "OutputUnreadable"
+            report["error_message"] = f"{type(err).__name__}: {err}"
+    with open(RESULT, "w", encoding="utf-8") as handle:
+        json.dump(report, handle)
+    return 0 if report["error_type"] is None else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -177,13 +177,23 @@ class SpawnMatcher:
             self.db_path.parent / "maps" / self.database["metadata"]["source_map"])
         if not self.map_path.exists():
             self.map_path = DEFAULT_MAP_PATH
-        #: the rejections of the last ``find``, by spawn id (for debugging)
-        self.last_rejections: dict[int, tuple[Rejection, ...]] = {}
+        self._by_context: dict[str, list[dict[str, Any]]] = {}
+        for entry in self.entries:
+            self._by_context.setdefault(entry["context"], []).append(entry)
+        self._last_params: dict[str, Any] | None = None
 
     @property
     def network(self) -> RoadNetwork:
         """The lane graph of the database's map (loaded on first use)."""
         return road_network(self.map_path)
+
+    @property
+    def last_rejections(self) -> dict[int, tuple[Rejection, ...]]:
+        """Why each spawn point was rejected in the last ``find``, by spawn id (debugging)."""
+        if self._last_params is None:
+            return {}
+        return {a.spawn_id: a.rejections for a in self.assess(self._last_params)
+                if not a.accepted}
 
     def assess(self, params: dict[str, Any]) -> list[Assessment]:
         """Every spawn point judged against ``params``, in database order."""
@@ -202,14 +212,15 @@ class SpawnMatcher:
         """
         if top_n < 1:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
-        assessments = self.assess(params)
-        self.last_rejections = {a.spawn_id: a.rejections for a in assessments if not a.accepted}
-        by_id = {entry["spawn_id"]: entry for entry in self.entries}
-        accepted = [a for a in assessments if a.accepted]
+        needs = Requirements.from_params(params)
+        self._last_params = params
+        # only the first rejection matters here; assess() lists them all for debugging
+        accepted = [SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
+                    for entry in self._by_context.get(needs.domain, [])
+                    if next(_hard_filters(entry, needs), None) is None]
         if not accepted:
-            raise NoSpawnFits(_no_fit_message(params, self.db_path, assessments))
-        ranked = _spread_over_roads(accepted, by_id)
-        return [SpawnCandidate(a.spawn_id, a.score, by_id[a.spawn_id]) for a in ranked[:top_n]]
+            raise NoSpawnFits(_no_fit_message(params, self.db_path, self.assess(params)))
+        return _spread_over_roads(accepted)[:top_n]
 
     def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
@@ -313,16 +324,16 @@ def _light_for(entry: dict[str, Any], movement: str) -> dict[str, Any] | None:
     return None
 
 
-def _spread_over_roads(accepted: list[Assessment], by_id: dict[int, dict]) -> list[Assessment]:
+def _spread_over_roads(candidates: list[SpawnCandidate]) -> list[SpawnCandidate]:
     """Best score first; among equal scores, alternate roads so the top N is spread out."""
-    ordered = sorted(accepted, key=lambda a: (-a.score, a.spawn_id))
+    ordered = sorted(candidates, key=lambda c: (-c.score, c.spawn_id))
     seen: Counter = Counter()
     rank = {}
-    for assessment in ordered:
-        group = (assessment.score, by_id[assessment.spawn_id]["geometry"]["road_id"])
-        rank[assessment.spawn_id] = seen[group]
+    for candidate in ordered:
+        group = (candidate.score, candidate.entry["geometry"]["road_id"])
+        rank[candidate.spawn_id] = seen[group]
         seen[group] += 1
-    return sorted(ordered, key=lambda a: (-a.score, rank[a.spawn_id], a.spawn_id))
+    return sorted(ordered, key=lambda c: (-c.score, rank[c.spawn_id], c.spawn_id))
 
 
 def _placed_actors(params: dict[str, Any]):

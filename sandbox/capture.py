@@ -40,13 +40,6 @@ class CappedBuffer:
         return (bytes(self.head) + marker + tail).decode("utf-8", errors="replace")
 
 
-def capped_text(data: bytes, cap: int) -> str:
-    """``data`` cut to ``cap`` bytes the same way a stream would be."""
-    buffer = CappedBuffer(cap)
-    buffer.feed(data)
-    return buffer.text()
-
-
 def drain_in_background(stream: BinaryIO, buffer: CappedBuffer) -> threading.Thread:
     """Read ``stream`` to its end into ``buffer`` on a daemon thread (so a flood never blocks).
 

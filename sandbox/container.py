@@ -9,8 +9,11 @@ memory allowance unless ``memswap_limit`` equals ``mem_limit``.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 import time
+from collections.abc import Iterator
 
 import docker
 import requests
@@ -27,7 +30,7 @@ from sandbox.base import (
     RawRun,
     Sandbox,
 )
-from sandbox.capture import capped_text
+from sandbox.capture import CappedBuffer
 from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
 from sandbox.settings import MIB, SandboxSettings
 
@@ -71,22 +74,28 @@ class DockerSandbox(Sandbox):
             raise SandboxUnavailable(f"container engine error: {err}") from err
 
     def _execute(self, attempt: Attempt) -> RawRun:
+        s = self.settings
+        stdout, stderr = CappedBuffer(s.stdout_max_bytes), CappedBuffer(s.stderr_max_bytes)
         started = time.monotonic()
         container = self._create(attempt)
         try:
+            # attached before start, streamed while it runs: the capped engine log keeps only
+            # the end of a flood, this keeps head and tail
+            stream = container.attach(stdout=True, stderr=True, stream=True, demux=True,
+                                      logs=True)
+            reader = threading.Thread(target=_drain, args=(stream, stdout, stderr),
+                                      daemon=True, name="sandbox-attach")
             container.start()
+            reader.start()
             timed_out, code = self._wait(container, started)
             duration = time.monotonic() - started
-            stdout = container.logs(stdout=True, stderr=False)
-            stderr = container.logs(stdout=False, stderr=True)
+            reader.join(timeout=10)
         except (DockerException, requests.RequestException) as err:
             raise SandboxError(f"container engine failed during the run: {err}") from err
         finally:
             _remove(container)
-        s = self.settings
-        return RawRun(exit_code=code, stdout=capped_text(stdout, s.stdout_max_bytes),
-                      stderr=capped_text(stderr, s.stderr_max_bytes), timed_out=timed_out,
-                      duration_s=duration)
+        return RawRun(exit_code=code, stdout=stdout.text(), stderr=stderr.text(),
+                      timed_out=timed_out, duration_s=duration)
 
     def _wait(self, container, started: float) -> tuple[bool, int | None]:
         remaining = self.settings.wall_time_s - (time.monotonic() - started)
@@ -138,6 +147,16 @@ class DockerSandbox(Sandbox):
         if self._client is not None:
             self._client.close()
             self._client = None
+
+
+def _drain(stream: Iterator[tuple[bytes | None, bytes | None]], stdout: CappedBuffer,
+           stderr: CappedBuffer) -> None:
+    with contextlib.suppress(DockerException, requests.RequestException, OSError):
+        for out, err in stream:
+            if out:
+                stdout.feed(out)
+            if err:
+                stderr.feed(err)
 
 
 def _remove(container) -> None:

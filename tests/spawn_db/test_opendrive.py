@@ -121,3 +121,38 @@ def test_unreadable_files_name_the_file(tmp_path):
     geometry = '<geometry s="0" x="0" y="0" hdg="0" length="10"><clothoid/></geometry>'
     with pytest.raises(OpenDriveError, match="clothoid"):
         load_opendrive(write(tmp_path, opendrive(road_xml("3", 10.0, geometry))))
+
+
+def test_every_plan_view_kind_is_read_from_xml(tmp_path):
+    geometry = """
+        <geometry s="0" x="0" y="0" hdg="0" length="50"><spiral curvStart="0" curvEnd="0.02"/>
+        </geometry>
+        <geometry s="50" x="60" y="10" hdg="0.5" length="20"><poly3 a="0" b="0" c="0.001" d="0"/>
+        </geometry>
+        <geometry s="70" x="80" y="20" hdg="0.6" length="30">
+            <paramPoly3 aU="0" bU="30" cU="0" dU="0" aV="0" bV="0" cV="2" dV="0"
+                        pRange="normalized"/>
+        </geometry>
+        <geometry s="100" x="100" y="40" hdg="0.7" length="10">
+            <paramPoly3 aU="0" bU="1" cU="0" dU="0" aV="0" bV="0" cV="0" dV="0" pRange="arcLength"/>
+        </geometry>"""
+    odr = load_opendrive(write(tmp_path, opendrive(road_xml("5", 110.0, geometry))))
+    spiral, poly3, normalized, arc_length = odr.roads["5"].plan_view.geometries
+    assert (spiral.curv_start, spiral.curv_end) == (0.0, 0.02)
+    assert poly3.coeff_v == (0.0, 0.0, 0.001, 0.0) and poly3.p_end is None
+    assert normalized.coeff_v == (0.0, 0.0, 2.0, 0.0) and normalized.p_end == 1.0
+    assert arc_length.p_end == 10.0
+    pose = odr.roads["5"].plan_view.pose(np.array([50.0, 105.0]))
+    # spiral end: heading = k1 * L / 2; the arcLength line runs 5 m along hdg 0.7
+    assert pose.hdg[0] == pytest.approx(0.02 * 50 / 2)
+    assert (pose.x[1], pose.y[1]) == pytest.approx((100 + 5 * math.cos(0.7),
+                                                    40 + 5 * math.sin(0.7)))
+    assert odr.roads["5"].speed_limit_kmh(0.0) == 50.0
+
+
+def test_schema_of_the_database_is_a_valid_json_schema():
+    from jsonschema import Draft202012Validator
+
+    from schemas import load_json_schema
+
+    Draft202012Validator.check_schema(load_json_schema("spawn_db"))

@@ -6,7 +6,8 @@ Public API:
   ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys filled).
 - ``lane_position_to_world(road_id, lane_id, s, offset=0)`` -> ``(x, y, z, h)`` and
   ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
-  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame).
+  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame); ``traffic_lights_carla()``
+  (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
 - ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``.
 - ``load_opendrive(path)`` and ``RoadNetwork`` for any other map.
 - Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``OpenDriveError``,
@@ -30,6 +31,7 @@ from spawn_db.errors import (
 from spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
 from spawn_db.opendrive import load_opendrive
 from spawn_db.road_network import RoadNetwork
+from spawn_db.signals import is_traffic_light, signal_position
 
 
 def lane_position_to_world(road_id: int | str, lane_id: int, s: float, offset: float = 0.0,
@@ -57,10 +59,25 @@ def advance_along_lane(road_id: int | str, lane_id: int, s: float, distance: flo
     return road, point.lane_id, point.s
 
 
+def traffic_lights_carla(map_path: str | Path | None = None) -> dict[str, tuple[float, float]]:
+    """Every dynamic traffic light of the map: signal id -> ``(x, y)`` in CARLA's frame.
+
+    These are the positions a ``TrafficSignalStateAction name="pos=x,y"`` resolves against.
+    """
+    network = road_network(map_path)
+    return {signal.id: _carla_xy(signal_position(network, signal))
+            for road in network.map.roads.values() for signal in road.signals
+            if is_traffic_light(signal)}
+
+
+def _carla_xy(pose) -> tuple[float, float]:
+    return pose.x, -pose.y
+
+
 __all__ = [
     "DEFAULT_DB_PATH", "DEFAULT_MAP_PATH", "Assessment", "LaneEndsError", "NoSpawnFits",
     "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
     "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
     "build_database", "lane_position_to_world", "load_database", "load_opendrive",
-    "mark_reviewed", "road_network", "write_database",
+    "mark_reviewed", "road_network", "traffic_lights_carla", "write_database",
 ]

@@ -12,8 +12,8 @@ import pytest
 
 from ingest import IngestReport, extract_params, iter_raw_records
 from ingest.samples import write_highway_samples, write_urban_samples
-from spawn_db import SpawnMatcher
-from spawn_db.signals import is_traffic_light, junction_approach, signal_position
+from spawn_db import SpawnMatcher, traffic_lights_carla
+from spawn_db.signals import junction_approach
 
 PER_CLASS = 12
 
@@ -77,8 +77,7 @@ def test_cut_ins_start_beside_the_ego_and_others_behind_or_ahead_of_it(assigned,
 
 
 def test_urban_spawns_fit_the_manoeuvre(assigned, town04):
-    lights = [signal_position(town04, s) for r in town04.map.roads.values() for s in r.signals
-              if is_traffic_light(s)]
+    lights = list(traffic_lights_carla().values())
     for params, result in assigned:
         if params["domain"] != "urban":
             continue
@@ -90,8 +89,8 @@ def test_urban_spawns_fit_the_manoeuvre(assigned, town04):
                                           cap=needed + 1) > needed
             continue
         # the light named in the params is a dynamic signal of the map (so pos=x,y resolves)
-        nearest = min(math.hypot(p.x - result["tfl_x_carla"], -p.y - result["tfl_y_carla"])
-                      for p in lights)
+        nearest = min(math.hypot(x - result["tfl_x_carla"], y - result["tfl_y_carla"])
+                      for x, y in lights)
         assert nearest < 1e-3
         last = town04.road(key.road_id).sections
         approach = junction_approach(town04, key._replace(

@@ -35,14 +35,11 @@ def check_backends(settings: SandboxSettings | None = None) -> dict[str, str | N
     settings = settings or SandboxSettings()
     reasons: dict[str, str | None] = {}
     for name in BACKENDS:
-        box = _make(name, settings)
         try:
-            box.probe()
+            _probed(_make(name, settings)).close()
             reasons[name] = None
         except SandboxError as err:
             reasons[name] = str(err)
-        finally:
-            box.close()
     return reasons
 
 
@@ -53,14 +50,21 @@ def get_sandbox(settings: SandboxSettings | None = None) -> Sandbox:
     Raises :class:`SandboxUnavailable` naming the setting to change when it cannot run.
     """
     settings = settings or SandboxSettings()
-    names = ["docker", "bwrap"] if settings.backend == "auto" else [settings.backend]
+    if settings.backend != "auto":
+        return _probed(_make(settings.backend, settings))
     reasons = []
-    for name in names:
-        box = _make(name, settings)
+    for name in BACKENDS:
         try:
-            box.probe()
-            return box
+            return _probed(_make(name, settings))
         except SandboxUnavailable as err:
-            box.close()
             reasons.append(f"{name}: {err}")
     raise SandboxUnavailable("no sandbox backend works here: " + "; ".join(reasons))
+
+
+def _probed(box: Sandbox) -> Sandbox:
+    try:
+        box.probe()
+    except SandboxError:
+        box.close()
+        raise
+    return box

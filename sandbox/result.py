@@ -134,7 +134,7 @@ def safe_relative_name(name: object) -> str:
     if not isinstance(name, str) or not name or len(name) > MAX_NAME_CHARS or "\0" in name:
         raise ReportInvalid(f"unsafe file name {name!r}")
     parts = PurePosixPath(name).parts
-    if (name.startswith("/") or len(parts) > MAX_DEPTH
+    if (name.startswith("/") or not parts or len(parts) > MAX_DEPTH
             or any(part in (".", "..") for part in parts) or "\\" in name):
         raise ReportInvalid(f"unsafe file name {name!r}")
     return "/".join(parts)

@@ -20,6 +20,7 @@ COMMANDS: dict[str, str] = {
     "demo": "scenweave.commands.demo:demo",
     "run": "scenweave.commands.run:run",
     "spawn-db": "scenweave.commands.spawn_db:spawn_db",
+    "sandbox": "scenweave.commands.sandbox:sandbox",
 }
 
 

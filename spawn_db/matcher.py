@@ -21,7 +21,7 @@ from typing import Any
 
 from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from spawn_db.database import load_database
-from spawn_db.errors import NoSpawnFits, ParamsError
+from spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError
 from spawn_db.road_network import LanePoint, RoadNetwork
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
@@ -173,14 +173,21 @@ class SpawnMatcher:
         self.db_path = Path(db_path)
         self.database = load_database(self.db_path)
         self.entries: list[dict[str, Any]] = self.database["spawn_points"]
-        self.map_path = Path(map_path) if map_path else (
-            self.db_path.parent / "maps" / self.database["metadata"]["source_map"])
-        if not self.map_path.exists():
-            self.map_path = DEFAULT_MAP_PATH
+        self.map_path = Path(map_path) if map_path else self._find_map()
         self._by_context: dict[str, list[dict[str, Any]]] = {}
         for entry in self.entries:
             self._by_context.setdefault(entry["context"], []).append(entry)
         self._last_params: dict[str, Any] | None = None
+
+    def _find_map(self) -> Path:
+        source = self.database["metadata"]["source_map"]
+        for candidate in (self.db_path.parent / "maps" / source, self.db_path.parent / source):
+            if candidate.exists():
+                return candidate
+        if source == DEFAULT_MAP_PATH.name:
+            return DEFAULT_MAP_PATH
+        raise SpawnDatabaseError(f"{self.db_path}: its map {source} is neither in maps/ beside "
+                                 "it nor bundled; pass map_path= to SpawnMatcher")
 
     @property
     def network(self) -> RoadNetwork:

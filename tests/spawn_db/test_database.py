@@ -135,3 +135,33 @@ def test_invalid_database_names_the_field(tmp_path):
         validate_database(database, tmp_path / "x.json")
     with pytest.raises(SpawnDatabaseError, match="spawn-db build"):
         load_database(tmp_path / "absent.json")
+
+
+def test_any_map_builds_and_matches(tmp_path):
+    from spawn_db import SpawnMatcher
+    from tests.spawn_db.contract_params import highway
+    from tests.spawn_db.synthetic_maps import two_road_chain, write
+
+    map_path = write(tmp_path, two_road_chain().replace('max="50"', 'max="120"'), "Chain.xodr")
+    database = build_database(map_path)
+    entries = database["spawn_points"]
+    # road 1 (100 m): s = 10, 50, 90; road 2 (50 m): s = 10; lanes -1 and -2 each
+    assert [(e["geometry"]["road_id"], e["geometry"]["s"]) for e in entries if
+            e["geometry"]["lane_id"] == -1] == [(1, 10.0), (1, 50.0), (1, 90.0), (2, 10.0)]
+    first = entries[0]
+    assert first["context"] == "highway" and database["metadata"]["map"] == "Carla/Maps/Chain"
+    assert first["drivable"]["ahead_m"] == pytest.approx(90.0 + 50.0 * 1.0175, abs=1e-3)
+    assert first["drivable"]["behind_m"] == pytest.approx(10.0)
+    assert first["lanes"]["right"] == {"count": 1, "ahead_m": first["drivable"]["ahead_m"],
+                                       "behind_m": 10.0}
+    assert first["lanes"]["left"]["count"] == 0
+    db_path = tmp_path / "Chain.json"
+    write_database(database, db_path)
+    matcher = SpawnMatcher(db_path)  # finds Chain.xodr beside the database
+    params = highway("BRAKE", ego_ms=5.0, npc_distance_m=10.0)  # 10 + 5 x 15 + 6 = 91 m ahead
+    found = {(c.entry["geometry"]["road_id"], c.entry["geometry"]["s"])
+             for c in matcher.find(params, top_n=10)}
+    assert found == {(1, 10.0), (1, 50.0)}  # 140.9 and 100.9 m ahead; the others are short
+    map_path.unlink()
+    with pytest.raises(SpawnDatabaseError, match="Chain.xodr.*map_path="):
+        SpawnMatcher(db_path)

@@ -93,8 +93,10 @@ def lane_pose(road: Road, lane_id: int, s: float, offset: float = 0.0,
     """World pose of the centre of ``lane_id`` at ``s``, shifted ``offset`` metres along ``+t``.
 
     ``offset`` follows OpenDRIVE's ``t``: positive is to the left of the reference line's
-    direction. The heading is the direction traffic drives on the lane. ``section_index``
-    picks the lane section at a section boundary (default: the one traffic enters there).
+    direction. The heading is the direction traffic drives along the lane centre (which
+    turns away from the reference heading where the lane widens or narrows).
+    ``section_index`` picks the lane section at a section boundary (default: the one traffic
+    enters there).
     """
     if not -1e-6 <= s <= road.length + 1e-6:
         raise OpenDriveError(f"road {road.id}: s={s:g} is outside the road (0..{road.length:g})")
@@ -102,8 +104,12 @@ def lane_pose(road: Road, lane_id: int, s: float, offset: float = 0.0,
     if section_index is None:
         section_index = road.section_index(s, moving_forward=lane_id < 0)
     section = road.sections[section_index]
-    t, _ = lane_center_offset(road, section, lane_id, np.array([s]))
-    return point_at(road, s, float(t[0]) + offset, lane_id)
+    t, slope = lane_center_offset(road, section, lane_id, np.array([s]))
+    pose = point_at(road, s, float(t[0]) + offset, lane_id)
+    # dP/ds = (1 - curvature t) T + t' N: the centre line's own direction
+    curvature = float(road.plan_view.pose(s).curvature[0])
+    drift = math.atan2(float(slope[0]), 1.0 - curvature * float(t[0]))
+    return WorldPose(pose.x, pose.y, pose.z, normalize_angle(pose.h + drift))
 
 
 def point_at(road: Road, s: float, t: float, lane_id: int = -1) -> WorldPose:

@@ -85,3 +85,11 @@ def test_neighbours_are_same_direction_lanes(town04):
     assert town04.neighbour(town04.key_at("45", -1, 100.0), "left") is None
     # left lanes drive the other way: their "left" is the lower id
     assert town04.neighbour(town04.key_at("45", 4, 100.0), "left").lane_id == 3
+
+
+def test_heading_of_a_widening_lane_follows_its_centre_line(chain):
+    # lane -2's centre drifts right by half of 1 cm per metre: heading atan(-0.005)
+    pose = chain.lane_to_world("1", -2, 40.0)
+    assert pose.h == pytest.approx(math.atan(-0.005), abs=1e-12)
+    ahead = chain.lane_to_world("1", -2, 41.0)
+    assert math.atan2(ahead.y - pose.y, ahead.x - pose.x) == pytest.approx(pose.h, abs=1e-9)

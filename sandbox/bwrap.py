@@ -9,6 +9,7 @@ bwrap sets no resource limits, so a per-run cgroup and ``prlimit`` do.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import os
 import shutil
@@ -42,6 +43,11 @@ class BwrapSandbox(Sandbox):
 
     name = "bwrap"
 
+    @functools.cached_property
+    def cgroup_problem(self) -> str | None:
+        """Why runs get rlimits instead of a per-run cgroup (weaker), or None."""
+        return RunCgroup.unavailable_reason(self.settings.cgroup_root)
+
     def probe(self) -> None:
         """Check bwrap, setpriv, prlimit and the sandbox Python, then run a trivial sandbox."""
         for tool in ("bwrap", "prlimit", *(["setpriv"] if os.geteuid() == 0 else [])):
@@ -67,7 +73,7 @@ class BwrapSandbox(Sandbox):
     def _execute(self, attempt: Attempt) -> RawRun:
         s = self.settings
         cgroup = None
-        if RunCgroup.unavailable_reason(s.cgroup_root) is None:
+        if self.cgroup_problem is None:
             cgroup = RunCgroup(s.cgroup_root, s.memory_mb * MIB, s.pids, s.cpus)
             cgroup.create()
         try:

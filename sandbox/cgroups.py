@@ -43,6 +43,12 @@ class RunCgroup:
                 return f"no cgroup controller at {parent} (SandboxSettings.cgroup_root)"
             if not os.access(parent, os.W_OK):
                 return f"{parent} is not writable: run as root or delegate it"
+        trial = RunCgroup(root, 64 * 1024 * 1024, 8, 1.0)
+        try:
+            trial.create()
+        except SandboxUnavailable as err:  # e.g. v2 controllers that cannot be enabled here
+            return str(err)
+        trial.remove()
         return None
 
     def create(self) -> None:

@@ -17,7 +17,7 @@ from collections.abc import Iterator
 
 import docker
 import requests
-from docker.errors import DockerException, NotFound
+from docker.errors import APIError, DockerException, NotFound
 from docker.types import LogConfig, Ulimit
 
 from sandbox.base import (
@@ -103,7 +103,8 @@ class DockerSandbox(Sandbox):
             status = container.wait(timeout=max(remaining, 0.1))
             return False, int(status.get("StatusCode", -1))
         except requests.RequestException:  # the wait timed out: hard kill
-            container.kill()
+            with contextlib.suppress(APIError):  # "not running": it ended meanwhile
+                container.kill()
             status = container.wait(timeout=30)
             return True, int(status.get("StatusCode", -1))
 

@@ -19,11 +19,7 @@ import pytest
 
 from tests.sandbox.evidence import Listener, marker, processes_with
 
-WRITE_SCENARIO = """
-def generate(params, out_path):
-    with open(out_path, "w") as handle:
-        handle.write(params["text"])
-"""
+REPO = Path(__file__).resolve().parents[2]
 
 
 def output_text(out_dir: Path) -> str:
@@ -116,7 +112,7 @@ def generate(params, out_path):
     loot = [repr(dict(os.environ))]
     for path in ["/proc/1/environ", "/proc/self/environ", "/proc/2/environ", params["file"],
                  *glob.glob("/tmp/*.secret"), "/etc/shadow", "/root/.bash_history",
-                 "/work/main/pyproject.toml"]:
+                 params["repo_file"]]:
         try:
             loot.append(open(path, errors="replace").read())
         except OSError:
@@ -125,21 +121,22 @@ def generate(params, out_path):
     open(out_path, "w").write("\\n".join(loot))
 """
     try:
-        result = box.run(code, {"file": str(secret_file)}, tmp_path)
+        params = {"file": str(secret_file), "repo_file": str(REPO / "pyproject.toml")}
+        result = box.run(code, params, tmp_path)
     finally:
         secret_file.unlink()
     assert result.ok, result
     received = output_text(tmp_path) + result.stdout + result.stderr
     assert "PATH" in received, "control: the script did write its loot"
     assert canary not in received
-    assert "scenweave" not in received.lower().replace("scenweave_canary", "")
+    assert 'name = "scenweave"' not in received  # the repository is not mounted
 
 
 def test_nothing_is_written_outside_the_output_folder(box, tmp_path):
     victim_dir = Path("/tmp") / marker()
     victim_dir.mkdir(mode=0o777)
     victim_dir.chmod(0o777)
-    targets = [victim_dir / "planted", Path("/work/main/planted-by-sandbox"),
+    targets = [victim_dir / "planted", REPO / "planted-by-sandbox",
                Path(box.settings.corpus_path() or "/nonexistent") / "planted.py",
                Path("/usr/planted"), Path("/etc/planted")]
     code = """
@@ -247,12 +244,13 @@ def generate(params, out_path):
     assert processes_with(tag) == []
 
 
-def test_output_flood_is_capped(box, tmp_path):
+def test_output_flood_is_capped(make_box, tmp_path):
+    box = make_box(wall_time_s=20.0)  # the flood must end on its own, not at the time limit
     code = """
 import sys
 def generate(params, out_path):
     sys.stdout.write("HEAD" + "x" * (1 << 20))
-    for _ in range(40):
+    for _ in range(16):
         sys.stdout.write("y" * (1 << 20))
     sys.stdout.write("TAIL")
     sys.stderr.write("e" * (8 << 20))

@@ -220,7 +220,7 @@ class SpawnMatcher:
         if top_n < 1:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
         needs = Requirements.from_params(params)
-        self._last_params = params
+        self._last_params = dict(params)
         # only the first rejection matters here; assess() lists them all for debugging
         accepted = [SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
                     for entry in self._by_context.get(needs.domain, [])

@@ -67,8 +67,8 @@ class BwrapSandbox(Sandbox):
             raise SandboxUnavailable(
                 f"bwrap cannot start {python} with scenariogeneration as uid "
                 f"{self.settings.sandbox_uid}: {done.stderr.decode(errors='replace').strip()} "
-                "(unprivileged user namespaces and SandboxSettings.python readable by "
-                "SandboxSettings.sandbox_uid are needed)")
+                "(it needs unprivileged user namespaces, and SandboxSettings.python and "
+                "SandboxSettings.corpus_dir readable by SandboxSettings.sandbox_uid)")
 
     def _execute(self, attempt: Attempt) -> RawRun:
         s = self.settings

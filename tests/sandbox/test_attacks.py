@@ -20,6 +20,20 @@ import pytest
 from tests.sandbox.evidence import Listener, marker, processes_with
 
 REPO = Path(__file__).resolve().parents[2]
+#: forks sleepers tagged with params["tag"] until refused; writes how many it got
+FORK_BOMB = """
+import os
+def generate(params, out_path):
+    forks = 0
+    for _ in range(2000):
+        try:
+            if os.fork() == 0:
+                os.execv("/bin/sleep", ["sleep", "300", params["tag"]])
+            forks += 1
+        except OSError:
+            break
+    open(out_path, "w").write(str(forks))
+"""
 
 
 def output_text(out_dir: Path) -> str:
@@ -183,20 +197,7 @@ def generate(params, out_path):
 def test_fork_bomb_is_capped_and_leaves_no_process(make_box, tmp_path):
     box = make_box(pids=24)
     tag = marker()
-    code = """
-import os
-def generate(params, out_path):
-    forks = 0
-    for _ in range(2000):
-        try:
-            if os.fork() == 0:
-                os.execv("/bin/sleep", ["sleep", "300", params["tag"]])
-            forks += 1
-        except OSError:
-            break
-    open(out_path, "w").write(str(forks))
-"""
-    result = box.run(code, {"tag": tag}, tmp_path)
+    result = box.run(FORK_BOMB, {"tag": tag}, tmp_path)
     assert processes_with(tag) == []
     assert result.ok, result
     assert 0 < int((tmp_path / "scenario.xosc").read_text()) < 24
@@ -333,3 +334,20 @@ def _host_ip() -> str:
         return "127.0.0.1"
     finally:
         probe.close()
+
+
+def test_without_a_cgroup_rlimits_still_stop_bombs(tmp_path):
+    """Hosts where no run cgroup can be made (non-root, no delegation) fall back to rlimits."""
+    from sandbox import SandboxSettings, get_sandbox
+    from tests.sandbox.conftest import FAST
+
+    settings = SandboxSettings(backend="bwrap", cgroup_root=tmp_path / "no-cgroups",
+                               **{**FAST, "pids": 16})
+    box = get_sandbox(settings)
+    assert "no cgroup controller" in box.cgroup_problem
+    tag = marker()
+    forks = box.run(FORK_BOMB, {"tag": tag}, tmp_path / "fork")
+    assert processes_with(tag) == []
+    assert forks.ok and int((tmp_path / "fork" / "scenario.xosc").read_text()) < 16
+    memory = box.run("def generate(p, o):\n    hog = bytearray(4 << 30)\n", {}, tmp_path / "mem")
+    assert memory.error_type == "MemoryError"

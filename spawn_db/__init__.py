@@ -8,7 +8,8 @@ Public API:
   ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
   bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame); ``traffic_lights_carla()``
   (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
-- ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``.
+- ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``,
+  ``carry_reviews``.
 - ``load_opendrive(path)`` and ``RoadNetwork`` for any other map.
 - Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``OpenDriveError``,
   ``LaneEndsError``, ``SpawnDatabaseError``.
@@ -19,7 +20,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
-from spawn_db.database import build_database, load_database, mark_reviewed, write_database
+from spawn_db.database import (
+    build_database,
+    carry_reviews,
+    load_database,
+    mark_reviewed,
+    write_database,
+)
 from spawn_db.errors import (
     LaneEndsError,
     NoSpawnFits,
@@ -78,6 +85,6 @@ __all__ = [
     "DEFAULT_DB_PATH", "DEFAULT_MAP_PATH", "Assessment", "LaneEndsError", "NoSpawnFits",
     "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
     "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
-    "build_database", "lane_position_to_world", "load_database", "load_opendrive",
+    "build_database", "carry_reviews", "lane_position_to_world", "load_database", "load_opendrive",
     "mark_reviewed", "road_network", "traffic_lights_carla", "write_database",
 ]

@@ -394,6 +394,24 @@ def validate_database(database: dict[str, Any], path: Path) -> None:
         raise SpawnDatabaseError(f"{path}: spawn_id values are not unique")
 
 
+def carry_reviews(database: dict[str, Any], previous: dict[str, Any]) -> int:
+    """Copy ``manually_reviewed`` marks from ``previous`` onto entries at the same lane position.
+
+    A rebuild must not throw away a person's review. Returns how many marks were carried.
+    """
+    def place(entry: dict[str, Any]) -> tuple:
+        geometry = entry["geometry"]
+        return geometry["road_id"], geometry["lane_id"], geometry["s"]
+
+    reviewed = {place(e) for e in previous["spawn_points"] if e["annotations"]["manually_reviewed"]}
+    carried = 0
+    for entry in database["spawn_points"]:
+        if place(entry) in reviewed:
+            entry["annotations"]["manually_reviewed"] = True
+            carried += 1
+    return carried
+
+
 def mark_reviewed(path: str | Path, spawn_ids: Iterable[int], reviewed: bool = True) -> int:
     """Set ``annotations.manually_reviewed`` of the given entries; returns how many changed."""
     path = Path(path)

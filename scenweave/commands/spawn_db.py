@@ -12,6 +12,7 @@ from spawn_db import (
     DEFAULT_DB_PATH,
     DEFAULT_MAP_PATH,
     build_database,
+    carry_reviews,
     load_database,
     mark_reviewed,
     road_network,
@@ -37,27 +38,13 @@ def spawn_db() -> None:
 def build(map_path: Path, out_path: Path, keep_reviews: bool) -> None:
     """Generate the spawn database of MAP_PATH (deterministic: same map, same bytes)."""
     database = build_database(map_path)
-    kept = _carry_reviews(database, out_path) if keep_reviews and out_path.exists() else 0
+    kept = (carry_reviews(database, load_database(out_path))
+            if keep_reviews and out_path.exists() else 0)
     write_database(database, out_path)
     counts = Counter(entry["context"] for entry in database["spawn_points"])
     summary = ", ".join(f"{n} {context}" for context, n in sorted(counts.items()))
     click.echo(f"spawn-db build: {len(database['spawn_points'])} spawn points ({summary}), "
                f"{kept} reviews kept, from {map_path.name} -> {out_path}")
-
-
-def _carry_reviews(database: dict, old_path: Path) -> int:
-    def place(entry: dict) -> tuple:
-        geometry = entry["geometry"]
-        return geometry["road_id"], geometry["lane_id"], geometry["s"]
-
-    reviewed = {place(e) for e in load_database(old_path)["spawn_points"]
-                if e["annotations"]["manually_reviewed"]}
-    kept = 0
-    for entry in database["spawn_points"]:
-        if place(entry) in reviewed:
-            entry["annotations"]["manually_reviewed"] = True
-            kept += 1
-    return kept
 
 
 @spawn_db.command("show")

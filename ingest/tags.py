@@ -1,14 +1,10 @@
-"""Manoeuvre class codes and the corpus tags they map to (docs/params.md)."""
+"""Urban class codes, their corpus tags (from the corpus's own table) and readable names."""
 
 from __future__ import annotations
 
-URBAN_TAGS = {
-    "U1_1": "in_lane_driving",
-    "U4_1": "stop_at_tfl_red",
-    "U4_2": "pass_tfl_green_or_orange",
-    "U4_3": "straight_tfl_green",
-    "U4_4": "turn_right_at_tfl_green",
-}
+from corpus.retrieval import CLASS_TAGS
+
+URBAN_TAGS = {code: tag for code, tag in CLASS_TAGS.items() if code.startswith("U")}
 
 URBAN_NAMES = {
     "U1_1": "In-lane driving",

@@ -13,7 +13,7 @@ import json
 import os
 import stat
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path, PurePosixPath
 
 MAX_MESSAGE_CHARS = 4000
@@ -42,6 +42,13 @@ class ExecResult:
     def ok(self) -> bool:
         """The script ran to the end of ``generate`` without raising, within its limits."""
         return self.exit_code == 0 and not self.timed_out and self.error_type is None
+
+    def to_dict(self) -> dict:
+        """A JSON-ready copy (for traces and run folders), with ``ok`` included."""
+        data = asdict(self)
+        data["files"] = [str(path) for path in self.files]
+        data["ok"] = self.ok
+        return data
 
     @property
     def overhead_s(self) -> float | None:

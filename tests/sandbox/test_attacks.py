@@ -7,12 +7,14 @@ the same channels do work, so a sandbox that blocks everything fails.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
 import socket
 import subprocess
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -351,3 +353,20 @@ def test_without_a_cgroup_rlimits_still_stop_bombs(tmp_path):
     assert forks.ok and int((tmp_path / "fork" / "scenario.xosc").read_text()) < 16
     memory = box.run("def generate(p, o):\n    hog = bytearray(4 << 30)\n", {}, tmp_path / "mem")
     assert memory.error_type == "MemoryError"
+
+
+def test_parallel_attempts_stay_apart(box, tmp_path):
+    code = """
+import time
+def generate(params, out_path):
+    time.sleep(0.3)
+    open(out_path, "w").write(params["text"])
+"""
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        results = list(pool.map(lambda i: box.run(code, {"text": f"run {i}"}, tmp_path / str(i)),
+                                range(2)))
+    assert [r.ok for r in results] == [True, True]
+    assert [(tmp_path / str(i) / "scenario.xosc").read_text() for i in range(2)] == \
+        ["run 0", "run 1"]
+    assert json.loads(json.dumps(results[0].to_dict()))["files"] == \
+        [str(tmp_path / "0" / "scenario.xosc")]

@@ -6,7 +6,8 @@ needs one or a manoeuvre not in ``suitable_for``; and, beyond the thesis, the ma
 fit: a same-direction lane on every side ``required_lane_sides`` names, for as long as the
 manoeuvre lasts, and enough drivable lane ahead for the gap plus the distance the fastest
 actor travels until the stop trigger, and behind for the gap to the rearmost actor. The
-survivors are scored with Table 5.3 and ranked; ``assign`` picks candidate
+survivors are scored with Table 5.3 and ranked (urban manoeuvres without a light get the
+light-distance points for room to drive before the next light instead); ``assign`` picks candidate
 ``index % len(candidates)`` (round robin) and fills the params' spawn keys in the
 OpenSCENARIO frame (``y = -y_carla``, ``h = -radians(yaw_carla)``).
 """
@@ -113,6 +114,7 @@ class Requirements:
     speed_kmh: float
     speed_limit_kmh: float | None
     tfl_ds_m: float | None
+    drive_distance_m: float | None = None
 
     @classmethod
     def from_params(cls, params: dict[str, Any]) -> Requirements:
@@ -136,7 +138,8 @@ class Requirements:
             side_ahead_m=min(ahead, gap_ahead + max_speed * manoeuvre_end + VEHICLE_MARGIN_M),
             side_behind_m=gap_behind + VEHICLE_MARGIN_M, speed_kmh=max_speed * 3.6,
             speed_limit_kmh=number.optional("speed_limit_kmh"),
-            tfl_ds_m=number.optional("tfl_ds_m"))
+            tfl_ds_m=number.optional("tfl_ds_m"),
+            drive_distance_m=number.optional("drive_distance_m"))
 
     @property
     def light_movement(self) -> str | None:
@@ -314,11 +317,17 @@ def _score(entry: dict[str, Any], needs: Requirements) -> float:
     score = 30.0 + priority + 10.0 * entry["annotations"]["manually_reviewed"]
     if needs.speed_limit_kmh is not None:
         score += max(0.0, 20.0 - abs(limit - needs.speed_limit_kmh))
-    light = _light_for(entry, needs.light_movement) if needs.light_movement else None
+    stop_line = entry["surroundings"]["stop_line_distance_m"]
+    if needs.light_movement is None:
+        # no light in the manoeuvre: the light-distance points go to room to drive it before
+        # the next light instead
+        room = stop_line is None or stop_line >= (needs.drive_distance_m or 0.0) + VEHICLE_MARGIN_M
+        return score + 30.0 * room
+    light = _light_for(entry, needs.light_movement)
     if light is not None:
         if needs.tfl_ds_m is not None:
             score += max(0.0, 30.0 - abs(light["distance_m"] - needs.tfl_ds_m))
-        if entry["surroundings"]["stop_line_distance_m"] is not None:
+        if stop_line is not None:
             score += 15.0
     return score
 

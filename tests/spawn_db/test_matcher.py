@@ -164,11 +164,14 @@ def test_urban_assignment_names_the_controlling_light(matcher):
     assert result["ego_y"] == -entry["transform"]["y"]
 
 
-def test_in_lane_driving_without_a_light_still_finds_a_spawn(matcher):
-    result = matcher.assign(urban("U1_1", tfl_ds_m=None, drive_distance_m=80.0), 0)
-    assert result["spawn_id"] is not None
-    entry = _by_id(matcher)[result["spawn_id"]]
-    assert entry["drivable"]["ahead_m"] >= 20.0 * 9.0
+def test_in_lane_driving_without_a_light_prefers_room_before_the_next_light(matcher):
+    params = urban("U1_1", tfl_ds_m=None, drive_distance_m=80.0)
+    candidates = matcher.find(params, top_n=5)
+    for candidate in candidates:
+        assert candidate.entry["drivable"]["ahead_m"] >= 20.0 * 9.0
+        assert candidate.entry["surroundings"]["stop_line_distance_m"] >= 86.0
+    short = matcher.find({**params, "drive_distance_m": 10.0}, top_n=200)
+    assert min(c.entry["surroundings"]["stop_line_distance_m"] for c in short) < 86.0
 
 
 def test_bad_params_are_one_clear_error(matcher):

@@ -45,11 +45,18 @@ def check_backends(settings: SandboxSettings | None = None) -> dict[str, str | N
 
 def get_sandbox(settings: SandboxSettings | None = None) -> Sandbox:
     """The sandbox of ``settings.backend``, checked to work; ``auto`` prefers a container
-    engine that answers and has the image, else bubblewrap.
+    engine that answers and has the image, else bubblewrap. Close it when done (it may hold
+    a warm pool and an engine connection); it is also a context manager.
 
     Raises :class:`SandboxUnavailable` naming the setting to change when it cannot run.
     """
     settings = settings or SandboxSettings()
+    box = _first_working(settings)
+    box.start_pool()
+    return box
+
+
+def _first_working(settings: SandboxSettings) -> Sandbox:
     if settings.backend != "auto":
         return _probed(_make(settings.backend, settings))
     reasons = []

@@ -6,12 +6,17 @@ import json
 import os
 import shutil
 import tempfile
+import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from sandbox.result import ExecResult, Report, ReportInvalid, read_report, write_files
 from sandbox.settings import SandboxSettings
+
+if TYPE_CHECKING:
+    from sandbox.pool import WarmPool
 
 HARNESS = Path(__file__).with_name("harness.py")
 #: the only environment a sandboxed script sees (nothing from the host)
@@ -47,24 +52,17 @@ class Attempt:
     """A private staging folder for one run: ``job/`` (harness, script, params) and the report.
 
     ``job/`` is mounted read-only; the report file is the only host file the sandbox can
-    write, and the file-size limit bounds it.
+    write, and the file-size limit bounds it. A warm sandbox starts before the job is
+    loaded and waits for the ``go`` file.
     """
 
-    def __init__(self, settings: SandboxSettings, code: str, params: dict) -> None:
-        try:
-            params_json = json.dumps(params)
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"params: not JSON-serialisable: {err}") from err
+    def __init__(self, settings: SandboxSettings) -> None:
         self.settings = settings
         self.root = Path(tempfile.mkdtemp(prefix="scenweave-sbx-", dir=settings.work_dir))
         self.root.chmod(0o755)  # the unprivileged sandbox uid must reach job/
         self.job = self.root / "job"
         self.job.mkdir(mode=0o755)
-        shutil.copyfile(HARNESS, self.job / "harness.py")
-        (self.job / "script.py").write_text(code, encoding="utf-8")
-        (self.job / "params.json").write_text(params_json, encoding="utf-8")
-        for path in self.job.iterdir():
-            path.chmod(0o644)
+        self._write(HARNESS.name, HARNESS.read_text(encoding="utf-8"))
         self.report = self.root / "result.json"
         self.report.touch(mode=0o600)
         if os.geteuid() == 0:
@@ -72,9 +70,24 @@ class Attempt:
         else:
             self.report.chmod(0o666)
 
-    def harness_command(self, python: str) -> list[str]:
+    def load(self, code: str, params_json: str) -> None:
+        """Put the script and its params where the harness reads them."""
+        self._write("script.py", code)
+        self._write("params.json", params_json)
+
+    def go(self) -> None:
+        """Tell a waiting (warm) harness that the job is complete."""
+        self._write("go", "")
+
+    def _write(self, name: str, text: str) -> None:
+        path = self.job / name
+        path.write_text(text, encoding="utf-8")
+        path.chmod(0o644)
+
+    def harness_command(self, python: str, warm: bool) -> list[str]:
         """The command line that starts the harness inside the sandbox."""
-        return [python, "-I", f"{JOB_MOUNT}/harness.py", str(self.settings.output_max_bytes)]
+        command = [python, "-I", f"{JOB_MOUNT}/harness.py", str(self.settings.output_max_bytes)]
+        return [*command, "--warm", str(self.settings.warm_idle_s)] if warm else command
 
     def outcome(self, raw: RawRun, out_dir: Path, backend: str) -> ExecResult:
         """Turn what the backend saw plus the (vetted) report into an :class:`ExecResult`."""
@@ -120,13 +133,33 @@ class Attempt:
         self.close()
 
 
+def params_to_json(params: dict) -> str:
+    """``params`` as JSON text; ValueError naming ``params`` when it cannot be."""
+    try:
+        return json.dumps(params)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"params: not JSON-serialisable: {err}") from err
+
+
 class Sandbox(ABC):
-    """Runs LLM-written scripts, one throwaway sandbox per attempt."""
+    """Runs LLM-written scripts, one throwaway sandbox per attempt.
+
+    With ``SandboxSettings.warm_pool > 0`` that many sandboxes are started ahead (the
+    interpreter up, scenariogeneration imported) and each still serves one attempt only.
+    """
 
     name = ""
 
     def __init__(self, settings: SandboxSettings) -> None:
         self.settings = settings
+        self._pool: WarmPool | None = None
+
+    def start_pool(self) -> None:
+        """Start the warm pool of ``settings.warm_pool`` sandboxes (no-op when 0)."""
+        if self.settings.warm_pool > 0 and self._pool is None:
+            from sandbox.pool import WarmPool  # pool builds on this module
+
+            self._pool = WarmPool(self, self.settings.warm_pool)
 
     def run(self, code: str, params: dict, out_dir: Path) -> ExecResult:
         """Run ``code``'s ``generate(params, <out_dir>/scenario.xosc)`` in a fresh sandbox.
@@ -134,19 +167,57 @@ class Sandbox(ABC):
         The script's failures (exceptions, timeout, limits) come back in the result; only
         infrastructure failures raise :class:`sandbox.SandboxError`.
         """
+        params_json = params_to_json(params)
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
-        with Attempt(self.settings, code, params) as attempt:
-            raw = self._execute(attempt)
+        slot = self._pool.take() if self._pool is not None else None
+        attempt, handle = slot if slot is not None else (Attempt(self.settings), None)
+        try:
+            attempt.load(code, params_json)
+            started = time.monotonic()
+            if handle is None:
+                handle = self._start(attempt, warm=False)
+            else:
+                attempt.go()
+        except BaseException:
+            if handle is not None:
+                self._abort(handle)
+            attempt.close()
+            raise
+        try:
+            raw = self._finish(handle, started)
             return attempt.outcome(raw, out_dir, self.name)
+        finally:
+            attempt.close()
 
     @abstractmethod
     def probe(self) -> None:
         """Raise :class:`sandbox.SandboxUnavailable` saying why this backend cannot run here."""
 
     @abstractmethod
-    def _execute(self, attempt: Attempt) -> RawRun:
-        """Run the harness of ``attempt`` under every limit of the settings."""
+    def _start(self, attempt: Attempt, warm: bool) -> Any:
+        """Start the harness of ``attempt`` under every limit; return a handle on it."""
 
-    def close(self) -> None:  # noqa: B027 - most backends hold nothing
-        """Release what the backend holds (engine connections)."""
+    @abstractmethod
+    def _finish(self, handle: Any, started: float) -> RawRun:
+        """Wait until the wall-time limit counted from ``started``, kill, clean up, report."""
+
+    @abstractmethod
+    def _alive(self, handle: Any) -> bool:
+        """Whether a started (warm) sandbox is still waiting for its job."""
+
+    @abstractmethod
+    def _abort(self, handle: Any) -> None:
+        """Kill and remove a started sandbox that will not be used."""
+
+    def close(self) -> None:
+        """Stop the warm pool; backends also release their engine connection."""
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+
+    def __enter__(self) -> Sandbox:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

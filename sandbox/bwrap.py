@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import math
 import os
 import shutil
 import signal
 import subprocess
+import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from sandbox.base import (
@@ -30,12 +31,23 @@ from sandbox.base import (
 )
 from sandbox.capture import CappedBuffer, drain_in_background
 from sandbox.cgroups import RunCgroup
-from sandbox.errors import SandboxUnavailable
+from sandbox.errors import SandboxError, SandboxUnavailable
 from sandbox.settings import MIB
 
 #: joins the run's cgroups (as root, before dropping privileges), then execs the rest
 JOIN_CGROUPS = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
 SYSTEM_DIRS = ("bin", "sbin", "lib", "lib32", "lib64")
+
+
+@dataclass
+class Running:
+    """A started bwrap sandbox: its launcher, cgroup and output capture."""
+
+    proc: subprocess.Popen
+    cgroup: RunCgroup | None
+    stdout: CappedBuffer
+    stderr: CappedBuffer
+    readers: list[threading.Thread]
 
 
 class BwrapSandbox(Sandbox):
@@ -70,47 +82,54 @@ class BwrapSandbox(Sandbox):
                 "(it needs unprivileged user namespaces, and SandboxSettings.python and "
                 "SandboxSettings.corpus_dir readable by SandboxSettings.sandbox_uid)")
 
-    def _execute(self, attempt: Attempt) -> RawRun:
+    def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings
         cgroup = None
         if self.cgroup_problem is None:
             cgroup = RunCgroup(s.cgroup_root, s.memory_mb * MIB, s.pids, s.cpus)
             cgroup.create()
-        try:
-            return self._launch(attempt, cgroup)
-        finally:
-            if cgroup is not None:
-                cgroup.kill_all()
-                cgroup.remove()
-
-    def _launch(self, attempt: Attempt, cgroup: RunCgroup | None) -> RawRun:
-        s = self.settings
         join = (["/bin/sh", "-c", JOIN_CGROUPS, "join", *map(str, cgroup.procs_files()), "--"]
                 if cgroup else [])
         command = [*join, *self._privilege_drop(), *self._rlimits(cgroup is None), "bwrap",
-                   *self._mounts(attempt), "--", *attempt.harness_command(s.python)]
+                   *self._mounts(attempt), "--", *attempt.harness_command(s.python, warm)]
+        try:
+            proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, bufsize=0, env=SANDBOX_ENV,
+                                    close_fds=True, start_new_session=True)
+        except OSError as err:
+            if cgroup is not None:
+                cgroup.remove()
+            raise SandboxError(f"cannot start bwrap: {err}") from err
         stdout, stderr = CappedBuffer(s.stdout_max_bytes), CappedBuffer(s.stderr_max_bytes)
-        started = time.monotonic()
-        proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, bufsize=0, env=SANDBOX_ENV,
-                                close_fds=True, start_new_session=True)
         readers = [drain_in_background(proc.stdout, stdout),
                    drain_in_background(proc.stderr, stderr)]
+        return Running(proc, cgroup, stdout, stderr, readers)
+
+    def _finish(self, handle: Running, started: float) -> RawRun:
+        remaining = self.settings.wall_time_s - (time.monotonic() - started)
         timed_out = False
         try:
-            proc.wait(timeout=s.wall_time_s)
+            handle.proc.wait(timeout=max(remaining, 0.01))
         except subprocess.TimeoutExpired:
             timed_out = True
         finally:
-            _kill_group(proc)
-        duration = time.monotonic() - started
-        if cgroup is not None:
-            cgroup.kill_all()  # readers end once nothing holds the pipes open
-        for reader in readers:
+            duration = time.monotonic() - started
+            self._abort(handle)
+        code = handle.proc.returncode
+        return RawRun(exit_code=128 - code if code < 0 else code, stdout=handle.stdout.text(),
+                      stderr=handle.stderr.text(), timed_out=timed_out, duration_s=duration)
+
+    def _alive(self, handle: Running) -> bool:
+        return handle.proc.poll() is None
+
+    def _abort(self, handle: Running) -> None:
+        """Kill the launcher's group and everything in the run's cgroup, then clean up."""
+        _kill_group(handle.proc)
+        if handle.cgroup is not None:
+            handle.cgroup.kill_all()  # readers end once nothing holds the pipes open
+            handle.cgroup.remove()
+        for reader in handle.readers:
             reader.join(timeout=5)
-        code = proc.returncode
-        return RawRun(exit_code=128 - code if code < 0 else code, stdout=stdout.text(),
-                      stderr=stderr.text(), timed_out=timed_out, duration_s=duration)
 
     def _privilege_drop(self) -> list[str]:
         if os.geteuid() != 0:
@@ -122,7 +141,7 @@ class BwrapSandbox(Sandbox):
     def _rlimits(self, without_cgroup: bool) -> list[str]:
         s = self.settings
         limits = ["prlimit", f"--fsize={s.file_size_limit}", "--core=0", "--nofile=256",
-                  f"--cpu={math.ceil(s.wall_time_s) + 1}"]
+                  f"--cpu={s.cpu_time_limit_s}"]
         if without_cgroup:  # weaker stand-ins: per-uid process count, address space
             limits += [f"--nproc={s.pids}", f"--as={4 * s.memory_mb * MIB}"]
         return [*limits, "--"]

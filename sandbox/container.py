@@ -10,14 +10,15 @@ memory allowance unless ``memswap_limit`` equals ``mem_limit``.
 from __future__ import annotations
 
 import contextlib
-import math
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import docker
 import requests
 from docker.errors import APIError, DockerException, NotFound
+from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
 
 from sandbox.base import (
@@ -37,6 +38,16 @@ from sandbox.settings import MIB, SandboxSettings
 SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
 LOG_MAX_SIZE = "1m"
 BUILD_HINT = "build it with `bash scripts/setup.d/20-sandbox.sh` or set SandboxSettings.image"
+
+
+@dataclass
+class Running:
+    """A started container and the capture of its output."""
+
+    container: Container
+    stdout: CappedBuffer
+    stderr: CappedBuffer
+    reader: threading.Thread | None = None
 
 
 class DockerSandbox(Sandbox):
@@ -73,31 +84,49 @@ class DockerSandbox(Sandbox):
         except (DockerException, requests.RequestException) as err:
             raise SandboxUnavailable(f"container engine error: {err}") from err
 
-    def _execute(self, attempt: Attempt) -> RawRun:
+    def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings
-        stdout, stderr = CappedBuffer(s.stdout_max_bytes), CappedBuffer(s.stderr_max_bytes)
-        started = time.monotonic()
-        container = self._create(attempt)
+        container = self._create(attempt, warm)
+        running = Running(container, CappedBuffer(s.stdout_max_bytes),
+                          CappedBuffer(s.stderr_max_bytes))
         try:
             # attached before start, streamed while it runs: the capped engine log keeps only
             # the end of a flood, this keeps head and tail
             stream = container.attach(stdout=True, stderr=True, stream=True, demux=True,
                                       logs=True)
-            reader = threading.Thread(target=_drain, args=(stream, stdout, stderr),
-                                      daemon=True, name="sandbox-attach")
+            running.reader = threading.Thread(
+                target=_drain, args=(stream, running.stdout, running.stderr), daemon=True,
+                name="sandbox-attach")
             container.start()
-            reader.start()
-            timed_out, code = self._wait(container, started)
+            running.reader.start()
+        except (DockerException, requests.RequestException) as err:
+            _remove(container)
+            raise SandboxError(f"cannot start the sandbox container: {err}") from err
+        return running
+
+    def _finish(self, handle: Running, started: float) -> RawRun:
+        try:
+            timed_out, code = self._wait(handle.container, started)
             duration = time.monotonic() - started
-            reader.join(timeout=10)
+            handle.reader.join(timeout=10)
         except (DockerException, requests.RequestException) as err:
             raise SandboxError(f"container engine failed during the run: {err}") from err
         finally:
-            _remove(container)
-        return RawRun(exit_code=code, stdout=stdout.text(), stderr=stderr.text(),
+            _remove(handle.container)
+        return RawRun(exit_code=code, stdout=handle.stdout.text(), stderr=handle.stderr.text(),
                       timed_out=timed_out, duration_s=duration)
 
-    def _wait(self, container, started: float) -> tuple[bool, int | None]:
+    def _alive(self, handle: Running) -> bool:
+        try:
+            handle.container.reload()
+        except (DockerException, requests.RequestException):
+            return False
+        return handle.container.status == "running"
+
+    def _abort(self, handle: Running) -> None:
+        _remove(handle.container)
+
+    def _wait(self, container: Container, started: float) -> tuple[bool, int | None]:
         remaining = self.settings.wall_time_s - (time.monotonic() - started)
         try:
             status = container.wait(timeout=max(remaining, 0.1))
@@ -108,7 +137,7 @@ class DockerSandbox(Sandbox):
             status = container.wait(timeout=30)
             return True, int(status.get("StatusCode", -1))
 
-    def _create(self, attempt: Attempt):
+    def _create(self, attempt: Attempt, warm: bool):
         s = self.settings
         volumes = {str(attempt.job): {"bind": JOB_MOUNT, "mode": "ro"},
                    str(attempt.report): {"bind": RESULT_MOUNT, "mode": "rw"}}
@@ -118,7 +147,7 @@ class DockerSandbox(Sandbox):
         small_tmpfs = f"size={s.tmpfs_mb}m,mode=1777"
         try:
             return self.client.containers.create(
-                s.image, command=attempt.harness_command(SANDBOX_PYTHON),
+                s.image, command=attempt.harness_command(SANDBOX_PYTHON, warm),
                 user=f"{s.sandbox_uid}:{s.sandbox_uid}", network_mode="none", read_only=True,
                 mem_limit=s.memory_mb * MIB, memswap_limit=s.memory_mb * MIB,
                 pids_limit=s.pids, nano_cpus=int(s.cpus * 1e9), cap_drop=["ALL"],
@@ -136,7 +165,7 @@ class DockerSandbox(Sandbox):
 
     def _ulimits(self) -> list[Ulimit]:
         s = self.settings
-        cpu_s = math.ceil(s.wall_time_s) + 1
+        cpu_s = s.cpu_time_limit_s
         return [Ulimit(name="nofile", soft=256, hard=256),
                 Ulimit(name="nproc", soft=s.pids, hard=s.pids),
                 Ulimit(name="fsize", soft=s.file_size_limit, hard=s.file_size_limit),
@@ -144,7 +173,8 @@ class DockerSandbox(Sandbox):
                 Ulimit(name="cpu", soft=cpu_s, hard=cpu_s)]
 
     def close(self) -> None:
-        """Close the engine connection."""
+        """Stop the warm pool and close the engine connection."""
+        super().close()
         if self._client is not None:
             self._client.close()
             self._client = None
@@ -160,7 +190,7 @@ def _drain(stream: Iterator[tuple[bytes | None, bytes | None]], stdout: CappedBu
                 stderr.feed(err)
 
 
-def _remove(container) -> None:
+def _remove(container: Container) -> None:
     try:
         container.remove(force=True)
     except NotFound:

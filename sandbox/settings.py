@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,15 +34,26 @@ class SandboxSettings:
     sandbox_uid: int = 65534  # uid bwrap drops to when started as root
     cgroup_root: Path = Path("/sys/fs/cgroup")
     work_dir: Path | None = None  # where attempts are staged; default: the system temp folder
+    warm_pool: int = 0  # sandboxes started ahead, each still used once (0: every run is cold)
+    warm_idle_s: int = 600  # a warm sandbox nobody used by then exits and is replaced
 
     def __post_init__(self) -> None:
         if self.backend not in (*BACKENDS, "auto"):
             raise ValueError(f"SandboxSettings.backend: {self.backend!r} is not one of "
                              f"{', '.join((*BACKENDS, 'auto'))}")
         for name in ("wall_time_s", "memory_mb", "pids", "cpus", "output_max_bytes",
-                     "output_max_files", "stdout_max_bytes", "stderr_max_bytes", "tmpfs_mb"):
+                     "output_max_files", "stdout_max_bytes", "stderr_max_bytes", "tmpfs_mb",
+                     "warm_idle_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"SandboxSettings.{name} must be > 0, got {getattr(self, name)!r}")
+
+        if self.warm_pool < 0:
+            raise ValueError(f"SandboxSettings.warm_pool must be >= 0, got {self.warm_pool!r}")
+
+    @property
+    def cpu_time_limit_s(self) -> int:
+        """CPU seconds per sandbox: the wall time plus room for a warm sandbox's imports."""
+        return math.ceil(self.wall_time_s) + 5
 
     def engine_url(self) -> str:
         """The container engine to talk to: the setting, ``$DOCKER_HOST``, or podman's socket."""

@@ -1,0 +1,51 @@
+"""The warm pool: sandboxes started ahead, each still used for one attempt only."""
+
+from __future__ import annotations
+
+import time
+
+from tests.sandbox.evidence import processes_with
+
+PROBE = """
+import os, sys
+def generate(params, out_path):
+    seen = os.path.exists("/tmp/previous-attempt")
+    open("/tmp/previous-attempt", "w").write("x")
+    warm = "scenariogeneration" in sys.modules
+    open(out_path, "w").write(f"{seen} {warm}")
+"""
+IDLE_S = 4321  # unique in the warm harnesses' command lines
+
+
+def _warm_harnesses() -> list[int]:
+    return processes_with(f"--warm\0{IDLE_S}")
+
+
+def test_each_attempt_gets_a_fresh_warm_sandbox(make_box, tmp_path):
+    box = make_box(warm_pool=1, warm_idle_s=IDLE_S)
+    outputs = []
+    for index in range(3):
+        time.sleep(1.5)  # let the pool refill so the attempt finds a warm sandbox
+        result = box.run(PROBE, {}, tmp_path / str(index))
+        assert result.ok, result
+        outputs.append((tmp_path / str(index) / "scenario.xosc").read_text())
+    assert outputs == ["False True"] * 3  # warm (imports done), never shared
+    box.close()
+    assert _warm_harnesses() == []
+
+
+def test_wall_time_counts_from_the_job_not_from_the_warm_start(make_box, tmp_path):
+    box = make_box(warm_pool=1, warm_idle_s=IDLE_S, wall_time_s=2.0)
+    time.sleep(3)  # longer than the wall time: a warm sandbox waiting is not running a job
+    result = box.run("import time\ndef generate(p, o):\n    time.sleep(0.5)\n", {}, tmp_path)
+    assert result.ok, result
+    slow = box.run("import time\ndef generate(p, o):\n    time.sleep(60)\n", {}, tmp_path)
+    assert slow.timed_out and slow.duration_s < 2.0 + 3.0
+
+
+def test_an_idle_warm_sandbox_expires_and_runs_still_work(make_box, tmp_path):
+    box = make_box(warm_pool=1, warm_idle_s=1)
+    time.sleep(3)  # the warm one gave up waiting
+    result = box.run(PROBE, {}, tmp_path)
+    assert result.ok, result
+    assert (tmp_path / "scenario.xosc").read_text().startswith("False")

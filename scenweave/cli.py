@@ -21,6 +21,9 @@ COMMANDS: dict[str, str] = {
     "run": "scenweave.commands.run:run",
     "spawn-db": "scenweave.commands.spawn_db:spawn_db",
     "sandbox": "scenweave.commands.sandbox:sandbox",
+    "worker": "scenweave.commands.worker:worker",
+    "submit": "scenweave.commands.submit:submit_command",
+    "report": "scenweave.commands.report:report",
 }
 
 

@@ -2,12 +2,15 @@
 
 ``process_scenario`` is what both ``scenweave run`` and the queue worker call for each
 scenario; it never raises for a problem of the scenario itself — that becomes a ``failed``
-outcome with the error — so a batch always goes on.
+outcome with the error — so a batch always goes on. Failures of the machine or a service
+(``is_infrastructure_error``) are raised instead: the scenario is not at fault, a retry later
+may succeed, and the queue worker retries exactly these.
 """
 
 from __future__ import annotations
 
 import json
+import sys
 import time
 import traceback
 from collections.abc import Callable
@@ -49,7 +52,7 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
     started = time.perf_counter()
     timings: dict[str, float] = {}
     trace = Trace(out_dir / TRACE_NAME)
-    outcome = _base_outcome(params)
+    outcome = base_outcome(params)
     try:
         placed = _timed(timings, "spawn",
                         lambda: matcher.assign(params, index, top_n=settings.top_n))
@@ -61,6 +64,9 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
         else:
             outcome.update(_agent_scenario(placed, out_dir, settings, timings))
     except Exception as err:  # noqa: BLE001 - a scenario's failure is a value, not a crash
+        if is_infrastructure_error(err):
+            trace.event("infrastructure_error", error=f"{type(err).__name__}: {err}")
+            raise
         outcome.update(status="failed", error=f"{type(err).__name__}: {err}",
                        error_taxonomy=[_taxonomy_of(err)])
         trace.event("error", error=outcome["error"], traceback=traceback.format_exc())
@@ -69,7 +75,29 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
     return outcome
 
 
-def _base_outcome(params: dict) -> dict:
+def is_infrastructure_error(err: BaseException) -> bool:
+    """True when ``err`` is a failure of the machine or a service, not of the scenario.
+
+    OS errors (disk full, connection refused — the ollama client raises ConnectionError when
+    the LLM server cannot be reached), memory, the sandbox's and Redis's own errors, and an
+    HTTP transport error of the LLM client. Modules are looked up only if already imported,
+    so this never pulls a heavy package in.
+    """
+    return isinstance(err, (OSError, MemoryError, *_loaded_infrastructure_types()))
+
+
+def _loaded_infrastructure_types() -> tuple[type[BaseException], ...]:
+    found = []
+    for module, name in (("sandbox", "SandboxError"), ("redis.exceptions", "RedisError"),
+                         ("httpx", "TransportError"), ("agent", "LLMUnavailable")):
+        err_type = getattr(sys.modules.get(module), name, None)
+        if isinstance(err_type, type) and issubclass(err_type, BaseException):
+            found.append(err_type)
+    return tuple(found)
+
+
+def base_outcome(params: dict) -> dict:
+    """The outcome of a scenario before anything ran: ``failed``, no attempts, no spawn."""
     return {
         "scenario_id": params["scenario_id"], "maneuver_class": params["maneuver_class"],
         "domain": params["domain"], "status": "failed", "attempts": 0,
@@ -129,4 +157,4 @@ def _taxonomy_of(err: Exception) -> str:
         return "spawn"
     if name in ("ParamsError", "KeyError"):
         return "params"
-    return "infrastructure"
+    return "other"  # infrastructure errors are raised, never get here

@@ -8,6 +8,7 @@ assigns the same spawns as an uninterrupted one.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -16,6 +17,7 @@ from typing import Any
 from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.progress import progress
+from scenweave.report import write_run_report
 from scenweave.run_folder import RUN_FILE, STATUSES, SUMMARY_FILE, RunFolder
 
 
@@ -51,13 +53,11 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists."""
     loaded = load_input(Path(data), selection)
     folder = RunFolder.open(out_root, run_id)
-    folder.write(RUN_FILE, _run_description(data, loaded, selection, settings, folder))
+    folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
     matcher = matcher or default_matcher()
     skipped = 0
-    per_class: Counter[str] = Counter()
-    for params in progress(loaded.params, desc="scenarios", total=len(loaded.params)):
-        index = per_class[params["maneuver_class"]]
-        per_class[params["maneuver_class"]] += 1
+    for index, params in progress(round_robin(loaded.params), desc="scenarios",
+                                  total=len(loaded.params)):
         done = folder.outcome(params["scenario_id"])
         if done and not (retry_failed and done.get("status") == "failed"):
             skipped += 1
@@ -68,7 +68,16 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     issues = [i.to_dict() for i in loaded.report.issues]
     summary = summarize(folder, issues)
     folder.write(SUMMARY_FILE, summary)
+    write_run_report(folder.root)
     return RunResult(folder, summary, skipped, issues)
+
+
+def round_robin(params_list: list[dict]) -> Iterator[tuple[int, dict]]:
+    """Each params with its spawn index: its position among the records of its class."""
+    per_class: Counter[str] = Counter()
+    for params in params_list:
+        yield per_class[params["maneuver_class"]], params
+        per_class[params["maneuver_class"]] += 1
 
 
 def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
@@ -94,8 +103,9 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
     }
 
 
-def _run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
-                     settings: PipelineSettings, folder: RunFolder) -> dict:
+def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
+                    settings: PipelineSettings, folder: RunFolder) -> dict:
+    """What ``run.json`` says: input, selection, mode and settings of the run."""
     agent_settings = settings.agent
     return {
         "run_id": folder.run_id,

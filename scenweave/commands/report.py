@@ -1,0 +1,25 @@
+"""``scenweave report RUN_DIR``: (re)write a run's summary.json and report.html."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from scenweave.report import write_run_report
+from scenweave.run_folder import SUMMARY_FILE
+
+
+@click.command("report")
+@click.argument("run_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def report(run_dir: Path) -> None:
+    """Write RUN_DIR/report.html from the scenario folders (summary.json is refreshed)."""
+    from scenweave.worker import refresh_run
+
+    if not (run_dir / SUMMARY_FILE).exists() and not any(run_dir.glob("*/status.json")):
+        raise click.UsageError(f"{run_dir}: not a run folder (no summary.json, no scenarios)")
+    summary = refresh_run(run_dir)
+    path = write_run_report(run_dir)
+    counts = ", ".join(f"{v} {k}" for k, v in summary["counts"].items())
+    click.echo(f"report of run {summary['run_id']}: {summary['total']} scenarios: {counts} "
+               f"-> {path}")

@@ -1,0 +1,71 @@
+"""``scenweave submit DATA --queue URL``: enqueue a run's scenarios for the GPU-host workers.
+
+Takes the same input and selection options as ``scenweave run`` (the very same click options),
+plus where the queue is and how jobs are retried.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from scenweave.commands.run import run as run_command
+from scenweave.inputs import InputSelection
+from scenweave.pipeline import PipelineSettings
+from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, submit
+
+#: options of ``scenweave run`` that mean the same here
+SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",
+                  "variants", "seed", "layout", "top_n", "retry_failed")
+
+
+def _delays(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(part) for part in text.split(",") if part.strip())
+    except ValueError as err:
+        raise click.BadParameter(f"{text!r}: give seconds like 10,60,300") from err
+
+
+def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, matcher: str,
+            as_json: bool, no_llm: bool, top_n: int, **selection_and_run: object) -> None:
+    """Enqueue one job per scenario of DATA; workers (``scenweave worker``) do them."""
+    if not no_llm:
+        raise click.UsageError("only --no-llm is available in this build; pass --no-llm")
+    data, out_root = selection_and_run.pop("data"), selection_and_run.pop("out_root")
+    run_id, retry_failed = selection_and_run.pop("run_id"), selection_and_run.pop("retry_failed")
+    classes = selection_and_run.pop("classes")
+    selection = InputSelection(classes=tuple(c.strip() for c in classes.split(",")) if classes
+                               else (), **selection_and_run)
+    options = JobOptions(retries=retries, retry_delays_s=_delays(retry_delays),
+                         timeout_s=job_timeout, matcher=matcher)
+    settings = PipelineSettings(no_llm=True, top_n=top_n)
+    result = submit(Path(data), Path(out_root), selection, settings, connect(url), run_id=run_id,
+                    retry_failed=retry_failed, options=options)
+    if as_json:
+        click.echo(json.dumps({"run_id": result.folder.run_id, "folder": str(result.folder.root),
+                               "enqueued": result.enqueued, "already_done": result.already_done,
+                               "already_queued": result.already_queued,
+                               "input_issues": result.input_issues}, indent=1))
+    else:
+        for issue in result.input_issues[:10]:
+            click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
+        click.echo(result.line())
+
+
+submit_command = click.Command(
+    "submit", callback=_submit, help=_submit.__doc__,
+    params=[*(p for p in run_command.params if p.name in SHARED_OPTIONS),
+            click.Option(["--queue", "url"], envvar=QUEUE_ENV, show_envvar=True,
+                         help="Redis URL of the job queue [default: redis://127.0.0.1:6379/0]."),
+            click.Option(["--retries"], default=3, show_default=True, type=click.IntRange(0),
+                         help="Retries of a scenario after an infrastructure error."),
+            click.Option(["--retry-delays"], default="10,60,300", show_default=True,
+                         help="Seconds before each retry, comma-separated."),
+            click.Option(["--job-timeout"], default=3600, show_default=True,
+                         type=click.IntRange(1), help="Seconds one scenario may take."),
+            click.Option(["--matcher"], default=DEFAULT_MATCHER, show_default=True,
+                         help="Spawn matcher factory (module:callable) the workers use."),
+            click.Option(["--json", "as_json"], is_flag=True,
+                         help="Print what was enqueued as JSON.")])

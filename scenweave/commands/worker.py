@@ -1,0 +1,34 @@
+"""``scenweave worker``: do the queued scenarios of any run, on the GPU host."""
+
+from __future__ import annotations
+
+import click
+
+from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, WorkerOptions, work, work_in_processes
+
+
+@click.command("worker")
+@click.option("--queue", "url", envvar=QUEUE_ENV, show_envvar=True,
+              help="Redis URL of the job queue [default: redis://127.0.0.1:6379/0].")
+@click.option("--workers", "count", default=1, show_default=True, type=click.IntRange(1),
+              help="Worker processes: as many as the LLM server serves in parallel.")
+@click.option("--burst", is_flag=True, help="Stop when the queue is empty.")
+@click.option("--heartbeat", default=30, show_default=True, type=click.IntRange(1),
+              help="Seconds between heartbeats; a job is abandoned after 2 missed + 10 s.")
+@click.option("--maintenance-interval", default=60, show_default=True, type=click.IntRange(1),
+              help="Seconds between looks for jobs of dead workers.")
+@click.option("--preload", default=DEFAULT_MATCHER, show_default=True,
+              help="Spawn matcher (module:callable) to load once before work starts.")
+def worker(url: str | None, count: int, burst: bool, heartbeat: int, maintenance_interval: int,
+           preload: str) -> None:
+    """Run queued scenarios (from ``scenweave submit``) until stopped; Ctrl-C or SIGTERM
+    stops after the current scenario."""
+    options = WorkerOptions(burst=burst, heartbeat_s=heartbeat,
+                            maintenance_interval_s=maintenance_interval,
+                            preload_matcher=preload or None)
+    if count == 1:
+        worked = work(url, options)
+        click.echo(f"worker stopped ({'did some scenarios' if worked else 'no scenarios done'})")
+    else:
+        clean = work_in_processes(url, options, count)
+        click.echo(f"workers stopped: {clean} of {count} exited cleanly")

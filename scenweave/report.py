@@ -1,0 +1,402 @@
+"""What a run or a benchmark did, for a reader: metrics over outcomes, figures, ``report.html``.
+
+Everything here works on outcome dicts (``status.json`` of each scenario, the ``scenarios`` of
+``summary.json``), so it runs the same on a ``--no-llm`` run, an agent run and a benchmark.
+The metrics follow thesis §6.1: success rate (SR, the LLM's own success: ``ok`` or
+``repaired``), first-attempt rate, latency per scenario and the error taxonomy; a fallback
+still delivers a scenario, so ``delivered_rate`` counts it too. The HTML page is static and
+self-contained: figures are inline PNGs, links are relative to the run folder.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import math
+from collections import Counter
+from collections.abc import Iterable
+from pathlib import Path
+from string import Template
+from typing import Any
+
+from ingest.atomic import write_text_atomic
+from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
+
+REPORT_FILE = "report.html"
+TEMPLATE = Path(__file__).parent / "templates" / "report.html"
+SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE)
+HOUR_S = 3600.0
+
+
+# --- metrics -------------------------------------------------------------------------------
+
+def latency_s(outcome: dict) -> float | None:
+    """Wall-clock seconds one scenario took (``timings_s.total``), or None if unknown."""
+    total = (outcome.get("timings_s") or {}).get("total")
+    return float(total) if isinstance(total, int | float) else None
+
+
+def percentile(values: list[float], q: float) -> float | None:
+    """The ``q``-th percentile (0..100) by linear interpolation; None for no values."""
+    if not values:
+        return None
+    ordered = sorted(values)
+    rank = (len(ordered) - 1) * q / 100.0
+    low, high = math.floor(rank), math.ceil(rank)
+    return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
+
+
+def latency_stats(values: list[float]) -> dict:
+    """Mean, standard deviation, p50, p95, min and max of latencies in seconds."""
+    if not values:
+        return {"mean": None, "std": None, "p50": None, "p95": None, "min": None, "max": None}
+    mean = sum(values) / len(values)
+    std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
+    return {"mean": round(mean, 4), "std": round(std, 4),
+            "p50": round(percentile(values, 50), 4), "p95": round(percentile(values, 95), 4),
+            "min": round(min(values), 4), "max": round(max(values), 4)}
+
+
+def metrics(outcomes: list[dict]) -> dict:
+    """Thesis §6.1 metrics over a group of outcomes (a run, a class, a model)."""
+    n = len(outcomes)
+    counts = Counter(o.get("status", "failed") for o in outcomes)
+    latencies = [v for v in (latency_s(o) for o in outcomes) if v is not None]
+    tokens_in = sum(int(o.get("tokens_in") or 0) for o in outcomes)
+    tokens_out = sum(int(o.get("tokens_out") or 0) for o in outcomes)
+    taxonomy = Counter(t for o in outcomes for t in o.get("error_taxonomy") or [])
+    return {
+        "n": n,
+        "counts": {s: counts.get(s, 0) for s in STATUSES},
+        "success_rate": _rate(counts["ok"] + counts["repaired"], n),
+        "delivered_rate": _rate(n - counts["failed"], n),
+        "first_attempt_rate": _rate(sum(bool(o.get("first_attempt_success"))
+                                        for o in outcomes), n),
+        "mean_attempts": round(sum(o.get("attempts") or 0 for o in outcomes) / n, 3) if n else None,
+        "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
+        "latency_s": latency_stats(latencies),
+        "per_hour": scenarios_per_hour(latencies),
+        "tokens_in": tokens_in, "tokens_out": tokens_out,
+        "tokens_per_scenario": round((tokens_in + tokens_out) / n, 1) if n else None,
+        "error_taxonomy": dict(sorted(taxonomy.items())),
+        "errors_total": sum(taxonomy.values()),
+    }
+
+
+def by_class(outcomes: Iterable[dict]) -> dict[str, list[dict]]:
+    """Outcomes grouped by manoeuvre class, classes sorted."""
+    groups: dict[str, list[dict]] = {}
+    for o in outcomes:
+        groups.setdefault(o.get("maneuver_class", "?"), []).append(o)
+    return dict(sorted(groups.items()))
+
+
+def projected_curve(latencies: list[float], horizon_s: float = HOUR_S,
+                    max_points: int = 2000) -> list[tuple[float, int]]:
+    """(time, scenarios finished) of one sequential pipeline over ``horizon_s`` (Fig. 6.4).
+
+    The observed latencies are repeated in order until the horizon, as if one pipeline
+    instance kept running on the same mix of classes. At most ``max_points`` points are kept
+    (every k-th scenario, and the last one), so a fast run does not make a million points.
+    """
+    usable = [v for v in latencies if v > 0]
+    if not usable:
+        return []
+    expected = horizon_s / (sum(usable) / len(usable))
+    step = max(1, math.ceil(expected / max_points))
+    curve, clock, count = [], 0.0, 0
+    while True:
+        for value in usable:
+            if clock + value > horizon_s:
+                if not curve or curve[-1][1] != count:
+                    curve.append((clock, count))
+                return curve
+            clock += value
+            count += 1
+            if count % step == 0:
+                curve.append((clock, count))
+
+
+def scenarios_per_hour(latencies: list[float]) -> float | None:
+    """Scenarios one sequential pipeline makes per hour at these latencies."""
+    usable = [v for v in latencies if v > 0]
+    return round(HOUR_S * len(usable) / sum(usable), 1) if usable else None
+
+
+def observed_curve(run_dir: Path, outcomes: list[dict]) -> list[tuple[float, int]]:
+    """(seconds since the run's first start, scenarios finished) at each commit, from the files.
+
+    A scenario's ``status.json`` is written when it is committed, so its modification time
+    is the finish time; the start of the run is the earliest finish minus its latency.
+    """
+    points = []
+    for o in outcomes:
+        path = Path(run_dir) / safe_name(o["scenario_id"]) / STATUS_FILE
+        if path.exists():
+            points.append((path.stat().st_mtime, latency_s(o) or 0.0))
+    if not points:
+        return []
+    start = min(end - took for end, took in points)
+    return [(t, n) for n, t in enumerate(sorted(end - start for end, _ in points), start=1)]
+
+
+# --- figures -------------------------------------------------------------------------------
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _png(fig: Any) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
+    _pyplot().close(fig)
+    return buffer.getvalue()
+
+
+def plot_latency_vs_success(per_model: dict[str, dict]) -> bytes:
+    """Fig. 6.1: mean latency against success rate, one labelled point per model."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for model, m in per_model.items():
+        mean = m["latency_s"]["mean"] or 0.0
+        ax.scatter(mean, 100 * (m["success_rate"] or 0.0), s=60)
+        ax.annotate(model, (mean, 100 * (m["success_rate"] or 0.0)),
+                    textcoords="offset points", xytext=(6, 4), fontsize=8)
+    ax.set_xlabel("mean latency (s/scenario)")
+    ax.set_ylabel("success rate (%)")
+    ax.set_ylim(-5, 105)
+    ax.grid(alpha=0.3)
+    return _png(fig)
+
+
+def plot_latency_per_class(series: dict[str, list[dict]]) -> bytes:
+    """Fig. 6.2: mean latency ± standard deviation per class, one bar group per series."""
+    plt = _pyplot()
+    classes = sorted({o.get("maneuver_class", "?") for group in series.values() for o in group})
+    fig, ax = plt.subplots(figsize=(max(6.4, 0.55 * len(classes) * max(1, len(series))), 4.2))
+    width = 0.8 / max(1, len(series))
+    for i, (name, group) in enumerate(series.items()):
+        grouped = by_class(group)
+        stats = [latency_stats([v for v in map(latency_s, grouped.get(c, [])) if v is not None])
+                 for c in classes]
+        ax.bar([k + i * width for k in range(len(classes))], [s["mean"] or 0 for s in stats],
+               width, yerr=[s["std"] or 0 for s in stats], capsize=2, label=name)
+    ax.set_xticks([k + width * (len(series) - 1) / 2 for k in range(len(classes))], classes,
+                  rotation=45, ha="right")
+    ax.set_ylabel("latency (s/scenario)")
+    if len(series) > 1:
+        ax.legend(fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
+    return _png(fig)
+
+
+def plot_latency_boxplot(outcomes: list[dict]) -> bytes:
+    """Fig. 6.3: the distribution of latencies per class."""
+    plt = _pyplot()
+    grouped = by_class(outcomes)
+    data = [[v for v in map(latency_s, group) if v is not None] or [0.0]
+            for group in grouped.values()]
+    fig, ax = plt.subplots(figsize=(max(6.4, 0.5 * len(grouped)), 4.2))
+    ax.boxplot(data)
+    ax.set_xticks(range(1, len(grouped) + 1), list(grouped), rotation=45, ha="right")
+    ax.set_ylabel("latency (s/scenario)")
+    ax.grid(axis="y", alpha=0.3)
+    return _png(fig)
+
+
+def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
+    """Fig. 6.4: cumulative scenarios over time, one step curve per series of (time, count)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for name, curve in series.items():
+        if not curve:
+            continue
+        ax.step([0.0] + [t / 60 for t, _ in curve], [0] + [n for _, n in curve], where="post",
+                label=f"{name}: {curve[-1][1]} in {curve[-1][0] / 60:.1f} min")
+    ax.set_xlabel("time (min)")
+    ax.set_ylabel("scenarios finished")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return _png(fig)
+
+
+# --- HTML ----------------------------------------------------------------------------------
+
+def _rate(part: int, whole: int) -> float | None:
+    return round(part / whole, 4) if whole else None
+
+
+def _pct(value: float | None) -> str:
+    return "–" if value is None else f"{100 * value:.0f}%"
+
+
+def _sec(value: float | None) -> str:
+    return "–" if value is None else f"{value:.2f}"
+
+
+def _esc(value: Any) -> str:
+    return html.escape("" if value is None else str(value))
+
+
+def table(header: list[str], rows: list[list[Any]], text_columns: int = 1,
+          row_classes: list[str] | None = None,
+          column_classes: dict[int, str] | None = None) -> str:
+    """An HTML table; the first ``text_columns`` columns are left-aligned text, cells are
+    escaped unless they are already markup (``Markup``)."""
+    def cell(tag: str, i: int, value: Any) -> str:
+        names = ["text"] if i < text_columns else []
+        names += [column_classes[i]] if column_classes and i in column_classes else []
+        cls = f' class="{" ".join(names)}"' if names else ""
+        body = value.html if isinstance(value, Markup) else _esc(value)
+        return f"<{tag}{cls}>{body}</{tag}>"
+
+    head = "".join(cell("th", i, h) for i, h in enumerate(header))
+    body = []
+    for r, row in enumerate(rows):
+        cls = f' class="{row_classes[r]}"' if row_classes else ""
+        body.append(f"<tr{cls}>" + "".join(cell("td", i, v) for i, v in enumerate(row)) + "</tr>")
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+
+
+class Markup:
+    """A table cell that is already HTML (links, spans)."""
+
+    def __init__(self, markup: str):
+        self.html = markup
+
+
+def figure(png: bytes, caption: str, alt: str) -> str:
+    """An inline PNG figure with a caption."""
+    data = base64.b64encode(png).decode("ascii")
+    return (f'<figure><img alt="{_esc(alt)}" src="data:image/png;base64,{data}">'
+            f"<figcaption>{_esc(caption)}</figcaption></figure>")
+
+
+def page(title: str, body: str) -> str:
+    """The whole HTML page from the template."""
+    return Template(TEMPLATE.read_text(encoding="utf-8")).substitute(title=_esc(title), body=body)
+
+
+def metrics_row(name: str, m: dict) -> list[Any]:
+    """One row of the per-class / per-model metrics tables."""
+    lat = m["latency_s"]
+    return [name, m["n"], *(m["counts"][s] for s in STATUSES), _pct(m["success_rate"]),
+            _pct(m["delivered_rate"]), _pct(m["first_attempt_rate"]), _sec(lat["mean"]),
+            _sec(lat["p50"]), _sec(lat["p95"]),
+            "–" if m["per_hour"] is None else m["per_hour"], m["tokens_in"] + m["tokens_out"]]
+
+
+METRICS_HEADER = ["", "n", *STATUSES, "SR", "delivered", "1st attempt", "mean s", "p50 s",
+                  "p95 s", "per hour", "tokens"]
+
+
+def count_boxes(counts: dict[str, int], total: int) -> str:
+    """The outcome counts as big numbers."""
+    boxes = [f'<div class="count total"><span class="n">{total}</span>scenarios</div>']
+    boxes += [f'<div class="count {s}"><span class="n">{counts.get(s, 0)}</span>{s}</div>'
+              for s in STATUSES]
+    return f'<div class="counts">{"".join(boxes)}</div>'
+
+
+def scenario_links(scenario_id: str, run_dir: Path) -> Markup:
+    """Relative links to a scenario's folder and the files in it that exist."""
+    folder = safe_name(scenario_id)
+    links = [f'<a href="{_esc(folder)}/">folder</a>']
+    links += [f'<a href="{_esc(folder)}/{name}">{name}</a>'
+              for name in SCENARIO_FILES if (run_dir / folder / name).exists()]
+    return Markup(" ".join(links))
+
+
+def render_run_report(run_dir: Path) -> str:
+    """The HTML report of one run folder (reads ``summary.json``, ``run.json``, the folders)."""
+    run_dir = Path(run_dir)
+    summary = _read_json(run_dir / SUMMARY_FILE) or {}
+    run = _read_json(run_dir / RUN_FILE) or {}
+    outcomes = summary.get("scenarios") or []
+    total = run.get("scenarios")
+    m = metrics(outcomes)
+    grouped = by_class(outcomes)
+    parts = [
+        f"<h1>Run {_esc(summary.get('run_id', run_dir.name))}</h1>",
+        f'<p class="meta">mode {_esc(run.get("mode", "?"))} · input {_esc(run.get("input", "?"))}'
+        f" · started {_esc(run.get('started_at', '?'))} · summary written "
+        f"{_esc(summary.get('written_at', '?'))}"
+        + (f" · {len(outcomes)} of {total} scenarios finished" if total is not None else "")
+        + "</p>",
+        count_boxes(m["counts"], len(outcomes)),
+        "<h2>Per class</h2>",
+        table(METRICS_HEADER, [metrics_row(code, metrics(g)) for code, g in grouped.items()]
+              + [metrics_row("all", m)]),
+        "<h2>Error taxonomy</h2>",
+        table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()])
+        if m["error_taxonomy"] else "<p>No errors.</p>",
+    ]
+    if outcomes:
+        parts += ["<h2>Figures</h2>", *_run_figures(run_dir, outcomes)]
+    parts += ["<h2>Scenarios</h2>", _scenario_table(run_dir, outcomes)]
+    issues = summary.get("input_issues") or []
+    if issues:
+        parts += ["<h2>Input issues</h2>",
+                  table(["file", "row", "field", "message"],
+                        [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
+                         for i in issues], text_columns=4)]
+    return page(f"ScenWeave run {summary.get('run_id', run_dir.name)}", "\n".join(parts))
+
+
+def _run_figures(run_dir: Path, outcomes: list[dict]) -> list[str]:
+    latencies = {name: [v for v in map(latency_s, group) if v is not None]
+                 for name, group in _domains(outcomes).items()}
+    cumulative = {f"projected, sequential, {name}": projected_curve(values)
+                  for name, values in latencies.items() if values}
+    cumulative["observed"] = observed_curve(run_dir, outcomes)
+    return [
+        figure(plot_latency_per_class({"run": outcomes}),
+               "Mean latency ± standard deviation per class (thesis Fig. 6.2).",
+               "latency per class"),
+        figure(plot_latency_boxplot(outcomes),
+               "Distribution of latencies per class (thesis Fig. 6.3).", "latency boxplot"),
+        figure(plot_cumulative(cumulative),
+               "Cumulative scenarios: projected for one sequential pipeline over an hour "
+               "(thesis Fig. 6.4) and as observed in this run.", "cumulative scenarios"),
+    ]
+
+
+def _domains(outcomes: list[dict]) -> dict[str, list[dict]]:
+    groups: dict[str, list[dict]] = {"mix": outcomes}
+    for o in outcomes:
+        groups.setdefault(f"{o.get('domain', '?')} only", []).append(o)
+    return groups if len(groups) > 2 else {"mix": outcomes}
+
+
+def _scenario_table(run_dir: Path, outcomes: list[dict]) -> str:
+    rows, classes = [], []
+    for o in outcomes:
+        rows.append([o["scenario_id"], o.get("maneuver_class"), o.get("status"),
+                     o.get("attempts"), o.get("spawn_id"), _sec(latency_s(o)),
+                     scenario_links(o["scenario_id"], run_dir),
+                     Markup(f'<span class="error">{_esc(o.get("error") or "")}</span>')])
+        classes.append(f"status-{o.get('status')}")
+    return table(["scenario", "class", "status", "attempts", "spawn", "latency s", "files",
+                  "error"], rows, text_columns=3, row_classes=classes,
+                 column_classes={2: "status", 6: "text", 7: "text"})
+
+
+def write_run_report(run_dir: Path) -> Path:
+    """Write ``report.html`` into the run folder (atomically) and return its path."""
+    path = Path(run_dir) / REPORT_FILE
+    write_text_atomic(path, render_run_report(Path(run_dir)))
+    return path
+
+
+def _read_json(path: Path) -> Any:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return None

@@ -1,0 +1,93 @@
+"""Fixtures of the worker tests: a real redis-server, canonical sample records, worker
+processes started as ``scenweave worker`` subprocesses."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from scenweave.cli import cli
+from tests.worker.gates import GATES_ENV
+from tests.worker.redis_server import RedisServer
+
+GATED_MATCHER = "tests.worker.gates:GatedMatcher"
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def redis_server(tmp_path_factory):
+    server = RedisServer(tmp_path_factory.mktemp("redis")).start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture
+def redis_url(redis_server):
+    """The URL of an emptied Redis database for one test."""
+    from redis import Redis
+
+    Redis.from_url(redis_server.url).flushall()
+    return redis_server.url
+
+
+@pytest.fixture(scope="module")
+def records(sample_raw, tmp_path_factory) -> Path:
+    """Canonical records of the sample data; BRAKE row 1 asks for a gap no spawn fits."""
+    out = tmp_path_factory.mktemp("records")
+    result = CliRunner().invoke(cli, ["ingest", str(sample_raw), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    path = out / "highway" / "BRAKE.json"
+    data = json.loads(path.read_text())
+    data[1]["params"]["npc_distance_m"] = 4000.0
+    path.write_text(json.dumps(data))
+    return out
+
+
+@pytest.fixture
+def gates(tmp_path) -> Path:
+    path = tmp_path / "gates"
+    path.mkdir()
+    return path
+
+
+class Workers:
+    """``scenweave worker`` processes of one test, stopped at its end."""
+
+    def __init__(self, url: str, gates: Path, cwd: Path):
+        self.url, self.gates, self.cwd = url, gates, cwd
+        self.processes: list[subprocess.Popen] = []
+
+    def start(self, *extra: str) -> subprocess.Popen:
+        env = {**os.environ, GATES_ENV: str(self.gates), "PYTHONPATH": str(REPO)}
+        process = subprocess.Popen(
+            [sys.executable, "-m", "scenweave.cli", "worker", "--queue", self.url,
+             "--preload", GATED_MATCHER, "--heartbeat", "1", "--maintenance-interval", "1",
+             *extra], cwd=self.cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            text=True)
+        self.processes.append(process)
+        return process
+
+    def stop(self) -> None:
+        for process in self.processes:
+            if process.poll() is None:
+                process.send_signal(signal.SIGTERM)
+        for process in self.processes:
+            try:
+                process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+
+@pytest.fixture
+def workers(redis_url, gates, tmp_path):
+    started = Workers(redis_url, gates, tmp_path)
+    yield started
+    started.stop()

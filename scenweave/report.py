@@ -290,7 +290,8 @@ def metrics_row(name: str, m: dict) -> list[Any]:
     return [name, m["n"], *(m["counts"][s] for s in STATUSES), _pct(m["success_rate"]),
             _pct(m["delivered_rate"]), _pct(m["first_attempt_rate"]), _sec(lat["mean"]),
             _sec(lat["p50"]), _sec(lat["p95"]),
-            "–" if m["per_hour"] is None else m["per_hour"], m["tokens_in"] + m["tokens_out"]]
+            "–" if m["per_hour"] is None else f"{m['per_hour']:.0f}",
+            m["tokens_in"] + m["tokens_out"]]
 
 
 METRICS_HEADER = ["", "n", *STATUSES, "SR", "delivered", "1st attempt", "mean s", "p50 s",
@@ -299,9 +300,9 @@ METRICS_HEADER = ["", "n", *STATUSES, "SR", "delivered", "1st attempt", "mean s"
 
 def count_boxes(counts: dict[str, int], total: int) -> str:
     """The outcome counts as big numbers."""
-    boxes = [f'<div class="count total"><span class="n">{total}</span>scenarios</div>']
-    boxes += [f'<div class="count {s}"><span class="n">{counts.get(s, 0)}</span>{s}</div>'
-              for s in STATUSES]
+    boxes = [(total, "scenarios", "total")] + [(counts.get(s, 0), s, s) for s in STATUSES]
+    boxes = [f'<div class="count {cls}"><span class="n">{n}</span> {label}</div>'
+             for n, label, cls in boxes]
     return f'<div class="counts">{"".join(boxes)}</div>'
 
 

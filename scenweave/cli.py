@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "worker": "scenweave.commands.worker:worker",
     "submit": "scenweave.commands.submit:submit_command",
     "report": "scenweave.commands.report:report",
+    "bench": "scenweave.commands.bench:bench",
 }
 
 

@@ -1,0 +1,245 @@
+"""The multi-model benchmark (thesis §6.1–6.2): the same records through the agent per model.
+
+Each model gets its own run folder (``<bench>/runs/<model>/``, made by ``run_batch``, so an
+interrupted benchmark resumes), and the outcomes of all models are aggregated into
+``bench.json``: per model and per class the success rate, first-attempt rate, latency
+(mean/std/p50/p95), tokens and the error taxonomy (Tables 6.2, 6.3), plus the figures of
+Figs. 6.1, 6.2 and 6.4 as PNG files and a self-contained ``bench.html``.
+
+The model name ``reference`` stands for no LLM at all (the deterministic reference scripts):
+a baseline for latency and a way to run the whole benchmark machinery without a model.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from ingest.atomic import write_json_atomic, write_text_atomic
+from scenweave.inputs import InputSelection
+from scenweave.pipeline import PipelineSettings
+from scenweave.progress import progress
+from scenweave.report import (
+    METRICS_HEADER,
+    by_class,
+    figure,
+    latency_s,
+    metrics,
+    metrics_row,
+    page,
+    plot_cumulative,
+    plot_latency_per_class,
+    plot_latency_vs_success,
+    projected_curve,
+    table,
+)
+from scenweave.runner import run_batch
+
+#: the 11 highway classes of the thesis benchmark (BR_BK shares BRAKE's script)
+THESIS_CLASSES = ("BRAKE", "CINF", "CINB", "COUTF", "COUTB", "LCF", "LCB", "FLF", "FLB", "FRF",
+                  "FRB")
+LLM_BACKENDS = ("ollama", "embedded", "replay")
+REFERENCE = "reference"
+BENCH_FILE = "bench.json"
+BENCH_HTML = "bench.html"
+FIGURES = {"latency_vs_success": "fig6_1_latency_vs_success.png",
+           "latency_per_class": "fig6_2_latency_per_class.png",
+           "cumulative": "fig6_4_scenarios_per_hour.png"}
+
+
+class BenchError(Exception):
+    """The benchmark cannot run as configured; the message names the option to change."""
+
+
+@dataclass
+class BenchSettings:
+    """What to benchmark: which models, on which records, with which LLM backend."""
+
+    models: tuple[str, ...]
+    classes: tuple[str, ...] = THESIS_CLASSES
+    per_class: int = 5
+    llm: str = "ollama"
+    seed: int = 7
+    top_n: int = 5
+
+
+@dataclass
+class BenchResult:
+    """Where the benchmark wrote, and its aggregate."""
+
+    root: Path
+    aggregate: dict
+    run_dirs: dict[str, Path] = field(default_factory=dict)
+
+    def line(self) -> str:
+        """The one-line summary printed at the end of ``scenweave bench``."""
+        parts = []
+        for model, entry in self.aggregate["models"].items():
+            m = entry["overall"]
+            mean = m["latency_s"]["mean"]
+            latency = "–" if mean is None else f"{mean:.2f}"
+            parts.append(f"{model}: SR {_pct(m['success_rate'])}, "
+                         f"1st {_pct(m['first_attempt_rate'])}, {latency} s")
+        return f"bench {self.root.name}: " + "; ".join(parts) + f" -> {self.root / BENCH_FILE}"
+
+
+def _pct(value: float | None) -> str:
+    return "–" if value is None else f"{100 * value:.0f}%"
+
+
+def model_dir_name(model: str) -> str:
+    """A folder name for a model tag such as ``qwen2.5-coder:7b``."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", model)
+
+
+def agent_settings_for(llm: str) -> Callable[[str], PipelineSettings]:
+    """Pipeline settings per model name: the agent with that model on backend ``llm``."""
+    if llm not in LLM_BACKENDS:
+        raise BenchError(f"--llm {llm!r}: choose one of {', '.join(LLM_BACKENDS)}")
+
+    def settings(model: str) -> PipelineSettings:
+        if model == REFERENCE:
+            return PipelineSettings(no_llm=True)
+        try:
+            from agent import AgentSettings
+        except ImportError as err:
+            raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
+                             f"({err}); benchmark --models {REFERENCE} only") from err
+        return PipelineSettings(no_llm=False, agent=AgentSettings(model=model, llm=llm))
+
+    return settings
+
+
+def sample_records(root: Path, settings: BenchSettings) -> Path:
+    """Seeded MOOVE-format sample data for the benchmark (made once, reused on resume)."""
+    from ingest.samples import write_highway_samples, write_urban_samples
+
+    data = root / "data"
+    if not data.exists():
+        staging = Path(tempfile.mkdtemp(dir=root, prefix=".data."))
+        write_highway_samples(staging / "highway", seed=settings.seed, per_class=settings.per_class)
+        write_urban_samples(staging / "urban", seed=settings.seed, per_class=settings.per_class)
+        staging.rename(data)
+    return data
+
+
+def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = None,
+              data: Path | None = None,
+              settings_for: Callable[[str], PipelineSettings] | None = None) -> BenchResult:
+    """Run every model over the selected records, aggregate, write json, figures and html."""
+    settings_for = settings_for or agent_settings_for(settings.llm)
+    root = Path(out_root) / (bench_id or datetime.now(UTC).strftime("bench-%Y%m%d-%H%M%S"))
+    root.mkdir(parents=True, exist_ok=True)
+    data = Path(data) if data else sample_records(root, settings)
+    selection = InputSelection(classes=settings.classes, per_class=settings.per_class)
+    pipelines = {model: settings_for(model) for model in settings.models}  # fail before running
+    outcomes, run_dirs = {}, {}
+    for model in progress(settings.models, desc="models", total=len(settings.models)):
+        pipelines[model].top_n = settings.top_n
+        result = run_batch(data, root / "runs", selection, pipelines[model],
+                           run_id=model_dir_name(model))
+        outcomes[model] = result.summary["scenarios"]
+        run_dirs[model] = result.folder.root
+    summary = aggregate(outcomes)
+    summary["settings"] = {**asdict(settings), "data": str(data)}
+    summary["runs"] = {model: str(path) for model, path in run_dirs.items()}
+    write_bench(root, summary, outcomes)
+    return BenchResult(root, summary, run_dirs)
+
+
+def aggregate(outcomes_by_model: dict[str, list[dict]]) -> dict:
+    """``bench.json``: metrics per model and per model and class, and the thesis tables."""
+    models = {model: {"overall": metrics(outcomes),
+                      "by_class": {code: metrics(group)
+                                   for code, group in by_class(outcomes).items()}}
+              for model, outcomes in outcomes_by_model.items()}
+    classes = sorted({code for entry in models.values() for code in entry["by_class"]})
+    errors = sorted({e for entry in models.values() for e in entry["overall"]["error_taxonomy"]})
+    return {
+        "written_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "models": models,
+        # thesis Table 6.2: mean latency (s/scenario) by class and model
+        "latency_table": {code: {model: entry["by_class"].get(code, {}).get("latency_s", {})
+                                 .get("mean") for model, entry in models.items()}
+                          for code in classes},
+        # thesis Table 6.3: errors by category and model, over all attempts
+        "error_table": {error: {model: entry["overall"]["error_taxonomy"].get(error, 0)
+                                for model, entry in models.items()} for error in errors},
+    }
+
+
+def figures(summary: dict, outcomes_by_model: dict[str, list[dict]]) -> dict[str, bytes]:
+    """Figs. 6.1, 6.2 and 6.4 of the benchmark as PNG bytes, by the keys of ``FIGURES``."""
+    overall = {model: entry["overall"] for model, entry in summary["models"].items()}
+    curves = {model: projected_curve([v for v in map(latency_s, outcomes) if v is not None])
+              for model, outcomes in outcomes_by_model.items()}
+    return {"latency_vs_success": plot_latency_vs_success(overall),
+            "latency_per_class": plot_latency_per_class(outcomes_by_model),
+            "cumulative": plot_cumulative(curves)}
+
+
+def write_bench(root: Path, summary: dict, outcomes_by_model: dict[str, list[dict]]) -> Path:
+    """Write ``bench.json``, the figure PNGs and ``bench.html`` into ``root``."""
+    pngs = figures(summary, outcomes_by_model)
+    for key, png in pngs.items():
+        _write_bytes_atomic(root / FIGURES[key], png)
+    summary = {**summary, "figures": dict(FIGURES)}
+    write_json_atomic(root / BENCH_FILE, summary)
+    write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, pngs))
+    return root / BENCH_FILE
+
+
+def _write_bytes_atomic(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def render_bench(name: str, summary: dict, pngs: dict[str, bytes]) -> str:
+    """The benchmark as a static HTML page: the thesis tables and figures."""
+    models = list(summary["models"])
+
+    def cell(value: Any, fmt: str) -> str:
+        return "–" if value is None else format(value, fmt)
+
+    def rates(entry: dict, code: str) -> str:
+        group = entry["by_class"].get(code, {})
+        return (f"{cell(group.get('success_rate'), '.0%')} / "
+                f"{cell(group.get('first_attempt_rate'), '.0%')}")
+
+    per_class_sr = [[code, *(rates(entry, code) for entry in summary["models"].values())]
+                    for code in summary["latency_table"]]
+    parts = [
+        f"<h1>Benchmark {name}</h1>",
+        "<h2>Per model</h2>",
+        table(METRICS_HEADER, [metrics_row(model, entry["overall"])
+                               for model, entry in summary["models"].items()]),
+        "<h2>Mean latency (s/scenario) by class (thesis Table 6.2)</h2>",
+        table(["class", *models], [[code, *(cell(row[m], ".1f") for m in models)]
+                                   for code, row in summary["latency_table"].items()]),
+        "<h2>Success rate / first-attempt rate by class</h2>",
+        table(["class", *models], per_class_sr),
+        "<h2>Error taxonomy, all attempts (thesis Table 6.3)</h2>",
+        table(["error", *models], [[error, *(row[m] for m in models)]
+                                   for error, row in summary["error_table"].items()])
+        if summary["error_table"] else "<p>No errors.</p>",
+        "<h2>Figures</h2>",
+        figure(pngs["latency_vs_success"], "Latency vs success rate per model (Fig. 6.1).",
+               "latency vs success"),
+        figure(pngs["latency_per_class"], "Mean latency ± std per class and model (Fig. 6.2).",
+               "latency per class"),
+        figure(pngs["cumulative"], "Projected scenarios over one hour of sequential running "
+               "per model (Fig. 6.4).", "scenarios per hour"),
+    ]
+    return page(f"ScenWeave benchmark {name}", "\n".join(parts))

@@ -1,0 +1,42 @@
+"""``scenweave bench --models A,B``: the agent over the same sample records per model."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from scenweave.bench import LLM_BACKENDS, THESIS_CLASSES, BenchSettings, run_bench
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(part.strip() for part in text.split(",") if part.strip())
+
+
+@click.command("bench")
+@click.option("--models", required=True,
+              help="Comma-separated model names, e.g. qwen2.5-coder:7b,codellama:7b; "
+                   "'reference' = the reference scripts without an LLM.")
+@click.option("--classes", default=",".join(THESIS_CLASSES), show_default=True,
+              help="Comma-separated class codes.")
+@click.option("--per-class", default=5, show_default=True, type=click.IntRange(1),
+              help="Records per class (the thesis used 5).")
+@click.option("--llm", type=click.Choice(LLM_BACKENDS), default="ollama", show_default=True,
+              help="LLM backend the agent uses.")
+@click.option("--data", type=click.Path(exists=True, path_type=Path),
+              help="Records to use instead of seeded sample data.")
+@click.option("--seed", default=7, show_default=True, help="Seed of the sample data.")
+@click.option("--out", "out_root", default="bench", show_default=True,
+              type=click.Path(file_okay=False, path_type=Path), help="Folder for benchmarks.")
+@click.option("--bench-id", help="Name of the benchmark folder; an existing one is resumed.")
+@click.option("--json", "as_json", is_flag=True, help="Print bench.json instead of a line.")
+def bench(models: str, classes: str, per_class: int, llm: str, data: Path | None, seed: int,
+          out_root: Path, bench_id: str | None, as_json: bool) -> None:
+    """Benchmark models on the same records: SR, first-attempt rate, latency, tokens, errors."""
+    if not _names(models):
+        raise click.BadParameter("give at least one model", param_hint="--models")
+    settings = BenchSettings(models=_names(models), classes=_names(classes),
+                             per_class=per_class, llm=llm, seed=seed)
+    result = run_bench(settings, out_root, bench_id=bench_id, data=data)
+    click.echo(json.dumps(result.aggregate, indent=1) if as_json else result.line())

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from sandbox.errors import SandboxError
 from sandbox.result import ExecResult, Report, ReportInvalid, read_report, write_files
 from sandbox.settings import SandboxSettings
 
@@ -101,6 +102,8 @@ class Attempt:
         except ReportInvalid as err:
             report = Report(error_type="NoReport",
                             error_message=f"the script left no valid report ({err})")
+        except OSError as err:
+            raise SandboxError(f"cannot write the script's outputs into {out_dir}: {err}") from err
         result.script_duration_s = report.script_duration_s
         result.error_type = report.error_type
         result.error_message = report.error_message
@@ -125,12 +128,6 @@ class Attempt:
     def close(self) -> None:
         """Delete the staging folder (only our files and the report live there)."""
         shutil.rmtree(self.root, ignore_errors=True)
-
-    def __enter__(self) -> Attempt:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
 
 def params_to_json(params: dict) -> str:

@@ -132,3 +132,11 @@ def test_params_that_are_not_json_are_a_clear_error(tmp_path):
     box = sandbox.get_sandbox(sandbox.SandboxSettings(backend="bwrap"))
     with pytest.raises(ValueError, match="params: not JSON"):
         box.run("def generate(p, o): pass", {"when": object()}, tmp_path)
+
+
+def test_an_unwritable_output_folder_is_an_infrastructure_error(tmp_path):
+    (tmp_path / "scenario.xosc").mkdir()  # the host's folder is in the way, not the script
+    box = sandbox.get_sandbox(sandbox.SandboxSettings(backend="bwrap"))
+    code = "def generate(p, out_path):\n    open(out_path, 'w').write('x')\n"
+    with pytest.raises(sandbox.SandboxError, match="cannot write the script's outputs"):
+        box.run(code, {}, tmp_path)

@@ -19,6 +19,7 @@ COMMANDS: dict[str, str] = {
     "ingest": "scenweave.commands.ingest:ingest",
     "demo": "scenweave.commands.demo:demo",
     "run": "scenweave.commands.run:run",
+    "validate": "scenweave.commands.validate:validate",
     "spawn-db": "scenweave.commands.spawn_db:spawn_db",
     "sandbox": "scenweave.commands.sandbox:sandbox",
     "worker": "scenweave.commands.worker:worker",

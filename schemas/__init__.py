@@ -7,6 +7,13 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from schemas.findings import Finding, ValidationResult
+from schemas.qc import run_asam_qc
+from schemas.validate_xosc import validate_tree, validate_xosc
+
+__all__ = ["Finding", "ValidationResult", "load_json_schema", "run_asam_qc", "validate_tree",
+           "validate_xosc"]
+
 SCHEMAS_DIR = Path(__file__).resolve().parent
 
 

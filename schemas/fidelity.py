@@ -1,0 +1,247 @@
+"""Parameter fidelity: read the scenario back and compare every kinematic value with params.
+
+An XSD-valid scenario with a wrong number is a failure (SPEC §8). Where each params key lives
+in the file is fixed by docs/scenario-conventions.md; tolerances allow rounding in the last
+shown digits (an LLM writing 8.33 for 8.3333) but not a changed value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from lxml import etree
+
+from schemas.findings import Finding
+from schemas.scenario_doc import ScenarioDoc, number
+
+SPEED_TOL_MS = 0.01
+TIME_TOL_S = 0.01
+POSITION_TOL_M = 0.05
+HEADING_TOL_RAD = 1e-3
+YELLOW_PHASE_S = 3.0  # red follows yellow after this long (docs/scenario-conventions.md)
+LANE_CHANGE_MIN_LENGTH_M = 5.0
+SLOTS = ("center", "right", "left")
+NPC_SPEED_CHANGE_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
+LANE_CHANGE_ACTOR = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
+                     "LCF": "hero", "LCB": "hero"}
+
+
+@dataclass
+class _Check:
+    doc: ScenarioDoc
+    params: dict
+    found: list[Finding]
+
+    def close(self, code: str, what: str, got: float | None, want: float | None, tol: float,
+              element: etree._Element | None) -> None:
+        if want is None:
+            return
+        if got is None or not math.isfinite(got) or abs(got - want) > tol:
+            self.found.append(Finding(code, f"{what} is {got}, params say {want:.6g}", "error",
+                                      None if element is None else element.sourceline))
+
+
+def fidelity(doc: ScenarioDoc, params: dict) -> list[Finding]:
+    """FIDELITY_* findings: every value the scenario takes from ``params`` must match it."""
+    check = _Check(doc, params, [])
+    _spawns(check)
+    _init_speeds(check)
+    _events(check)
+    _lights(check)
+    check.close("FIDELITY_TIMEOUT", "stop-trigger time", doc.stop_time, params.get("timeout_s"),
+                TIME_TOL_S, doc.root.find("Storyboard/StopTrigger"))
+    _weather(check)
+    return check.found
+
+
+def _weather(check: _Check) -> None:
+    """The environment's name, rain and time of day must say what ``weather_key`` says."""
+    weather = check.params.get("weather_key")
+    if not weather:
+        return
+    root = check.doc.root
+    rain = root.find(".//Environment/Weather/Precipitation")
+    time_of_day = root.find(".//Environment/TimeOfDay")
+    hour = int((time_of_day.get("dateTime") or "T12")[11:13] or 12) if time_of_day is not None \
+        else None
+    seen = {
+        "name": check.doc.weather_name,
+        "rain": None if rain is None else rain.get("precipitationType") == "rain",
+        "night": None if hour is None else not 6 <= hour < 20,
+    }
+    wanted = {"name": weather, "rain": weather.endswith("_Rain"),
+              "night": weather.startswith("Night")}
+    for what, value in wanted.items():
+        if seen[what] is not None and seen[what] != value:
+            check.found.append(Finding("FIDELITY_WEATHER", f"environment {what} is "
+                                       f"{seen[what]!r}, weather_key {weather!r} says {value!r}"))
+
+
+def _placed_actors(params: dict) -> list[tuple[str, str]]:
+    """(entity, params prefix) of every actor the scenario must place, ego first."""
+    actors = [("hero", "ego")]
+    if params.get("domain") == "highway":
+        if params.get("has_npc") and params.get("maneuver_class") not in ("FRF", "FRB"):
+            actors.append(("npc", "npc"))
+        actors += [(f"npc_{slot}", slot) for slot in SLOTS if params.get(f"{slot}_present")]
+    elif params.get("lead_present"):
+        actors.append(("lead", "lead"))
+    return actors
+
+
+def _spawns(check: _Check) -> None:
+    params = check.params
+    for entity, prefix in _placed_actors(params):
+        position = check.doc.spawn_position(entity)
+        code = "FIDELITY_SPAWN" if entity == "hero" else "FIDELITY_GAP"
+        if position is None:
+            check.found.append(Finding("FIDELITY_MISSING", f"{entity} is not placed in Init"))
+            continue
+        if params.get("domain") == "highway":
+            _lane_position(check, code, entity, prefix, position)
+        else:
+            _world_position(check, code, entity, _expected_world(params, prefix), position)
+
+
+def _lane_position(check: _Check, code: str, entity: str, prefix: str,
+                   position: etree._Element) -> None:
+    params = check.params
+    if position.tag != "LanePosition":
+        check.found.append(Finding(code, f"{entity} is placed by <{position.tag}>, params give "
+                                   "a lane position", "error", position.sourceline))
+        return
+    for attribute, key in (("roadId", "road_id"), ("laneId", "lane_id")):
+        want = params.get(f"{prefix}_{key}")
+        if want is not None and str(position.get(attribute)) != str(int(want)):
+            check.found.append(Finding(code, f"{entity} {attribute} is {position.get(attribute)},"
+                                       f" params say {int(want)}", "error", position.sourceline))
+    check.close(code, f"{entity} s", number(position, "s"), params.get(f"{prefix}_s"),
+                POSITION_TOL_M, position)
+
+
+def _expected_world(params: dict, prefix: str) -> tuple[float, ...] | None:
+    keys = [params.get(f"ego_{axis}") for axis in "xyzh"]
+    if any(k is None for k in keys):
+        return None
+    x, y, z, h = keys
+    if prefix == "lead":  # straight ahead of the hero (docs/scenario-conventions.md)
+        d = params.get("lead_distance_m", 0.0)
+        return x + d * math.cos(h), y + d * math.sin(h), z, h
+    return x, y, z, h
+
+
+def _world_position(check: _Check, code: str, entity: str, want: tuple[float, ...] | None,
+                    position: etree._Element) -> None:
+    if want is None:
+        return
+    if position.tag != "WorldPosition":
+        check.found.append(Finding(code, f"{entity} is placed by <{position.tag}>, params give "
+                                   "a world position", "error", position.sourceline))
+        return
+    for axis, value in zip("xyz", want, strict=False):
+        check.close(code, f"{entity} {axis}", number(position, axis), value, POSITION_TOL_M,
+                    position)
+    got_h = number(position, "h")
+    if got_h is not None:  # headings equal modulo a full turn
+        got_h = want[3] + math.remainder(got_h - want[3], math.tau)
+    check.close(code, f"{entity} heading", got_h, want[3], HEADING_TOL_RAD, position)
+
+
+def _init_speeds(check: _Check) -> None:
+    for entity, prefix in _placed_actors(check.params):
+        if check.doc.spawn_position(entity) is None:
+            continue
+        check.close("FIDELITY_SPEED", f"{entity} initial speed", check.doc.init_speed(entity),
+                    check.params.get(f"{prefix}_speed_ms"), SPEED_TOL_MS,
+                    check.doc.init_private(entity))
+
+
+def _expected_speed_changes(params: dict) -> list[tuple[str, float | None, float | None]]:
+    """(action name, end speed, duration) of every speed change the class must contain."""
+    code = params.get("maneuver_class")
+    if code == "U4_1":
+        changes = [("hero_speed_change", 0.0, params.get("brake_time_s"))]
+    else:
+        changes = [("hero_speed_change", params.get("ego_end_speed_ms"), params.get("duration_s"))]
+    if code in NPC_SPEED_CHANGE_CLASSES:
+        changes.append(("npc_speed_change", params.get("npc_end_speed_ms"),
+                        params.get("duration_s")))
+    if code in ("FRF", "FRB"):
+        changes += [(f"npc_{slot}_speed_change", params.get(f"{slot}_end_speed_ms"),
+                     params.get("duration_s")) for slot in SLOTS if params.get(f"{slot}_present")]
+    return changes
+
+
+def _events(check: _Check) -> None:
+    params, events = check.params, check.doc.events
+    start = params.get("maneuver_start_s")
+    for name, end_speed, duration in _expected_speed_changes(params):
+        event = events.get(name)
+        if event is None:
+            check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
+            continue
+        target = event.action.find(".//SpeedActionTarget/AbsoluteTargetSpeed")
+        dynamics = event.action.find(".//SpeedActionDynamics")
+        check.close("FIDELITY_SPEED", f"{name} target speed", number(target, "value"), end_speed,
+                    SPEED_TOL_MS, target)
+        check.close("FIDELITY_DURATION", f"{name} duration", number(dynamics, "value"), duration,
+                    TIME_TOL_S, dynamics)
+        check.close("FIDELITY_TRIGGER", f"{name} start time", event.start_s, start, TIME_TOL_S,
+                    event.action)
+    actor = LANE_CHANGE_ACTOR.get(params.get("maneuver_class"))
+    if actor:
+        _lane_change(check, actor)
+
+
+def _lane_change(check: _Check, actor: str) -> None:
+    params = check.params
+    name = f"{actor}_lane_change"
+    event = check.doc.events.get(name)
+    if event is None:
+        check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
+        return
+    target = event.action.find(".//RelativeTargetLane")
+    want = {"left": 1.0, "right": -1.0}.get(params.get("lane_change_direction"))
+    got = number(target, "value")
+    if want is not None and got != want:
+        check.found.append(Finding("FIDELITY_DIRECTION", f"{name} goes {got} lanes, params say "
+                                   f"{params.get('lane_change_direction')} ({want:+.0f})",
+                                   "error", None if target is None else target.sourceline))
+    prefix = "ego" if actor == "hero" else "npc"
+    v0, v1 = params.get(f"{prefix}_speed_ms"), params.get(f"{prefix}_end_speed_ms")
+    duration = params.get("duration_s")
+    if None not in (v0, v1, duration):
+        length = max(LANE_CHANGE_MIN_LENGTH_M, (v0 + v1) / 2 * duration)
+        dynamics = event.action.find(".//LaneChangeActionDynamics")
+        check.close("FIDELITY_DURATION", f"{name} length (duration x speed)",
+                    number(dynamics, "value"), length, POSITION_TOL_M + length * 1e-3, dynamics)
+    check.close("FIDELITY_TRIGGER", f"{name} start time", event.start_s,
+                params.get("maneuver_start_s"), TIME_TOL_S, event.action)
+
+
+def _lights(check: _Check) -> None:
+    params = check.params
+    if params.get("domain") != "urban" or params.get("maneuver_class") == "U1_1":
+        return
+    x, y = params.get("tfl_x_carla"), params.get("tfl_y_carla")
+    wanted = f"pos={x:.3f},{y:.3f}" if x is not None and y is not None else None
+    events = check.doc.events
+    timing = {"traffic_light_initial": 0.0}
+    if params.get("maneuver_class") == "U4_1" or params.get("tfl_state") == "orange":
+        yellow = params.get("yellow_delay_s")
+        timing["traffic_light_yellow"] = yellow
+        timing["traffic_light_red"] = None if yellow is None else yellow + YELLOW_PHASE_S
+    for name, start in timing.items():
+        event = events.get(name)
+        if event is None:
+            check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
+            continue
+        light = event.action.find(".//TrafficSignalStateAction")
+        if wanted and (light is None or light.get("name") != wanted):
+            check.found.append(Finding("FIDELITY_LIGHT", f"{name} controls "
+                                       f"{None if light is None else light.get('name')!r}, "
+                                       f"params say {wanted!r}", "error",
+                                       event.action.sourceline))
+        check.close("FIDELITY_TRIGGER", f"{name} time", event.start_s, start, TIME_TOL_S,
+                    event.action)

@@ -1,0 +1,40 @@
+"""What the validator reports: findings with a code, a severity, a message and a line."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Literal
+
+Severity = Literal["error", "warning"]
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One problem in a scenario file."""
+
+    code: str
+    message: str
+    severity: Severity = "error"
+    line: int | None = None
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class ValidationResult:
+    """``{valid, fixes_applied, errors[{code, severity, message, line}], domain}`` (SPEC §8)."""
+
+    valid: bool
+    fixes_applied: list[str] = field(default_factory=list)
+    errors: list[Finding] = field(default_factory=list)
+    domain: str | None = None
+
+    @property
+    def error_codes(self) -> list[str]:
+        """Codes of the error-severity findings, in order."""
+        return [f.code for f in self.errors if f.severity == "error"]
+
+    def to_dict(self) -> dict:
+        return {"valid": self.valid, "fixes_applied": list(self.fixes_applied),
+                "errors": [f.to_dict() for f in self.errors], "domain": self.domain}

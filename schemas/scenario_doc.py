@@ -1,0 +1,105 @@
+"""A parsed scenario with the lookups the checks need (names per docs/scenario-conventions.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+from lxml import etree
+
+EGO_NAMES = ("hero", "ego")
+
+
+@dataclass
+class Event:
+    """One storyboard event: its single action, the acting entities and its start time."""
+
+    name: str
+    action: etree._Element
+    actors: tuple[str, ...]
+    start_s: float | None
+
+
+class ScenarioDoc:
+    """Read-only views on one OpenSCENARIO tree."""
+
+    def __init__(self, tree: etree._ElementTree):
+        self.tree = tree
+        self.root = tree.getroot()
+
+    def first(self, path: str) -> etree._Element | None:
+        found = self.root.find(path)
+        return found
+
+    @cached_property
+    def entities(self) -> list[str]:
+        return [e.get("name") for e in self.root.findall("Entities/ScenarioObject")]
+
+    @cached_property
+    def ego_name(self) -> str | None:
+        return next((n for n in EGO_NAMES if n in self.entities), None)
+
+    def init_private(self, entity: str) -> etree._Element | None:
+        return self.root.find(f"Storyboard/Init/Actions/Private[@entityRef='{entity}']")
+
+    def spawn_position(self, entity: str) -> etree._Element | None:
+        """The Position element (LanePosition, WorldPosition, ...) of the entity's teleport."""
+        private = self.init_private(entity)
+        if private is None:
+            return None
+        position = private.find("PrivateAction/TeleportAction/Position")
+        return position[0] if position is not None and len(position) else None
+
+    def init_speed(self, entity: str) -> float | None:
+        private = self.init_private(entity)
+        target = None if private is None else private.find(
+            "PrivateAction/LongitudinalAction/SpeedAction/SpeedActionTarget/AbsoluteTargetSpeed")
+        return _number(target, "value")
+
+    @cached_property
+    def events(self) -> dict[str, Event]:
+        """Events by the name of their (single) action; unnamed actions by event name."""
+        found: dict[str, Event] = {}
+        for group in self.root.iter("ManeuverGroup"):
+            actors = tuple(r.get("entityRef") for r in group.findall("Actors/EntityRef"))
+            for event in group.iter("Event"):
+                action = event.find("Action")
+                if action is None:
+                    continue
+                key = action.get("name") or event.get("name")
+                found[key] = Event(key, action, actors, _start_time(event))
+        return found
+
+    @cached_property
+    def stop_time(self) -> float | None:
+        condition = self.root.find("Storyboard/StopTrigger//SimulationTimeCondition")
+        return _number(condition, "value")
+
+    @cached_property
+    def weather_name(self) -> str | None:
+        environment = self.root.find("Storyboard/Init/Actions/GlobalAction/EnvironmentAction/"
+                                     "Environment")
+        return None if environment is None else environment.get("name")
+
+    def all(self, tag: str) -> list[etree._Element]:
+        return list(self.root.iter(tag))
+
+
+def _start_time(event: etree._Element) -> float | None:
+    condition = event.find("StartTrigger/ConditionGroup/Condition/ByValueCondition/"
+                           "SimulationTimeCondition")
+    return _number(condition, "value")
+
+
+def _number(element: etree._Element | None, attribute: str) -> float | None:
+    if element is None:
+        return None
+    try:
+        return float(element.get(attribute))
+    except (TypeError, ValueError):
+        return None
+
+
+def number(element: etree._Element | None, attribute: str) -> float | None:
+    """``float(element.attribute)`` or None when absent or not a number."""
+    return _number(element, attribute)

@@ -1,0 +1,88 @@
+"""``validate_xosc``: auto-fix, XSD 1.0, Table 5.8 checks, semantics, fidelity, CARLA lint.
+
+The file is read once, the five auto-fix rules rewrite it (atomically, only when something
+changed), and every check runs on the one parsed tree, so a validation costs milliseconds.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+from lxml import etree
+
+from schemas.autofix import apply_fixes
+from schemas.carla_lint import carla_lint
+from schemas.checks import detect_domain, semantics, structural
+from schemas.fidelity import fidelity
+from schemas.findings import Finding, ValidationResult
+from schemas.scenario_doc import ScenarioDoc
+from schemas.xsd import xsd_findings
+
+DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
+
+
+def validate_xosc(path: Path | str, params: dict | None = None, *,
+                  fix: bool = True) -> ValidationResult:
+    """Validate one ``.xosc`` (fixing it in place first unless ``fix=False``).
+
+    With ``params`` the scenario's values are checked against them (parameter fidelity) and
+    the manoeuvre class and domain come from them; without, they are read from the file.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        return _invalid(Finding("UNREADABLE", f"{path}: {err}"))
+    fixes: list[str] = []
+    if fix:
+        text, fixes = apply_fixes(text)
+        if fixes:
+            _write_atomic(path, text)
+    try:
+        tree = etree.ElementTree(etree.fromstring(text.encode("utf-8"),
+                                                 etree.XMLParser(remove_blank_text=False)))
+    except etree.XMLSyntaxError as err:
+        return _invalid(Finding("XML_SYNTAX", str(err), "error", err.lineno), fixes)
+    return validate_tree(tree, params, fixes)
+
+
+def validate_tree(tree: etree._ElementTree, params: dict | None = None,
+                  fixes: list[str] | None = None) -> ValidationResult:
+    """Every check on a parsed scenario (``validate_xosc`` without the file and the fixes)."""
+    doc = ScenarioDoc(tree)
+    domain = (params or {}).get("domain") or detect_domain(doc)
+    code = (params or {}).get("maneuver_class") or _class_from_header(doc)
+    findings = structural(doc, domain, code)
+    if doc.root.tag == "OpenSCENARIO":
+        findings = xsd_findings(tree) + findings
+        findings += semantics(doc, code, params)
+        findings += carla_lint(doc)
+        if params:
+            findings += fidelity(doc, params)
+    valid = not any(f.severity == "error" for f in findings)
+    return ValidationResult(valid, list(fixes or []), findings, domain)
+
+
+def _class_from_header(doc: ScenarioDoc) -> str | None:
+    header = doc.root.find("FileHeader")
+    match = DESCRIPTION_CLASS.match(header.get("description") or "") if header is not None \
+        else None
+    return match.group("code") if match else None
+
+
+def _invalid(finding: Finding, fixes: list[str] | None = None) -> ValidationResult:
+    return ValidationResult(False, list(fixes or []), [finding], None)
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

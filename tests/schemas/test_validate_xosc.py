@@ -1,0 +1,257 @@
+"""validate_xosc: a file per auto-fix rule and per check code that triggers it.
+
+Each case starts from a real corpus scenario (valid, faithful to its params) and changes one
+thing; the test asserts that exactly that change is caught, so a check that stops working
+fails here.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from lxml import etree
+
+import corpus
+from scenweave.cli import cli
+from schemas import run_asam_qc, validate_xosc
+from tests.corpus.params_examples import TAGS, example_params
+
+Mutation = Callable[[etree._Element], None]
+
+
+def _scenario(tmp_path: Path, code: str) -> tuple[Path, dict]:
+    params = example_params(code)
+    path = corpus.generate(params, tmp_path / f"{code}.xosc")
+    return path, params
+
+
+def _mutate(path: Path, change: Mutation) -> None:
+    tree = etree.parse(str(path))
+    change(tree.getroot())
+    tree.write(str(path), xml_declaration=True, encoding="utf-8")
+
+
+def _edit_text(path: Path, old: str, new: str, count: int = 1) -> None:
+    text = path.read_text()
+    assert old in text, old
+    path.write_text(text.replace(old, new, count))
+
+
+def _remove(xpath: str) -> Mutation:
+    def change(root: etree._Element) -> None:
+        found = root.xpath(xpath)
+        assert found, xpath
+        for element in found:
+            element.getparent().remove(element)
+    return change
+
+
+def _set(xpath: str, attribute: str, value: str) -> Mutation:
+    def change(root: etree._Element) -> None:
+        found = root.xpath(xpath)
+        assert found, xpath
+        for element in found:
+            element.set(attribute, value)
+    return change
+
+
+def _codes(result) -> set[str]:
+    return {f.code for f in result.errors if f.severity == "error"}
+
+
+@pytest.mark.parametrize("code", sorted(TAGS))
+def test_every_corpus_scenario_is_valid_and_faithful(tmp_path, code):
+    path, params = _scenario(tmp_path, code)
+    result = validate_xosc(path, params)
+    assert result.valid, [f.to_dict() for f in result.errors]
+    assert result.domain == params["domain"] and result.fixes_applied == []
+
+
+@pytest.mark.parametrize("code", ["BRAKE", "CINB", "FRF", "U4_1", "U4_4"])
+def test_asam_quality_checker_finds_nothing_in_corpus_scenarios(tmp_path, code):
+    path, _ = _scenario(tmp_path, code)
+    assert run_asam_qc(path) == []
+
+
+def test_asam_quality_checker_reports_a_broken_file(tmp_path):
+    path, _ = _scenario(tmp_path, "BRAKE")
+    _mutate(path, _remove("//Storyboard"))
+    assert any("schema" in f.message for f in run_asam_qc(path))
+
+
+# -- the five auto-fix rules (thesis Table 5.7) ----------------------------------------------
+
+AUTOFIX_CASES = {
+    "precipitationIntensity->intensity": (
+        "BRAKE", lambda p: _edit_text(p, ' intensity="', ' precipitationIntensity="')),
+    "missing TimeOfDay": ("BRAKE", lambda p: _mutate(p, _remove("//TimeOfDay"))),
+    "missing Precipitation": ("BRAKE", lambda p: _mutate(p, _remove("//Precipitation"))),
+    "spurious </TrafficSignalStateAction>": (
+        "U4_1", lambda p: _edit_text(p, "</TrafficSignalAction>",
+                                     "</TrafficSignalStateAction></TrafficSignalAction>")),
+    "delay expression->0": ("BRAKE", lambda p: _edit_text(p, 'delay="0.0"', 'delay="t+2"')),
+}
+
+
+@pytest.mark.parametrize("rule", sorted(AUTOFIX_CASES))
+def test_each_auto_fix_rule_repairs_its_artefact(tmp_path, rule):
+    code, damage = AUTOFIX_CASES[rule]
+    path, params = _scenario(tmp_path, code)
+    damage(path)
+    broken = validate_xosc(path, params, fix=False)
+    assert not broken.valid
+    fixed = validate_xosc(path, params)
+    assert fixed.fixes_applied == [rule]
+    assert fixed.valid, [f.to_dict() for f in fixed.errors]
+    assert validate_xosc(path, params).fixes_applied == []  # the fix was written to the file
+
+
+# -- Table 5.8 and beyond: one damaged file per check code -----------------------------------
+
+CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
+    # code: (class, mutation, give params)
+    "NO_ROOT": ("BRAKE", lambda r: setattr(r, "tag", "Scenario"), False),
+    "NO_STORY": ("BRAKE", _remove("//Story"), False),
+    "NO_TELEPORT": ("BRAKE", _remove("//Private[@entityRef='hero']/PrivateAction[TeleportAction]"),
+                    False),
+    "NO_MANEUVER": ("BRAKE", _remove("//ManeuverGroup"), False),
+    "NO_TRIGGER": ("BRAKE", _remove("//StartTrigger"), False),
+    "NO_WORLDPOS": ("U4_3", lambda r: setattr(
+        r.xpath("//Private[@entityRef='hero']//WorldPosition")[0], "tag", "RoadPosition"), True),
+    "NO_TFL_ACTION": ("U4_3", _remove("//ManeuverGroup[@name='traffic_light_group']"), False),
+    "ZERO_SPAWN": ("U4_3", lambda r: [_set("//Private[@entityRef='hero']//WorldPosition", a,
+                                           "0")(r) for a in "xy"], False),
+    "DEFAULT_SPAWN": ("U4_3", lambda r: [_set("//Private[@entityRef='hero']//WorldPosition", a,
+                                              v)(r) for a, v in (("x", "312.4"),
+                                                                 ("y", "171.8"))], False),
+    "NO_LANEPOS": ("BRAKE", lambda r: setattr(
+        r.xpath("//Private[@entityRef='hero']//LanePosition")[0], "tag", "RoadPosition"), True),
+    "NO_SPEED_ACTION": ("BRAKE", _remove("//AbsoluteTargetSpeed/ancestor::PrivateAction[1]"),
+                        True),
+    "NPC_MISSING": ("BRAKE", _remove("//ScenarioObject[@name='npc']"), False),
+    "ZERO_SPEED": ("BRAKE", _set("//Private[@entityRef='hero']//AbsoluteTargetSpeed", "value",
+                                 "0"), False),
+    "SEM_NO_NPC": ("CINF", _remove("//ScenarioObject[@name='npc']"), False),
+    "SEM_NO_LANE_CHANGE": ("LCF", _remove("//Event[Action[@name='hero_lane_change']]"), False),
+    "SEM_UNEXPECTED_LANE_CHANGE": ("BRAKE", lambda r: r.xpath(
+        "//Maneuver[@name='npc_maneuver']")[0].append(etree.fromstring(
+            _event_from("LCF", "hero_lane_change"))), False),
+    "SEM_NO_BRAKE": ("BRAKE", _set("//Action[@name='npc_speed_change']//AbsoluteTargetSpeed",
+                                   "value", "99"), False),
+    "URB_LIGHT_NAME": ("U4_1", _set("//TrafficSignalStateAction", "name", "12"), False),
+    "URB_LIGHT_NOT_RED": ("U4_1", _set("//TrafficSignalStateAction", "state", "green"), False),
+    "URB_NO_STOP": ("U4_1", _set("//Action[@name='hero_speed_change']//AbsoluteTargetSpeed",
+                                 "value", "3.0"), False),
+    "URB_LIGHT_START": ("U4_3", _set("//TrafficSignalStateAction", "state", "yellow"), False),
+    "URB_RED_ON_GREEN": ("U4_3", _set("//TrafficSignalStateAction", "state", "red"), False),
+    "URB_RED_BEFORE_PASS": ("U4_2", _set("//Event[@name='traffic_light_red_event']//"
+                                         "SimulationTimeCondition", "value", "0.5"), True),
+    "URB_NO_TURN": ("U4_4", _remove("//Event[Action[@name='hero_turn_right']]"), False),
+    "URB_TURN_NOT_RIGHT": ("U4_4", lambda r: _mirror_turn(r), False),
+    "CARLA_VERSION": ("BRAKE", _set("//FileHeader", "revMinor", "2"), False),
+    "CARLA_NO_HERO": ("BRAKE", _set("//Property[@name='type']", "value", "scenario"), False),
+    "CARLA_UNSUPPORTED": ("BRAKE", lambda r: setattr(
+        r.xpath("//Action[@name='npc_speed_change']//SpeedAction")[0], "tag",
+        "SynchronizeAction"), False),
+    # parameter fidelity
+    "FIDELITY_SPEED": ("BRAKE", _set("//Action[@name='npc_speed_change']//AbsoluteTargetSpeed",
+                                     "value", "5.0"), True),
+    "FIDELITY_SPAWN": ("CINF", _set("//Private[@entityRef='hero']//LanePosition", "s", "1.0"),
+                       True),
+    "FIDELITY_GAP": ("FLF", _set("//Private[@entityRef='npc']//LanePosition", "s", "1.0"), True),
+    "FIDELITY_DIRECTION": ("COUTB", lambda r: _flip_lane(r), True),
+    "FIDELITY_DURATION": ("FLB", _set("//Action[@name='npc_speed_change']//SpeedActionDynamics",
+                                      "value", "0.5"), True),
+    "FIDELITY_TRIGGER": ("U4_1", _set("//Event[@name='traffic_light_yellow_event']//"
+                                      "SimulationTimeCondition", "value", "7.5"), True),
+    "FIDELITY_TIMEOUT": ("FRB", _set("//Storyboard/StopTrigger//SimulationTimeCondition",
+                                     "value", "99"), True),
+    "FIDELITY_WEATHER": ("U1_1", _set("//Precipitation", "precipitationType", "rain"), True),
+    "FIDELITY_LIGHT": ("U4_3", _set("//TrafficSignalStateAction", "name", "pos=1.000,2.000"),
+                       True),
+    "FIDELITY_MISSING": ("FRF", _remove("//Event[Action[@name='hero_speed_change']]"), True),
+}
+
+
+def _event_from(code: str, action: str) -> str:
+    path = corpus.generate(example_params(code), Path(tempfile.mkdtemp()) / f"{code}.xosc")
+    event = etree.parse(str(path)).xpath(f"//Event[Action[@name='{action}']]")[0]
+    event.set("name", "extra_event")
+    return etree.tostring(event).decode()
+
+
+def _flip_lane(root: etree._Element) -> None:
+    target = root.xpath("//RelativeTargetLane")[0]
+    target.set("value", str(-int(float(target.get("value")))))
+
+
+def _mirror_turn(root: etree._Element) -> None:
+    spawn = root.xpath("//Private[@entityRef='hero']//WorldPosition")[0]
+    target = root.xpath("//Action[@name='hero_turn_right']//WorldPosition")[0]
+    for axis in "xy":
+        origin = float(spawn.get(axis))
+        target.set(axis, str(2 * origin - float(target.get(axis))))
+
+
+@pytest.mark.parametrize("check", sorted(CHECK_CASES))
+def test_each_check_code_fires_on_its_damage(tmp_path, check):
+    code, change, with_params = CHECK_CASES[check]
+    path, params = _scenario(tmp_path, code)
+    assert check not in _codes(validate_xosc(path, params if with_params else None))
+    _mutate(path, change)
+    result = validate_xosc(path, params if with_params else None, fix=False)
+    assert check in _codes(result), [f.to_dict() for f in result.errors]
+    assert not result.valid
+
+
+@pytest.mark.parametrize("value, check", [("$startDelay", "DELAY_PARAM"),
+                                          ("t+2", "DELAY_EXPR")])
+def test_delay_checks_report_what_auto_fix_would_reset(tmp_path, value, check):
+    path, _ = _scenario(tmp_path, "BRAKE")
+    _mutate(path, _set("//Condition[@name='npc_speed_change_start']", "delay", value))
+    result = validate_xosc(path, fix=False)
+    finding = next(f for f in result.errors if f.code == check)
+    assert finding.line is not None and finding.line > 1
+
+
+def test_rounding_in_the_last_shown_digits_is_not_a_fidelity_error(tmp_path):
+    path, params = _scenario(tmp_path, "BRAKE")
+    target = "//Action[@name='npc_speed_change']//AbsoluteTargetSpeed"
+    _mutate(path, _set(target, "value", f"{params['npc_end_speed_ms']:.3f}"))
+    assert validate_xosc(path, params).valid
+
+
+def test_carla_warnings_do_not_make_a_file_invalid(tmp_path):
+    path, params = _scenario(tmp_path, "BRAKE")
+    _mutate(path, _set("//LogicFile", "filepath", "maps/custom_map"))
+    result = validate_xosc(path, params)
+    assert result.valid
+    assert [f.code for f in result.errors] == ["CARLA_MAP"]
+
+
+def test_not_xml_at_all(tmp_path):
+    path = tmp_path / "broken.xosc"
+    path.write_text("<OpenSCENARIO><FileHeader")
+    result = validate_xosc(path)
+    assert not result.valid and result.errors[0].code == "XML_SYNTAX"
+
+
+def test_cli_reports_each_file_and_exits_1_when_one_is_invalid(tmp_path):
+    good, params = _scenario(tmp_path, "LCB")
+    bad, _ = _scenario(tmp_path, "FLF")
+    _mutate(bad, _remove("//Story"))
+    params_file = tmp_path / "params.json"
+    params_file.write_text(json.dumps(params))
+    runner = CliRunner()
+    ok = runner.invoke(cli, ["validate", str(good), "--params", str(params_file)])
+    assert ok.exit_code == 0 and "valid" in ok.output
+    both = runner.invoke(cli, ["validate", str(good), str(bad), "--json"])
+    assert both.exit_code == 1
+    results = {Path(r["file"]).name: r for r in json.loads(both.output)}
+    assert results["LCB.xosc"]["valid"] is True
+    assert "NO_STORY" in {e["code"] for e in results["FLF.xosc"]["errors"]}

@@ -37,7 +37,7 @@ class RunResult:
         resumed = f" ({self.skipped} already done)" if self.skipped else ""
         issues = f", {len(self.input_issues)} input issues" if self.input_issues else ""
         return (f"run {self.folder.run_id}: {self.summary['total']} scenarios: {parts}{resumed}"
-                f"{issues} -> {self.folder.root}")
+                f"{issues} -> {self.folder.root} (open {self.folder.root / 'report.html'})")
 
 
 def default_matcher() -> Any:

@@ -32,13 +32,13 @@ def processes_with(text: str) -> list[int]:
 class Listener:
     """A TCP and a UDP socket on every host address (loopback included) that record arrivals."""
 
-    def __init__(self) -> None:
+    def __init__(self, udp_port: int = 0) -> None:
         self.tcp = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.tcp.bind(("0.0.0.0", 0))
         self.tcp.listen(8)
         self.tcp.setblocking(False)
         self.udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.udp.bind(("0.0.0.0", 0))
+        self.udp.bind(("0.0.0.0", udp_port))
         self.udp.setblocking(False)
 
     @property

@@ -104,16 +104,29 @@ def generate(params, out_path):
         listener.close()
 
 
-def test_dns_resolution_fails(box, tmp_path):
+def test_dns_resolution_fails_and_reaches_no_resolver(box, tmp_path):
+    try:  # without a resolv.conf the resolver asks 127.0.0.1:53: listen there when we can
+        resolver = Listener(udp_port=53)
+    except OSError:
+        resolver = None
     code = """
 import socket
 def generate(params, out_path):
-    socket.getaddrinfo("pypi.org", 443)
+    socket.getaddrinfo("scenweave-canary.example.org", 443)
     open(out_path, "w").write("resolved")
 """
-    result = box.run(code, {}, tmp_path)
-    assert result.error_type == "gaierror"
-    assert not (tmp_path / "scenario.xosc").exists()
+    try:
+        result = box.run(code, {}, tmp_path)
+        if resolver is not None:
+            assert resolver.received() == []
+        assert result.error_type == "gaierror"
+        assert not (tmp_path / "scenario.xosc").exists()
+        if resolver is not None:
+            socket.socket(socket.AF_INET, socket.SOCK_DGRAM).sendto(b"q", ("127.0.0.1", 53))
+            assert resolver.received() != [], "control: the resolver must hear the host itself"
+    finally:
+        if resolver is not None:
+            resolver.close()
 
 
 def test_host_environment_and_files_stay_secret(box, tmp_path, monkeypatch):

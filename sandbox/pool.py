@@ -26,6 +26,7 @@ class WarmPool:
         self._ready: list[Slot] = []
         self._starting = 0
         self._closed = False
+        self._starters: list[threading.Thread] = []
         self._lock = threading.Lock()
         self._refill()
 
@@ -45,19 +46,29 @@ class WarmPool:
         return taken
 
     def close(self) -> None:
-        """Kill and remove every waiting sandbox; sandboxes still starting are dropped."""
+        """Kill and remove every waiting sandbox, after the ones still starting are up."""
         with self._lock:
             self._closed = True
+            starters, self._starters = self._starters, []
+        for starter in starters:  # each discards its own sandbox once it sees the pool closed
+            starter.join(timeout=60)
+        with self._lock:
             slots, self._ready = self._ready, []
         for slot in slots:
             self._discard(slot)
 
     def _refill(self) -> None:
-        with self._lock:
-            missing = 0 if self._closed else self._size - len(self._ready) - self._starting
+        with self._lock:  # registered under the lock, so close() joins every starter
+            if self._closed:
+                return
+            missing = self._size - len(self._ready) - self._starting
             self._starting += max(missing, 0)
-        for _ in range(missing):
-            threading.Thread(target=self._start_one, daemon=True, name="sandbox-warm").start()
+            self._starters = [t for t in self._starters if t.is_alive()]
+            for _ in range(missing):
+                starter = threading.Thread(target=self._start_one, daemon=True,
+                                           name="sandbox-warm")
+                self._starters.append(starter)
+                starter.start()
 
     def _start_one(self) -> None:
         attempt = Attempt(self._box.settings)

@@ -1,0 +1,25 @@
+"""What the nodes use but the state does not store: settings, the LLM, sandbox and trace."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from agent.settings import AgentSettings
+
+if TYPE_CHECKING:
+    from agent.llm.base import LLM
+    from agent.repair.base import RepairStrategy
+    from sandbox import Sandbox
+    from scenweave.pipeline import Trace
+
+
+@dataclass
+class AgentContext:
+    """The runtime of one graph run (LangGraph ``context_schema``)."""
+
+    settings: AgentSettings
+    llm: LLM
+    sandbox: Sandbox
+    strategy: RepairStrategy
+    trace: Trace

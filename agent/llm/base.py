@@ -1,0 +1,81 @@
+"""The one small interface every LLM backend implements, and what a call returns."""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from dataclasses import asdict, dataclass, field
+
+
+class LLMUnavailable(Exception):
+    """The LLM cannot answer (server unreachable, timed out, model missing, not installed).
+
+    An infrastructure failure, not the scenario's fault: the message names the setting to
+    change. The queue worker retries the scenario later; ``scenweave run`` stops on it unless
+    ``AgentSettings.on_llm_error`` is ``"fallback"``.
+    """
+
+
+class LLMTimeout(LLMUnavailable):
+    """The LLM did not finish one call within ``AgentSettings.timeout_s``."""
+
+
+@dataclass(frozen=True)
+class Prompt:
+    """One request: a system instruction, the user message, and who asks (for logs/replay)."""
+
+    system: str
+    user: str
+    scenario_id: str = ""
+    purpose: str = "generate"  # "generate" or "repair": which node asked
+
+    def messages(self) -> list[dict[str, str]]:
+        """The chat messages of this prompt."""
+        return [{"role": "system", "content": self.system}, {"role": "user", "content": self.user}]
+
+
+@dataclass
+class LLMReply:
+    """The raw text an LLM answered, with its cost."""
+
+    text: str
+    tokens_in: int = 0
+    tokens_out: int = 0
+    latency_s: float = 0.0
+    backend: str = ""
+    model: str = ""
+    meta: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+class LLM(ABC):
+    """A backend: ``complete(prompt)`` returns an :class:`LLMReply` or raises
+    :class:`LLMUnavailable`; ``check()`` raises the same before a batch starts."""
+
+    backend = ""
+
+    def __init__(self, model: str) -> None:
+        self.model = model
+
+    def complete(self, prompt: Prompt) -> LLMReply:
+        """Ask once; the reply is timed and logged (``$SCENWEAVE_HOME/llm-calls.sqlite``)."""
+        from agent.llm.log import log_call
+
+        started = time.perf_counter()
+        reply = self._complete(prompt)
+        reply.latency_s = round(time.perf_counter() - started, 4)
+        reply.backend, reply.model = self.backend, reply.model or self.model
+        log_call(prompt, reply)
+        return reply
+
+    def check(self) -> None:  # noqa: B027 - most backends have nothing to check
+        """Raise :class:`LLMUnavailable` naming the setting to change if this LLM cannot run."""
+
+    def close(self) -> None:  # noqa: B027 - most backends hold nothing
+        """Release what the backend holds (connections, a loaded model)."""
+
+    @abstractmethod
+    def _complete(self, prompt: Prompt) -> LLMReply:
+        """Backend-specific call; fill text and token counts."""

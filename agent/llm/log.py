@@ -1,0 +1,69 @@
+"""Every LLM call, logged locally in ``$SCENWEAVE_HOME/llm-calls.sqlite`` (like simonw/llm).
+
+Set ``SCENWEAVE_LLM_LOG=0`` to switch it off (e.g. for a benchmark of the LLM alone).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sqlite3
+from contextlib import closing
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from scenweave.home import home
+
+if TYPE_CHECKING:
+    from agent.llm.base import LLMReply, Prompt
+
+LOG_NAME = "llm-calls.sqlite"
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS calls (
+    id INTEGER PRIMARY KEY,
+    at TEXT NOT NULL,
+    backend TEXT NOT NULL,
+    model TEXT NOT NULL,
+    scenario_id TEXT,
+    purpose TEXT,
+    system TEXT,
+    prompt TEXT,
+    reply TEXT,
+    tokens_in INTEGER,
+    tokens_out INTEGER,
+    latency_s REAL,
+    meta TEXT
+)
+"""
+
+
+def log_path() -> Path:
+    return home() / LOG_NAME
+
+
+def log_call(prompt: Prompt, reply: LLMReply) -> None:
+    """Append one call to the log (a no-op when ``SCENWEAVE_LLM_LOG=0``)."""
+    if os.environ.get("SCENWEAVE_LLM_LOG", "1") == "0":
+        return
+    with closing(_connect()) as db, db:
+        db.execute(
+            "INSERT INTO calls (at, backend, model, scenario_id, purpose, system, prompt, reply,"
+            " tokens_in, tokens_out, latency_s, meta) VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
+            (datetime.now(UTC).isoformat(timespec="seconds"), reply.backend, reply.model,
+             prompt.scenario_id, prompt.purpose, prompt.system, prompt.user, reply.text,
+             reply.tokens_in, reply.tokens_out, reply.latency_s, json.dumps(reply.meta)))
+
+
+def recent_calls(limit: int = 20) -> list[dict]:
+    """The newest ``limit`` calls, newest first."""
+    with closing(_connect()) as db:
+        db.row_factory = sqlite3.Row
+        rows = db.execute("SELECT * FROM calls ORDER BY id DESC LIMIT ?", (limit,)).fetchall()
+    return [dict(row) for row in rows]
+
+
+def _connect() -> sqlite3.Connection:
+    db = sqlite3.connect(log_path(), timeout=30)
+    db.execute(SCHEMA)
+    return db

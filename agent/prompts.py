@@ -1,0 +1,101 @@
+"""The prompts: thesis Table 5.5 (six sections), the error-aware re-prompt (Table 5.6) and
+the patch prompt, which asks for a small edit to the reference instead of the whole script."""
+
+from __future__ import annotations
+
+import json
+
+from agent.llm.base import Prompt
+
+#: params keys that describe where a record came from, not the scenario (kept from the LLM)
+METADATA_KEYS = frozenset({"scenario_id", "source_file", "source_row", "record_id",
+                           "spawn_id", "description", "variant_of"})
+
+SYSTEM = ("You output only Python code. No explanations. "
+          "Start directly with import statements.")
+PATCH_SYSTEM = ("You output only edit blocks in the exact format you are shown. "
+                "No explanations.")
+
+TASK = "You are given a complete, working Python script for a CARLA {maneuver} scenario."
+CONSTRAINTS = ("OUTPUT THE ENTIRE SCRIPT BELOW, replacing ONLY the numeric parameter values "
+               "with those in the JSON. DO NOT simplify, summarize, or stub any function. "
+               "Keep the function generate(params, out_path) and every import.")
+OUTPUT_CUE = "Output the complete Python script starting with imports."
+
+ERROR_TASK = ("Your previous script for this CARLA {maneuver} scenario failed. "
+              "The error is below.")
+ERROR_CONSTRAINTS = ("Reproduce the REFERENCE SCRIPT VERBATIM, replacing ONLY numeric values "
+                     "with those in the JSON. Do not invent functions, attributes or modules: "
+                     "use only what the reference script uses.")
+
+PATCH_FORMAT = """Each edit is one block:
+<<<<<<< SEARCH
+(lines copied exactly from the reference script)
+=======
+(the lines that replace them)
+>>>>>>> REPLACE
+If the reference script already fits the parameters, output only: NO CHANGES"""
+
+
+def llm_params(params: dict) -> dict:
+    """The params the LLM sees: everything but metadata (thesis Table 5.5)."""
+    return {k: v for k, v in params.items() if k not in METADATA_KEYS}
+
+
+def maneuver_name(params: dict) -> str:
+    name = params.get("maneuver_tag") or params.get("maneuver_class", "driving")
+    return str(name).replace("_", " ")
+
+
+def generation_prompt(params: dict, reference: str) -> Prompt:
+    """Attempt 1: the six sections of thesis Table 5.5."""
+    user = _sections(
+        ("TASK", TASK.format(maneuver=maneuver_name(params))),
+        ("CONSTRAINTS", CONSTRAINTS),
+        ("REFERENCE SCRIPT", _fenced(reference)),
+        ("PARAMETERS JSON", _params_json(params)),
+        ("OUTPUT", OUTPUT_CUE),
+    )
+    return Prompt(SYSTEM, user, params.get("scenario_id", ""), "generate")
+
+
+def error_prompt(params: dict, reference: str, failed_code: str, error: str) -> Prompt:
+    """Attempts 2 and 3 (thesis Table 5.6): previous code and its error injected."""
+    user = _sections(
+        ("TASK", ERROR_TASK.format(maneuver=maneuver_name(params))),
+        ("ERROR", _fenced(error, "text")),
+        ("YOUR PREVIOUS SCRIPT", _fenced(failed_code)),
+        ("CONSTRAINTS", ERROR_CONSTRAINTS),
+        ("REFERENCE SCRIPT", _fenced(reference)),
+        ("PARAMETERS JSON", _params_json(params)),
+        ("OUTPUT", OUTPUT_CUE),
+    )
+    return Prompt(SYSTEM, user, params.get("scenario_id", ""), "repair")
+
+
+def patch_prompt(params: dict, reference: str, error: str | None = None) -> Prompt:
+    """Ask for edit blocks against the reference; after a failure, with the error."""
+    sections = [("TASK", TASK.format(maneuver=maneuver_name(params))
+                 + " Adapt it to the parameters with the smallest edit.")]
+    if error:
+        sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
+    sections += [
+        ("FORMAT", PATCH_FORMAT),
+        ("REFERENCE SCRIPT", _fenced(reference)),
+        ("PARAMETERS JSON", _params_json(params)),
+        ("OUTPUT", "Output only the edit blocks, or NO CHANGES."),
+    ]
+    return Prompt(PATCH_SYSTEM, _sections(*sections), params.get("scenario_id", ""),
+                  "repair" if error else "generate")
+
+
+def _sections(*sections: tuple[str, str]) -> str:
+    return "\n\n".join(f"### {title}\n{body}" for title, body in sections)
+
+
+def _fenced(text: str, lang: str = "python") -> str:
+    return f"```{lang}\n{text.rstrip()}\n```"
+
+
+def _params_json(params: dict) -> str:
+    return _fenced(json.dumps(llm_params(params), indent=1), "json")

@@ -1,0 +1,28 @@
+"""Repair strategies, selectable by name (``--repair``). Adding one is one module in this
+package that defines ``STRATEGY``, an instance of :class:`agent.repair.base.RepairStrategy`."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+from agent.repair.base import Candidate, RepairStrategy, Request
+
+__all__ = ["Candidate", "RepairStrategy", "Request", "get_strategy", "strategy_names"]
+
+_NOT_STRATEGIES = {"base"}
+
+
+def strategy_names() -> list[str]:
+    """Every strategy module in this package, e.g. ``code_corrections``, ``error_feedback``."""
+    return sorted(m.name for m in pkgutil.iter_modules(__path__)
+                  if m.name not in _NOT_STRATEGIES and not m.name.startswith("_"))
+
+
+def get_strategy(name: str) -> RepairStrategy:
+    """The strategy called ``name`` (dashes and underscores alike)."""
+    module_name = name.replace("-", "_")
+    if module_name not in strategy_names():
+        raise ValueError(f"--repair {name}: no such strategy "
+                         f"(choose {', '.join(n.replace('_', '-') for n in strategy_names())})")
+    return importlib.import_module(f"agent.repair.{module_name}").STRATEGY

@@ -55,13 +55,18 @@ class AgentOutcome:
         return asdict(self)
 
 
-def run_scenario(params: dict, out_dir: Path, settings: AgentSettings) -> AgentOutcome:
-    """Make one scenario with the agent in ``out_dir``; raise only infrastructure errors."""
+def run_scenario(params: dict, out_dir: Path, settings: AgentSettings,
+                 trace: Trace | None = None) -> AgentOutcome:
+    """Make one scenario with the agent in ``out_dir``; raise only infrastructure errors.
+
+    Events go to ``trace`` (the pipeline's, so times count from the scenario's start) or to
+    a new ``out_dir/trace.jsonl``.
+    """
     out_dir = Path(out_dir)
     context = AgentContext(settings=settings, llm=shared_llm(settings),
                            sandbox=shared_sandbox(settings),
                            strategy=get_strategy(settings.repair),
-                           trace=Trace(out_dir / TRACE_NAME))
+                           trace=trace or Trace(out_dir / TRACE_NAME))
     thread = {"configurable": {"thread_id": params["scenario_id"]},
               "recursion_limit": 4 + STEPS_PER_ATTEMPT * settings.max_attempts + 2}
     with closing(sqlite3.connect(out_dir / CHECKPOINTS_NAME, check_same_thread=False)) as db:

@@ -26,6 +26,7 @@ COMMANDS: dict[str, str] = {
     "submit": "scenweave.commands.submit:submit_command",
     "report": "scenweave.commands.report:report",
     "bench": "scenweave.commands.bench:bench",
+    "trace": "scenweave.commands.trace:trace",
 }
 
 

@@ -62,7 +62,7 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
         if settings.no_llm:
             outcome.update(_reference_scenario(placed, out_dir, timings, trace))
         else:
-            outcome.update(_agent_scenario(placed, out_dir, settings, timings))
+            outcome.update(_agent_scenario(placed, out_dir, settings, timings, trace))
     except Exception as err:  # noqa: BLE001 - a scenario's failure is a value, not a crash
         if is_infrastructure_error(err):
             trace.event("infrastructure_error", error=f"{type(err).__name__}: {err}")
@@ -131,10 +131,11 @@ def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace
 
 
 def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
-                    timings: dict) -> dict:
+                    timings: dict, trace: Trace) -> dict:
     import agent
 
-    result = _timed(timings, "agent", lambda: agent.run_scenario(params, out_dir, settings.agent))
+    result = _timed(timings, "agent",
+                    lambda: agent.run_scenario(params, out_dir, settings.agent, trace))
     return result.to_dict()
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import click
 
+from scenweave.commands.agent_options import agent_options, pipeline_settings
 from scenweave.inputs import InputSelection
-from scenweave.pipeline import PipelineSettings
 from scenweave.runner import run_batch
 
 
@@ -30,17 +30,22 @@ from scenweave.runner import run_batch
               help="Spawn candidates shared round robin per class.")
 @click.option("--retry-failed", is_flag=True, help="On resume, run failed scenarios again.")
 @click.option("--json", "as_json", is_flag=True, help="Print summary.json instead of a line.")
+@agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: str | None,
         per_class: int | None, limit: int | None, variants: int, seed: int,
-        layout: Path | None, top_n: int, retry_failed: bool, as_json: bool) -> None:
-    """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios."""
-    if not no_llm:
-        raise click.UsageError("only --no-llm is available in this build; pass --no-llm")
+        layout: Path | None, top_n: int, retry_failed: bool, as_json: bool,
+        **agent: object) -> None:
+    """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios.
+
+    By default the agent has the embedded model adapt each reference script; --llm ollama
+    uses an Ollama server, --no-llm runs the reference scripts directly.
+    """
+    settings = pipeline_settings(no_llm, top_n, **agent)
     selection = InputSelection(
         classes=tuple(c.strip() for c in classes.split(",")) if classes else (),
         per_class=per_class, limit=limit, variants=variants, seed=seed, layout=layout)
-    result = run_batch(data, out_root, selection, PipelineSettings(no_llm=True, top_n=top_n),
-                       run_id=run_id, retry_failed=retry_failed)
+    result = run_batch(data, out_root, selection, settings, run_id=run_id,
+                       retry_failed=retry_failed)
     if as_json:
         click.echo(json.dumps(result.summary, indent=1))
     else:

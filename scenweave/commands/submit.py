@@ -11,14 +11,14 @@ from pathlib import Path
 
 import click
 
+from scenweave.commands.agent_options import AGENT_OPTION_NAMES, pipeline_settings
 from scenweave.commands.run import run as run_command
 from scenweave.inputs import InputSelection
-from scenweave.pipeline import PipelineSettings
 from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, submit
 
 #: options of ``scenweave run`` that mean the same here
 SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",
-                  "variants", "seed", "layout", "top_n", "retry_failed")
+                  "variants", "seed", "layout", "top_n", "retry_failed", *AGENT_OPTION_NAMES)
 
 
 def _delays(text: str) -> tuple[int, ...]:
@@ -31,8 +31,8 @@ def _delays(text: str) -> tuple[int, ...]:
 def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, matcher: str,
             as_json: bool, no_llm: bool, top_n: int, **selection_and_run: object) -> None:
     """Enqueue one job per scenario of DATA; workers (``scenweave worker``) do them."""
-    if not no_llm:
-        raise click.UsageError("only --no-llm is available in this build; pass --no-llm")
+    agent = {name: selection_and_run.pop(name) for name in AGENT_OPTION_NAMES}
+    settings = pipeline_settings(no_llm, top_n, **agent)
     data, out_root = selection_and_run.pop("data"), selection_and_run.pop("out_root")
     run_id, retry_failed = selection_and_run.pop("run_id"), selection_and_run.pop("retry_failed")
     classes = selection_and_run.pop("classes")
@@ -40,7 +40,6 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
                                else (), **selection_and_run)
     options = JobOptions(retries=retries, retry_delays_s=_delays(retry_delays),
                          timeout_s=job_timeout, matcher=matcher)
-    settings = PipelineSettings(no_llm=True, top_n=top_n)
     result = submit(Path(data), Path(out_root), selection, settings, connect(url), run_id=run_id,
                     retry_failed=retry_failed, options=options)
     if as_json:

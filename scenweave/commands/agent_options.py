@@ -1,0 +1,87 @@
+"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``.
+
+Choices are spelled out here (not imported from ``agent``) so ``scenweave --help`` does not
+load LangGraph; ``pipeline_settings`` turns the options into settings and checks them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import click
+
+from scenweave.pipeline import PipelineSettings
+
+LLM_CHOICES = ("embedded", "ollama", "replay", "none")
+SANDBOX_CHOICES = ("auto", "docker", "bwrap")
+#: names of the options below, for commands that forward them
+AGENT_OPTION_NAMES = ("llm", "model", "repair", "max_attempts", "sandbox", "ollama_host",
+                      "llm_timeout", "num_ctx", "max_tokens", "replay_file", "on_llm_error")
+
+def _option(decls: list[str], **attrs: Any) -> tuple[list[str], dict]:
+    return decls, attrs
+
+
+AGENT_OPTIONS = [
+    _option(["--llm"], type=click.Choice(LLM_CHOICES), default="embedded",
+                 show_default=True,
+                 help="LLM backend: embedded GGUF model in-process, an Ollama server, recorded "
+                      "replies, or none (the reference scripts, same as --no-llm)."),
+    _option(["--model"], help="Model: an Ollama tag (default qwen2.5-coder:7b) or a GGUF "
+                                   "file for --llm embedded (default SmolLM2-135M-Instruct)."),
+    _option(["--repair"], default="error-feedback", show_default=True,
+                 help="Repair strategy: error-feedback, code-corrections or patch."),
+    _option(["--max-attempts"], default=3, show_default=True, type=click.IntRange(1),
+                 help="LLM attempts before the reference script is used (fallback)."),
+    _option(["--sandbox"], type=click.Choice(SANDBOX_CHOICES), default="auto",
+                 show_default=True, help="Where LLM-written code runs."),
+    _option(["--ollama-host"], envvar="OLLAMA_HOST", show_envvar=True,
+                 help="Ollama server [default: http://localhost:11434]."),
+    _option(["--llm-timeout"], default=300.0, show_default=True, type=click.FloatRange(1),
+                 help="Seconds one LLM call may take."),
+    _option(["--num-ctx"], default=8192, show_default=True, type=click.IntRange(512),
+                 help="Context window asked of the model."),
+    _option(["--max-tokens"], type=click.IntRange(16),
+                 help="Output tokens per call [default: 4096 Ollama, 768 embedded]."),
+    _option(["--replay-file"], type=click.Path(exists=True, dir_okay=False, path_type=Path),
+                 help="For --llm replay: a replies JSON or a scenario's trace.jsonl."),
+    _option(["--on-llm-error"], type=click.Choice(["raise", "fallback"]), default="raise",
+                 show_default=True,
+                 help="LLM unreachable or too slow: stop the run, or use the fallback."),
+]
+
+
+def agent_options(command: Callable[..., Any]) -> Callable[..., Any]:
+    """Add every agent option to a click command function."""
+    for decls, attrs in reversed(AGENT_OPTIONS):
+        command = click.option(*decls, **attrs)(command)
+    return command
+
+
+def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | None = None,
+                      repair: str = "error-feedback", max_attempts: int = 3,
+                      sandbox: str = "auto", ollama_host: str | None = None,
+                      llm_timeout: float = 300.0, num_ctx: int = 8192,
+                      max_tokens: int | None = None, replay_file: Path | None = None,
+                      on_llm_error: str = "raise") -> PipelineSettings:
+    """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts."""
+    if no_llm or llm == "none":
+        return PipelineSettings(no_llm=True, top_n=top_n)
+    from agent import AgentSettings
+    from agent.repair import get_strategy
+    from sandbox import SandboxSettings
+
+    try:
+        get_strategy(repair)
+    except ValueError as err:
+        raise click.BadParameter(str(err), param_hint="--repair") from err
+    if llm == "replay" and replay_file is None:
+        raise click.UsageError("--llm replay needs --replay-file")
+    agent = AgentSettings(llm=llm, model=model, repair=repair.replace("-", "_"),
+                          max_attempts=max_attempts, timeout_s=llm_timeout, num_ctx=num_ctx,
+                          max_tokens=max_tokens, ollama_host=ollama_host,
+                          replay_file=replay_file, on_llm_error=on_llm_error,
+                          sandbox=SandboxSettings(backend=sandbox))
+    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent)

@@ -1,0 +1,51 @@
+"""Agent tests run the real graph, the real bubblewrap sandbox and the real validator; only
+the LLM is replaced by recorded replies (except in test_embedded.py and the Ollama tests)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+import corpus
+from agent import AgentSettings
+from sandbox import SandboxSettings
+from tests.corpus.params_examples import example_params
+
+
+@pytest.fixture(autouse=True)
+def scenweave_home(tmp_path, monkeypatch) -> Path:
+    """Every test logs its LLM calls into its own home folder."""
+    home = tmp_path / "home"
+    monkeypatch.setenv("SCENWEAVE_HOME", str(home))
+    return home
+
+
+@pytest.fixture(scope="session")
+def sandbox_settings() -> SandboxSettings:
+    if shutil.which("bwrap") is None:
+        pytest.skip("AGENT SANDBOX NOT TESTED: bubblewrap is not installed")
+    return SandboxSettings(backend="bwrap", wall_time_s=20)
+
+
+def reference_source(code: str) -> str:
+    return corpus.retrieve(example_params(code)).source
+
+
+def fenced(code: str) -> str:
+    return f"Here is the script:\n```python\n{code}```\n"
+
+
+@pytest.fixture
+def replay(tmp_path, sandbox_settings):
+    """Settings for the agent with ``replies`` recorded (a list, or {scenario_id: list})."""
+
+    def make(replies, **overrides) -> AgentSettings:
+        path = tmp_path / f"replies-{len(list(tmp_path.glob('replies-*')))}.json"
+        path.write_text(json.dumps(replies), encoding="utf-8")
+        return AgentSettings(llm="replay", replay_file=path, sandbox=sandbox_settings,
+                             **overrides)
+
+    return make

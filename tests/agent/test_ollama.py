@@ -178,3 +178,17 @@ def test_live_ollama():
     reply = ollama(host, model=model, max_tokens=16).complete(
         Prompt("Answer with one word.", "Say hello.", "live", "generate"))
     assert reply.text.strip() and reply.tokens_in > 0 and reply.tokens_out > 0
+
+
+def test_the_agent_runs_on_ollama(server, tmp_path, sandbox_settings):
+    from agent import run_scenario
+    from tests.agent.conftest import fenced, reference_source
+    from tests.corpus.params_examples import example_params
+
+    server.reply = fenced(reference_source("CINF"))
+    settings = AgentSettings(llm="ollama", ollama_host=server.url, sandbox=sandbox_settings)
+    outcome = run_scenario(example_params("CINF"), tmp_path, settings)
+    assert (outcome.status, outcome.attempts) == ("ok", 1)
+    assert (outcome.tokens_in, outcome.tokens_out) == (321, 54)
+    assert outcome.llm == {"backend": "ollama", "model": PULLED}
+    assert [path for path, _ in server.requests] == ["/api/tags", "/api/chat"]

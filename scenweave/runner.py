@@ -98,9 +98,23 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
         "error_taxonomy": dict(sorted(taxonomy.items())),
         "tokens_in": sum(o.get("tokens_in", 0) for o in outcomes),
         "tokens_out": sum(o.get("tokens_out", 0) for o in outcomes),
+        "attempts": sum(o.get("attempts", 0) for o in outcomes),
+        "first_attempt_success": sum(bool(o.get("first_attempt_success")) for o in outcomes),
+        "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
+        "node_latency_s": node_latency(outcomes),
         "input_issues": input_issues,
         "scenarios": outcomes,
     }
+
+
+def node_latency(outcomes: list[dict]) -> dict[str, dict[str, float]]:
+    """Per agent node: total seconds and mean seconds per scenario that visited it."""
+    per_node: dict[str, list[float]] = {}
+    for o in outcomes:
+        for node, seconds in (o.get("node_latency_s") or {}).items():
+            per_node.setdefault(node, []).append(seconds)
+    return {node: {"total": round(sum(v), 4), "mean": round(sum(v) / len(v), 4),
+                   "scenarios": len(v)} for node, v in per_node.items()}
 
 
 def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,

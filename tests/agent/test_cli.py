@@ -30,6 +30,10 @@ def test_run_with_replay_then_trace(tmp_path, sample_raw):
         "repaired", 2, ["syntax"])
     assert scenario["llm"] == {"backend": "replay", "model": "replay"}
     assert summary["error_taxonomy"] == {"syntax": 1}
+    assert (summary["attempts"], summary["first_attempt_success"], summary["fallbacks"]) == (
+        2, 0, 0)
+    assert summary["node_latency_s"]["execute"]["scenarios"] == 1
+    assert summary["node_latency_s"]["execute"]["total"] == scenario["node_latency_s"]["execute"]
     assert set(scenario["node_latency_s"]) == {"retrieve", "generate", "execute", "repair",
                                                "validate"}
     run_json = json.loads((runs / "r1" / "run.json").read_text())

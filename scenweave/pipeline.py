@@ -122,6 +122,8 @@ def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace
     errors = [e for e in validation["errors"] if e.get("severity") == "error"]
     return {
         "status": "ok" if validation["valid"] else "failed",
+        "attempts": 1,  # the reference script, once; no repair without an LLM
+        "first_attempt_success": validation["valid"],
         "retrieval": retrieval.method,
         "validation": {"valid": validation["valid"], "fixes_applied": validation["fixes_applied"],
                        "errors": errors[:20], "domain": validation.get("domain")},

@@ -201,3 +201,34 @@ def test_sandbox_and_redis_errors_are_infrastructure_spawn_errors_are_not():
     assert is_infrastructure_error(SandboxUnavailable("no engine"))
     assert is_infrastructure_error(RedisConnectionError("gone"))
     assert not is_infrastructure_error(NoSpawnFits("no spawn fits"))
+
+
+def test_the_agent_runs_in_the_workers(records, tmp_path, gates, workers, redis_url):
+    """The agent path through the queue: settings travel with the job, the LLM is replayed,
+    each scenario's trace and checkpoints land in its folder."""
+    import shutil
+
+    if shutil.which("bwrap") is None:
+        pytest.skip("AGENT IN WORKER NOT TESTED: bubblewrap is not installed")
+    replies = tmp_path / "replies.json"
+    replies.write_text(json.dumps({BRAKE[0]: ["no edit blocks here", "NO CHANGES"],
+                                   "*": ["NO CHANGES"]}))
+    result = CliRunner().invoke(cli, [
+        "submit", str(records), "--out", str(tmp_path / "runs"), "--queue", redis_url,
+        "--matcher", GATED_MATCHER, "--run-id", "agent", "--classes", "BRAKE,U4_1",
+        "--llm", "replay", "--replay-file", str(replies), "--repair", "patch",
+        "--sandbox", "bwrap"])
+    assert result.exit_code == 0, result.output
+    assert workers.start("--burst").wait(timeout=180) == 0
+    run = tmp_path / "runs" / "agent"
+    summary = json.loads((run / "summary.json").read_text())
+    statuses = {o["scenario_id"]: o["status"] for o in summary["scenarios"]}
+    assert statuses.pop(BRAKE[0]) == "repaired"
+    assert statuses.pop(POISONED) == "failed"
+    assert set(statuses.values()) == {"ok"} and len(statuses) == 3
+    brake = outcome(run, BRAKE[0])
+    assert brake["llm"] == {"backend": "replay", "model": "replay"} and brake["repair"] == "patch"
+    folder = run / safe_name(BRAKE[0])
+    nodes = [json.loads(line)["node"] for line in (folder / "trace.jsonl").read_text().splitlines()]
+    assert nodes == ["spawn", "retrieve", "generate", "execute", "repair", "execute", "validate"]
+    assert (folder / "checkpoints.sqlite").is_file()

@@ -1,14 +1,11 @@
 """The agent: retrieve -> generate -> execute -> validate, repairing up to the attempt limit,
 then ``fallback`` (the reference script run directly) as the terminal node.
 
-    START -> retrieve -> generate -> execute -> validate -> END
-                            |           ^  \\        |
-                            |           |   \\       v
-                            |         repair <------+   (attempts left)
-                            v           |
-                         fallback <-----+-------------- (no attempts left / LLM down)
-                            |
-                           END
+    START -> retrieve -> generate -> execute -> validate -> END      (valid)
+    generate, repair -> execute, or -> fallback                     (LLM down, if so set)
+    execute  -> validate if the script ran, else repair or fallback
+    validate -> END if valid, else repair (attempts left) or fallback
+    fallback -> END
 """
 
 from __future__ import annotations

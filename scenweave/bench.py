@@ -65,6 +65,8 @@ class BenchSettings:
     classes: tuple[str, ...] = THESIS_CLASSES
     per_class: int = 5
     llm: str = "ollama"
+    repair: str = "error_feedback"
+    replay_file: Path | None = None
     seed: int = 7
     top_n: int = 5
 
@@ -98,8 +100,9 @@ def model_dir_name(model: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", model)
 
 
-def agent_settings_for(llm: str) -> Callable[[str], PipelineSettings]:
-    """Pipeline settings per model name: the agent with that model on backend ``llm``."""
+def agent_settings_for(llm: str, **agent: Any) -> Callable[[str], PipelineSettings]:
+    """Pipeline settings per model name: the agent with that model on backend ``llm``;
+    ``agent`` holds further AgentSettings fields (repair, replay_file, ...)."""
     if llm not in LLM_BACKENDS:
         raise BenchError(f"--llm {llm!r}: choose one of {', '.join(LLM_BACKENDS)}")
 
@@ -111,7 +114,7 @@ def agent_settings_for(llm: str) -> Callable[[str], PipelineSettings]:
         except ImportError as err:
             raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
                              f"({err}); benchmark --models {REFERENCE} only") from err
-        return PipelineSettings(no_llm=False, agent=AgentSettings(model=model, llm=llm))
+        return PipelineSettings(no_llm=False, agent=AgentSettings(model=model, llm=llm, **agent))
 
     return settings
 
@@ -133,7 +136,8 @@ def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = No
               data: Path | None = None,
               settings_for: Callable[[str], PipelineSettings] | None = None) -> BenchResult:
     """Run every model over the selected records, aggregate, write json, figures and html."""
-    settings_for = settings_for or agent_settings_for(settings.llm)
+    settings_for = settings_for or agent_settings_for(
+        settings.llm, repair=settings.repair, replay_file=settings.replay_file)
     root = Path(out_root) / (bench_id or datetime.now(UTC).strftime("bench-%Y%m%d-%H%M%S"))
     root.mkdir(parents=True, exist_ok=True)
     data = Path(data) if data else sample_records(root, settings)
@@ -147,7 +151,9 @@ def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = No
         outcomes[model] = result.summary["scenarios"]
         run_dirs[model] = result.folder.root
     summary = aggregate(outcomes)
-    summary["settings"] = {**asdict(settings), "data": str(data)}
+    replay = settings.replay_file
+    summary["settings"] = {**asdict(settings), "data": str(data),
+                           "replay_file": str(replay) if replay else None}
     summary["runs"] = {model: str(path) for model, path in run_dirs.items()}
     write_bench(root, summary, outcomes)
     return BenchResult(root, summary, run_dirs)

@@ -24,6 +24,10 @@ def _names(text: str) -> tuple[str, ...]:
               help="Records per class (the thesis used 5).")
 @click.option("--llm", type=click.Choice(LLM_BACKENDS), default="ollama", show_default=True,
               help="LLM backend the agent uses.")
+@click.option("--repair", default="error-feedback", show_default=True,
+              help="Repair strategy of the agent.")
+@click.option("--replay-file", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="For --llm replay: recorded replies.")
 @click.option("--data", type=click.Path(exists=True, path_type=Path),
               help="Records to use instead of seeded sample data.")
 @click.option("--seed", default=7, show_default=True, help="Seed of the sample data.")
@@ -31,12 +35,14 @@ def _names(text: str) -> tuple[str, ...]:
               type=click.Path(file_okay=False, path_type=Path), help="Folder for benchmarks.")
 @click.option("--bench-id", help="Name of the benchmark folder; an existing one is resumed.")
 @click.option("--json", "as_json", is_flag=True, help="Print bench.json instead of a line.")
-def bench(models: str, classes: str, per_class: int, llm: str, data: Path | None, seed: int,
-          out_root: Path, bench_id: str | None, as_json: bool) -> None:
+def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
+          replay_file: Path | None, data: Path | None, seed: int, out_root: Path,
+          bench_id: str | None, as_json: bool) -> None:
     """Benchmark models on the same records: SR, first-attempt rate, latency, tokens, errors."""
     if not _names(models):
         raise click.BadParameter("give at least one model", param_hint="--models")
     settings = BenchSettings(models=_names(models), classes=_names(classes),
-                             per_class=per_class, llm=llm, seed=seed)
+                             per_class=per_class, llm=llm, seed=seed,
+                             repair=repair.replace("-", "_"), replay_file=replay_file)
     result = run_bench(settings, out_root, bench_id=bench_id, data=data)
     click.echo(json.dumps(result.aggregate, indent=1) if as_json else result.line())

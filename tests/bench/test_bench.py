@@ -103,3 +103,23 @@ def test_cli_prints_one_line_per_benchmark(tmp_path):
 def test_an_unknown_backend_is_refused_by_name():
     with pytest.raises(BenchError, match="--llm 'gpt'"):
         agent_settings_for("gpt")
+
+
+def test_agent_benchmark_with_replayed_models(tmp_path):
+    replies = tmp_path / "replies.json"
+    replies.write_text(json.dumps({"*": ["NO CHANGES"]}))
+    result = CliRunner().invoke(cli, ["bench", "--models", "model-a,model-b", "--llm", "replay",
+                                      "--replay-file", str(replies), "--repair", "patch",
+                                      "--classes", "BRAKE,LCF", "--per-class", "1",
+                                      "--out", str(tmp_path), "--bench-id", "replay"])
+    assert result.exit_code == 0, result.output
+    assert "model-a: SR 100%, 1st 100%" in result.output
+    assert "model-b: SR 100%, 1st 100%" in result.output
+    aggregate = json.loads((tmp_path / "replay" / "bench.json").read_text())
+    outcomes = json.loads((tmp_path / "replay" / "runs" / "model-a" / "summary.json")
+                          .read_text())["scenarios"]
+    assert {o["llm"]["model"] for o in outcomes} == {"model-a"}
+    assert {o["repair"] for o in outcomes} == {"patch"}
+    assert set(aggregate["models"]) == {"model-a", "model-b"}
+    assert aggregate["settings"]["repair"] == "patch"
+    assert aggregate["settings"]["replay_file"] == str(replies)

@@ -23,7 +23,7 @@ CONSTRAINTS = ("OUTPUT THE ENTIRE SCRIPT BELOW, replacing ONLY the numeric param
 OUTPUT_CUE = "Output the complete Python script starting with imports."
 
 ERROR_TASK = ("Your previous script for this CARLA {maneuver} scenario failed. "
-              "The error is below.")
+              "The error and your script are below.")
 ERROR_CONSTRAINTS = ("Reproduce the REFERENCE SCRIPT VERBATIM, replacing ONLY numeric values "
                      "with those in the JSON. Do not invent functions, attributes or modules: "
                      "use only what the reference script uses.")
@@ -49,25 +49,22 @@ def maneuver_name(params: dict) -> str:
 
 def generation_prompt(params: dict, reference: str) -> Prompt:
     """Attempt 1: the six sections of thesis Table 5.5."""
-    user = _sections(
-        ("TASK", TASK.format(maneuver=maneuver_name(params))),
-        ("CONSTRAINTS", CONSTRAINTS),
-        ("REFERENCE SCRIPT", _fenced(reference)),
-        ("PARAMETERS JSON", _params_json(params)),
-        ("OUTPUT", OUTPUT_CUE),
-    )
+    user = _sections(*_shared_head(params, reference), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "generate")
 
 
 def error_prompt(params: dict, reference: str, failed_code: str, error: str) -> Prompt:
-    """Attempts 2 and 3 (thesis Table 5.6): previous code and its error injected."""
+    """Attempts 2 and 3 (thesis Table 5.6): previous code and its error injected.
+
+    It begins exactly like the first prompt, so a local model reuses its cached prefix
+    (llama.cpp keeps the longest common prefix) and reads only the new sections.
+    """
     user = _sections(
-        ("TASK", ERROR_TASK.format(maneuver=maneuver_name(params))),
+        *_shared_head(params, reference),
+        ("YOUR PREVIOUS SCRIPT FAILED", ERROR_TASK.format(maneuver=maneuver_name(params))),
         ("ERROR", _fenced(error, "text")),
         ("YOUR PREVIOUS SCRIPT", _fenced(failed_code)),
-        ("CONSTRAINTS", ERROR_CONSTRAINTS),
-        ("REFERENCE SCRIPT", _fenced(reference)),
-        ("PARAMETERS JSON", _params_json(params)),
+        ("CONSTRAINTS FOR THE RETRY", ERROR_CONSTRAINTS),
         ("OUTPUT", OUTPUT_CUE),
     )
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "repair")
@@ -75,18 +72,27 @@ def error_prompt(params: dict, reference: str, failed_code: str, error: str) -> 
 
 def patch_prompt(params: dict, reference: str, error: str | None = None) -> Prompt:
     """Ask for edit blocks against the reference; after a failure, with the error."""
-    sections = [("TASK", TASK.format(maneuver=maneuver_name(params))
-                 + " Adapt it to the parameters with the smallest edit.")]
-    if error:
-        sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
-    sections += [
+    sections = [
+        ("TASK", TASK.format(maneuver=maneuver_name(params))
+         + " Adapt it to the parameters with the smallest edit."),
         ("FORMAT", PATCH_FORMAT),
         ("REFERENCE SCRIPT", _fenced(reference)),
         ("PARAMETERS JSON", _params_json(params)),
-        ("OUTPUT", "Output only the edit blocks, or NO CHANGES."),
     ]
+    if error:
+        sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
+    sections.append(("OUTPUT", "Output only the edit blocks, or NO CHANGES."))
     return Prompt(PATCH_SYSTEM, _sections(*sections), params.get("scenario_id", ""),
                   "repair" if error else "generate")
+
+
+def _shared_head(params: dict, reference: str) -> list[tuple[str, str]]:
+    return [
+        ("TASK", TASK.format(maneuver=maneuver_name(params))),
+        ("CONSTRAINTS", CONSTRAINTS),
+        ("REFERENCE SCRIPT", _fenced(reference)),
+        ("PARAMETERS JSON", _params_json(params)),
+    ]
 
 
 def _sections(*sections: tuple[str, str]) -> str:

@@ -27,6 +27,7 @@ COMMANDS: dict[str, str] = {
     "report": "scenweave.commands.report:report",
     "bench": "scenweave.commands.bench:bench",
     "trace": "scenweave.commands.trace:trace",
+    "logs": "scenweave.commands.logs:logs",
 }
 
 

@@ -55,11 +55,13 @@ def log_call(prompt: Prompt, reply: LLMReply) -> None:
              reply.tokens_in, reply.tokens_out, reply.latency_s, json.dumps(reply.meta)))
 
 
-def recent_calls(limit: int = 20) -> list[dict]:
-    """The newest ``limit`` calls, newest first."""
+def recent_calls(limit: int = 20, scenario_id: str | None = None) -> list[dict]:
+    """The newest ``limit`` calls (of one scenario, if given), newest first."""
+    where, args = ("WHERE scenario_id = ?", (scenario_id,)) if scenario_id else ("", ())
     with closing(_connect()) as db:
         db.row_factory = sqlite3.Row
-        rows = db.execute("SELECT * FROM calls ORDER BY id DESC LIMIT ?", (limit,)).fetchall()
+        rows = db.execute(f"SELECT * FROM calls {where} ORDER BY id DESC LIMIT ?",
+                          (*args, limit)).fetchall()
     return [dict(row) for row in rows]
 
 

@@ -49,6 +49,11 @@ def test_run_with_replay_then_trace(tmp_path, sample_raw):
     assert "error EmptyCode" in shown.output and "taxonomy: syntax" in shown.output
     assert "checkpoints:" in shown.output
 
+    logged = json.loads(invoke("logs", "--json", "--scenario", scenario["scenario_id"]).output)
+    assert [c["purpose"] for c in logged] == ["repair", "generate"]  # newest first
+    assert {c["backend"] for c in logged} == {"replay"} and logged[1]["reply"] == "no code here"
+    assert "replay/replay" in invoke("logs", "-n", "1").output
+
     as_json = json.loads(invoke("trace", scenario["scenario_id"], "--runs", str(runs),
                                 "--json").output)
     assert [e["node"] for e in as_json][:3] == ["spawn", "retrieve", "generate"]

@@ -30,12 +30,14 @@ class OllamaLLM(LLM):
                 "num_ctx": s.num_ctx, "repeat_penalty": s.repeat_penalty}
 
     def check(self) -> None:
+        """Raise :class:`LLMUnavailable` unless the server answers and has pulled the model."""
         listing = self._call(self.client.list)
         pulled = {m.model for m in listing.models}
         if self.model not in pulled and f"{self.model}:latest" not in pulled:
             raise LLMUnavailable(self._missing_model())
 
     def close(self) -> None:
+        """Close the client's HTTP connections (the client keeps them alive between calls)."""
         inner = getattr(self.client, "_client", None)
         if inner is not None:
             inner.close()
@@ -54,17 +56,22 @@ class OllamaLLM(LLM):
     def _call(self, method: Any, *args: Any, **kwargs: Any) -> Any:
         try:
             return method(*args, **kwargs)
+        except httpx.ConnectTimeout as err:  # nothing accepted the connection: unreachable
+            raise LLMUnavailable(self._unreachable()) from err
         except httpx.TimeoutException as err:
             raise LLMTimeout(f"Ollama at {self.host} did not answer within "
                              f"{self.settings.timeout_s:g} s (AgentSettings.timeout_s / "
                              "--llm-timeout)") from err
         except (ConnectionError, httpx.TransportError) as err:
-            raise LLMUnavailable(f"cannot reach Ollama at {self.host}: start `ollama serve` "
-                                 "or set OLLAMA_HOST / --ollama-host") from err
+            raise LLMUnavailable(self._unreachable()) from err
         except ollama.ResponseError as err:
             if err.status_code == 404:
                 raise LLMUnavailable(self._missing_model()) from err
             raise LLMUnavailable(f"Ollama at {self.host} failed: {err}") from err
+
+    def _unreachable(self) -> str:
+        return (f"cannot reach Ollama at {self.host}: start `ollama serve` or set OLLAMA_HOST"
+                " / --ollama-host")
 
     def _missing_model(self) -> str:
         return (f"model '{self.model}' not found on Ollama at {self.host}: run "

@@ -11,6 +11,7 @@ import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import httpx
+import ollama as ollama_client
 import pytest
 
 from agent import AgentSettings, LLMTimeout, LLMUnavailable
@@ -29,6 +30,7 @@ class FakeOllama(ThreadingHTTPServer):
         super().__init__(("127.0.0.1", 0), OllamaHandler)
         self.requests: list[tuple[str, dict]] = []
         self.delay_s = 0.0
+        self.fail_status = 0  # e.g. 500: /api/chat answers this error instead
         self.reply = "```python\nprint('hi')\n```"
 
     @property
@@ -55,6 +57,8 @@ class OllamaHandler(BaseHTTPRequestHandler):
         time.sleep(self.server.delay_s)
         if self.path != "/api/chat":
             self._send(404, {"error": "not found"})
+        elif self.server.fail_status:
+            self._send(self.server.fail_status, {"error": "llama runner process has terminated"})
         elif body.get("model") != PULLED:
             self._send(404, {"error": f"model '{body.get('model')}' not found"})
         else:
@@ -79,7 +83,7 @@ class OllamaHandler(BaseHTTPRequestHandler):
 @pytest.fixture
 def server():
     fake = FakeOllama()
-    thread = threading.Thread(target=fake.serve_forever, daemon=True)
+    thread = threading.Thread(target=fake.serve_forever, args=(0.05,), daemon=True)
     thread.start()
     yield fake
     fake.shutdown()
@@ -127,8 +131,30 @@ def test_unreachable_server_names_the_setting():
     with socket.socket() as closed:  # a port that was free a moment ago: nothing listens
         closed.bind(("127.0.0.1", 0))
         port = closed.getsockname()[1]
+    llm = ollama(f"http://127.0.0.1:{port}")
     with pytest.raises(LLMUnavailable, match="OLLAMA_HOST") as raised:
-        ollama(f"http://127.0.0.1:{port}").complete(PROMPT)
+        llm.complete(PROMPT)
+    assert not isinstance(raised.value, LLMTimeout)
+    with pytest.raises(LLMUnavailable, match="cannot reach Ollama"):
+        llm.check()
+
+
+def test_connect_timeout_is_unreachable_not_slow():
+    """A host that never accepts the connection (a full backlog stands in for a dead route)."""
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(0)
+        port = listener.getsockname()[1]
+        fillers = [socket.socket() for _ in range(3)]
+        for filler in fillers:
+            filler.setblocking(False)
+            filler.connect_ex(("127.0.0.1", port))
+        try:
+            with pytest.raises(LLMUnavailable, match="cannot reach .*OLLAMA_HOST") as raised:
+                ollama(f"http://127.0.0.1:{port}", timeout_s=0.5).complete(PROMPT)
+        finally:
+            for filler in fillers:
+                filler.close()
     assert not isinstance(raised.value, LLMTimeout)
 
 
@@ -145,10 +171,26 @@ def test_unknown_model_says_how_to_pull_it(server):
         ollama(server.url, model="codellama:7b").complete(PROMPT)
 
 
+def test_server_error_is_unavailable(server):
+    server.fail_status = 500
+    with pytest.raises(LLMUnavailable, match="llama runner process has terminated") as raised:
+        ollama(server.url).complete(PROMPT)
+    assert "ollama pull" not in str(raised.value)
+
+
 def test_check_knows_pulled_models(server):
     ollama(server.url).check()
-    with pytest.raises(LLMUnavailable, match="not found"):
+    with pytest.raises(LLMUnavailable, match="ollama pull codellama:7b"):
         ollama(server.url, model="codellama:7b").check()
+    assert [path for path, _ in server.requests] == ["/api/tags", "/api/tags"]
+
+
+def test_close_releases_the_connection(server):
+    llm = ollama(server.url)
+    llm.complete(PROMPT)
+    llm.close()
+    assert llm.client._client.is_closed
+    llm.close()  # twice is harmless
 
 
 def test_ollama_host_env_is_used_when_no_host_is_set(server, monkeypatch):
@@ -157,24 +199,23 @@ def test_ollama_host_env_is_used_when_no_host_is_set(server, monkeypatch):
     assert server.requests
 
 
-def live_host() -> str | None:
-    host = os.environ.get("OLLAMA_HOST") or "http://localhost:11434"
-    host = host if host.startswith("http") else f"http://{host}"
+def live_models(host: str) -> list[str] | None:
+    """The models pulled on the Ollama server at ``host``, or None if it does not answer in 1 s."""
     try:
-        httpx.get(f"{host}/api/tags", timeout=1.0).raise_for_status()
-    except httpx.HTTPError:
+        listing = ollama_client.Client(host=host, timeout=1.0).list()
+    except (ConnectionError, httpx.HTTPError, ollama_client.ResponseError):
         return None
-    return host
+    return [m.model for m in listing.models if m.model]
 
 
 def test_live_ollama():
-    host = live_host()
-    if host is None:
-        pytest.skip("no Ollama server answers at $OLLAMA_HOST or localhost:11434")
-    models = httpx.get(f"{host}/api/tags", timeout=5).json()["models"]
-    if not models:
+    host = os.environ.get("OLLAMA_HOST") or "http://localhost:11434"
+    models = live_models(host)
+    if models is None:
+        pytest.skip(f"no Ollama server answers at {host} ($OLLAMA_HOST)")
+    model = os.environ.get("SCENWEAVE_OLLAMA_MODEL") or (models[0] if models else None)
+    if model is None:
         pytest.skip(f"the Ollama server at {host} has no model pulled")
-    model = os.environ.get("SCENWEAVE_OLLAMA_MODEL") or models[0]["name"]
     reply = ollama(host, model=model, max_tokens=16).complete(
         Prompt("Answer with one word.", "Say hello.", "live", "generate"))
     assert reply.text.strip() and reply.tokens_in > 0 and reply.tokens_out > 0

@@ -12,8 +12,9 @@ from sandbox import SandboxSettings
 LLM_CHOICES = ("ollama", "embedded", "replay", "none")
 DEFAULT_MODELS = {"ollama": "qwen2.5-coder:7b", "embedded": "smollm2-135m-instruct",
                   "replay": "replay", "none": "none"}
-#: SPEC §6: a small embedded model loops on long outputs; cap what it may write
-DEFAULT_MAX_TOKENS = {"ollama": 4096, "embedded": 768, "replay": 4096, "none": 0}
+#: SPEC §6: a small embedded model loops on long outputs; cap what it may write. The longest
+#: reference script is 365 SmolLM2 tokens, so 512 leaves room for the fences and a line of prose.
+DEFAULT_MAX_TOKENS = {"ollama": 4096, "embedded": 512, "replay": 4096, "none": 0}
 DEFAULT_OLLAMA_HOST = "http://localhost:11434"
 
 
@@ -32,7 +33,7 @@ class AgentSettings:
     temperature: float = 0.1
     top_p: float = 0.9
     max_tokens: int | None = None
-    """Output cap per call; None = 4096 for Ollama, 768 for the embedded model."""
+    """Output cap per call; None = 4096 for Ollama, 512 for the embedded model."""
     num_ctx: int = 8192
     """Context window asked of the model (prompt + reply tokens)."""
     repeat_penalty: float = 1.1

@@ -44,7 +44,7 @@ AGENT_OPTIONS = [
     _option(["--num-ctx"], default=8192, show_default=True, type=click.IntRange(512),
                  help="Context window asked of the model."),
     _option(["--max-tokens"], type=click.IntRange(16),
-                 help="Output tokens per call [default: 4096 Ollama, 768 embedded]."),
+                 help="Output tokens per call [default: 4096 Ollama, 512 embedded]."),
     _option(["--replay-file"], type=click.Path(exists=True, dir_okay=False, path_type=Path),
                  help="For --llm replay: a replies JSON or a scenario's trace.jsonl."),
     _option(["--on-llm-error"], type=click.Choice(["raise", "fallback"]), default="raise",

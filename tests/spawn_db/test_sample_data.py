@@ -18,6 +18,16 @@ from spawn_db.signals import junction_approach
 PER_CLASS = 12
 
 
+def _segments_within(network, road_id, lane_id, s, distance):
+    """``(segment, metres to its end)`` driven from a lane position until ``distance`` is covered."""
+    covered = 0.0
+    for segment in network.walk(road_id, lane_id, s, forward=True):
+        covered += segment.length
+        yield segment, covered
+        if covered >= distance:
+            return
+
+
 @pytest.fixture(scope="module")
 def assigned(tmp_path_factory) -> list[tuple[dict, dict]]:
     raw = tmp_path_factory.mktemp("spawn_samples")
@@ -49,8 +59,17 @@ def test_highway_spawns_fit_the_manoeuvre(assigned, town04):
         needed = params["gap_ahead_m"] + params["max_speed_ms"] * params["timeout_s"]
         assert town04.drivable_length(*ego, forward=True, cap=needed + 1) > needed
         assert town04.drivable_length(*ego, forward=False, cap=1000) > params["gap_behind_m"]
-        for side in params["required_lane_sides"]:
-            assert town04.neighbour(key, side) is not None, (params["scenario_id"], side)
+        # the side lanes last until the manoeuvre ends, and no light stands in the way
+        manoeuvre_end = params["maneuver_start_s"] + params["duration_s"]
+        side_needed = params["gap_ahead_m"] + params["max_speed_ms"] * manoeuvre_end
+        for segment, _ in _segments_within(town04, *ego, side_needed):
+            for side in params["required_lane_sides"]:
+                assert town04.neighbour(segment.key, side) is not None, \
+                    (params["scenario_id"], side, segment.key)
+        for segment, to_end in _segments_within(town04, *ego, needed):
+            approach = junction_approach(town04, segment.key)
+            assert to_end >= needed or approach is None or not approach.signalised, \
+                (params["scenario_id"], "traffic light inside the drive", segment.key)
         for actor, distance_key in (("npc", "npc_distance_m"), ("center", "center_distance_m"),
                                     ("right", "right_distance_m"), ("left", "left_distance_m")):
             if f"{actor}_s" not in result:

@@ -19,7 +19,7 @@ PER_CLASS = 12
 
 
 def _segments_within(network, road_id, lane_id, s, distance):
-    """``(segment, metres to its end)`` driven from a lane position until ``distance`` is covered."""
+    """``(segment, metres to its end)`` from a lane position until ``distance`` is covered."""
     covered = 0.0
     for segment in network.walk(road_id, lane_id, s, forward=True):
         covered += segment.length

@@ -27,7 +27,7 @@ class AgentSettings:
     model: str | None = None
     """Model name (Ollama tag, or a GGUF path for embedded); None = the backend's default."""
     repair: str = "error_feedback"
-    """Repair strategy by name (``agent.repair.strategy_names()``)."""
+    """Repair strategy by name (``agent.repair.strategy_names()``; dashes or underscores)."""
     max_attempts: int = 3
     """LLM attempts (first + repairs) before the reference script is run directly."""
     temperature: float = 0.1
@@ -54,6 +54,7 @@ class AgentSettings:
             raise ValueError(f"llm: {self.llm!r} is not one of {', '.join(LLM_CHOICES)}")
         if self.max_attempts < 1:
             raise ValueError("max_attempts: must be at least 1")
+        self.repair = checked_repair(self.repair)
 
     @property
     def model_name(self) -> str:
@@ -77,3 +78,18 @@ class AgentSettings:
         if self.llm == "ollama":
             data["ollama_host"] = self.host
         return data
+
+
+def checked_repair(name: str) -> str:
+    """``name`` as a strategy module name (``patch``, ``error_feedback``); a ValueError naming
+    ``--repair`` and the choices when there is no such strategy."""
+    # imported here: agent.repair's modules import the agent's code and prompt modules, which
+    # must stay free to import these settings
+    from agent.repair import strategy_names
+
+    module_name = name.replace("-", "_")
+    names = strategy_names()
+    if module_name not in names:
+        choices = ", ".join(n.replace("_", "-") for n in names)
+        raise ValueError(f"--repair {name!r}: no such repair strategy (choose {choices})")
+    return module_name

@@ -114,7 +114,11 @@ def agent_settings_for(llm: str, **agent: Any) -> Callable[[str], PipelineSettin
         except ImportError as err:
             raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
                              f"({err}); benchmark --models {REFERENCE} only") from err
-        return PipelineSettings(no_llm=False, agent=AgentSettings(model=model, llm=llm, **agent))
+        try:
+            agent_settings = AgentSettings(model=model, llm=llm, **agent)
+        except ValueError as err:  # e.g. an unknown --repair: the message names the option
+            raise BenchError(str(err)) from err
+        return PipelineSettings(no_llm=False, agent=agent_settings)
 
     return settings
 
@@ -138,11 +142,11 @@ def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = No
     """Run every model over the selected records, aggregate, write json, figures and html."""
     settings_for = settings_for or agent_settings_for(
         settings.llm, repair=settings.repair, replay_file=settings.replay_file)
+    pipelines = {model: settings_for(model) for model in settings.models}  # fail before running
     root = Path(out_root) / (bench_id or datetime.now(UTC).strftime("bench-%Y%m%d-%H%M%S"))
     root.mkdir(parents=True, exist_ok=True)
     data = Path(data) if data else sample_records(root, settings)
     selection = InputSelection(classes=settings.classes, per_class=settings.per_class)
-    pipelines = {model: settings_for(model) for model in settings.models}  # fail before running
     outcomes, run_dirs = {}, {}
     for model in progress(settings.models, desc="models", total=len(settings.models)):
         pipelines[model].top_n = settings.top_n

@@ -20,9 +20,7 @@ def strategy_names() -> list[str]:
 
 
 def get_strategy(name: str) -> RepairStrategy:
-    """The strategy called ``name`` (dashes and underscores alike)."""
-    module_name = name.replace("-", "_")
-    if module_name not in strategy_names():
-        raise ValueError(f"--repair {name}: no such strategy "
-                         f"(choose {', '.join(n.replace('_', '-') for n in strategy_names())})")
-    return importlib.import_module(f"agent.repair.{module_name}").STRATEGY
+    """The strategy called ``name`` (dashes and underscores alike); ValueError if none is."""
+    from agent.settings import checked_repair
+
+    return importlib.import_module(f"agent.repair.{checked_repair(name)}").STRATEGY

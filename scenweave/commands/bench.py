@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from scenweave.bench import LLM_BACKENDS, THESIS_CLASSES, BenchSettings, run_bench
+from scenweave.bench import LLM_BACKENDS, THESIS_CLASSES, BenchError, BenchSettings, run_bench
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -44,5 +44,8 @@ def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
     settings = BenchSettings(models=_names(models), classes=_names(classes),
                              per_class=per_class, llm=llm, seed=seed,
                              repair=repair.replace("-", "_"), replay_file=replay_file)
-    result = run_bench(settings, out_root, bench_id=bench_id, data=data)
+    try:
+        result = run_bench(settings, out_root, bench_id=bench_id, data=data)
+    except BenchError as err:
+        raise click.ClickException(str(err)) from err
     click.echo(json.dumps(result.aggregate, indent=1) if as_json else result.line())

@@ -123,3 +123,17 @@ def test_agent_benchmark_with_replayed_models(tmp_path):
     assert set(aggregate["models"]) == {"model-a", "model-b"}
     assert aggregate["settings"]["repair"] == "patch"
     assert aggregate["settings"]["replay_file"] == str(replies)
+
+
+def test_an_unknown_repair_strategy_stops_the_benchmark_before_it_runs(tmp_path):
+    replies = tmp_path / "replies.json"
+    replies.write_text(json.dumps({"*": ["NO CHANGES"]}))
+    result = CliRunner().invoke(cli, ["bench", "--models", "model-a", "--llm", "replay",
+                                      "--replay-file", str(replies), "--repair", "typo",
+                                      "--classes", "BRAKE", "--per-class", "1",
+                                      "--out", str(tmp_path / "bench"), "--bench-id", "b"])
+    assert result.exit_code == 1
+    [line] = result.output.splitlines()
+    assert "--repair 'typo'" in line
+    assert "code-corrections, error-feedback, patch" in line
+    assert not (tmp_path / "bench" / "b").exists()  # no records made, no run started

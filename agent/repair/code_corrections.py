@@ -1,9 +1,11 @@
 """Repair without asking the LLM when the error says what is wrong; else re-prompt.
 
 Deterministic fixes keyed on the failure: a missing or wrong import or name gets the
-reference's import block back; ``module has no attribute X`` becomes the closest real name
-of that module; tabs and stray indentation are normalised. Only when none applies (or the
-code would not change) is the LLM asked again, as in ``error_feedback``.
+reference's import block back; ``module has no attribute X`` and ``type object C has no
+attribute X`` become the closest real name of that module or class (only the modules the
+reference imports and ``scenariogeneration`` are ever looked into); tabs and stray
+indentation are normalised. Only when none applies (or the code would not change) is the
+LLM asked again, as in ``error_feedback``.
 """
 
 from __future__ import annotations
@@ -12,13 +14,18 @@ import ast
 import difflib
 import importlib
 import re
+import sys
 import textwrap
+from types import ModuleType
 
 from agent.llm.base import LLM
 from agent.repair.base import Candidate, RepairStrategy, Request
 from agent.repair.error_feedback import ErrorFeedback
 
 MISSING_MODULE_ATTR = re.compile(r"module '([\w.]+)' has no attribute '(\w+)'")
+MISSING_CLASS_ATTR = re.compile(r"type object '(\w+)' has no attribute '(\w+)'")
+#: modules a fix may import besides the reference's own imports (see ``allowed_modules``)
+ALLOWED_ROOTS = ("scenariogeneration",)
 IMPORT_LINE = re.compile(r"^(?:from\s+\S+\s+import\s+|import\s+)")
 
 
@@ -47,27 +54,75 @@ def restore_imports(code: str, reference: str) -> str:
     return head + "\n" + reference_imports(reference) + "\n" + body[len(head):].lstrip("\n")
 
 
-def closest_attribute(module_name: str, wrong: str) -> str | None:
-    """The attribute of ``module_name`` most like ``wrong`` (None if nothing is close)."""
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError:
+def allowed_modules(reference: str) -> tuple[str, ...]:
+    """The modules whose attributes a fix may look up: ``scenariogeneration`` and what the
+    reference script imports. The error message naming a module comes from code the LLM
+    wrote, so nothing else is ever imported on its say-so."""
+    tree = ast.parse(reference)
+    names = {alias.name for node in tree.body if isinstance(node, ast.Import)
+             for alias in node.names}
+    names |= {node.module for node in tree.body
+              if isinstance(node, ast.ImportFrom) and node.module and not node.level}
+    return tuple(sorted(names | set(ALLOWED_ROOTS)))
+
+
+def is_allowed(module_name: str, allowed: tuple[str, ...]) -> bool:
+    """True for a module of the allow-list or a submodule of one."""
+    return any(module_name == root or module_name.startswith(root + ".") for root in allowed)
+
+
+def allowed_module(module_name: str, allowed: tuple[str, ...]) -> ModuleType | None:
+    """The module, imported only if it is on the allow-list (None otherwise or if missing)."""
+    if not is_allowed(module_name, allowed):
         return None
-    names = [n for n in dir(module) if not n.startswith("_")]
-    close = difflib.get_close_matches(wrong, names, n=1, cutoff=0.6)
-    return close[0] if close else None
+    try:
+        return importlib.import_module(module_name)
+    except (ImportError, ValueError):
+        return None
 
 
-def fix_attribute(code: str, message: str) -> str:
-    match = MISSING_MODULE_ATTR.search(message)
-    if not match:
+def find_class(name: str, allowed: tuple[str, ...]) -> type | None:
+    """A class called ``name`` defined in or exported by an allowed, loaded module."""
+    for root in allowed:
+        allowed_module(root, allowed)
+    for module_name, module in sorted(sys.modules.items()):
+        if module is not None and is_allowed(module_name, allowed):
+            found = vars(module).get(name)
+            if isinstance(found, type):
+                return found
+    return None
+
+
+def closest_attribute(owner: object, wrong: str, then: str | None = None) -> str | None:
+    """The public attribute of ``owner`` most like ``wrong`` (None if nothing is close).
+
+    ``then`` is the attribute the code reads next (``xosc.ManeuverPriority.overwrite``:
+    ``overwrite``); of the close names, one that has it wins (``Priority``).
+    """
+    names = [n for n in dir(owner) if not n.startswith("_")]
+    close = difflib.get_close_matches(wrong, names, n=5, cutoff=0.6)
+    fitting = [n for n in close if then and hasattr(getattr(owner, n, None), then)]
+    return (fitting or close or [None])[0]
+
+
+def fix_attribute(code: str, message: str, allowed: tuple[str, ...]) -> str:
+    """``owner.wrong`` replaced by the closest real attribute, for ``module 'm' has no
+    attribute`` (owner: the module's last name, e.g. ``xosc``) and ``type object 'C' has no
+    attribute`` (owner: the class, looked up in the allowed modules)."""
+    if match := MISSING_MODULE_ATTR.search(message):
+        module_name, wrong = match.groups()
+        owner, prefix = allowed_module(module_name, allowed), module_name.rsplit(".", 1)[-1]
+    elif match := MISSING_CLASS_ATTR.search(message):
+        prefix, wrong = match.groups()
+        owner = find_class(prefix, allowed)
+    else:
         return code
-    module_name, wrong = match.groups()
-    right = closest_attribute(module_name, wrong)
-    if right is None:
+    if owner is None:
         return code
-    alias = module_name.rsplit(".", 1)[-1]
-    return re.sub(rf"\b{re.escape(alias)}\.{re.escape(wrong)}\b", f"{alias}.{right}", code)
+    used = rf"\b{re.escape(prefix)}\.{re.escape(wrong)}\b"
+    then = re.search(used + r"\.(\w+)", code)
+    right = closest_attribute(owner, wrong, then.group(1) if then else None)
+    return code if right is None else re.sub(used, f"{prefix}.{right}", code)
 
 
 def fix_indentation(code: str) -> str:
@@ -79,7 +134,7 @@ def deterministic_fix(code: str, error_type: str, message: str, reference: str) 
     if error_type in ("ImportError", "ModuleNotFoundError", "NameError"):
         return restore_imports(code, reference), "restore_imports"
     if error_type == "AttributeError":
-        return fix_attribute(code, message), "closest_attribute"
+        return fix_attribute(code, message, allowed_modules(reference)), "closest_attribute"
     if error_type in ("IndentationError", "TabError"):
         return fix_indentation(code), "normalise_indentation"
     return code, ""

@@ -45,7 +45,7 @@ def replay(tmp_path, sandbox_settings):
     def make(replies, **overrides) -> AgentSettings:
         path = tmp_path / f"replies-{len(list(tmp_path.glob('replies-*')))}.json"
         path.write_text(json.dumps(replies), encoding="utf-8")
-        return AgentSettings(llm="replay", replay_file=path, sandbox=sandbox_settings,
-                             **overrides)
+        return AgentSettings(**{"llm": "replay", "replay_file": path,
+                                "sandbox": sandbox_settings, **overrides})
 
     return make

@@ -8,16 +8,29 @@ import sqlite3
 from pathlib import Path
 
 import pytest
+from langgraph.runtime import Runtime
 
-from agent import LLMTimeout, LLMUnavailable, run_scenario
-from agent.graph import build_graph
+from agent import AgentSettings, LLMTimeout, LLMUnavailable, run_scenario
+from agent.context import AgentContext
+from agent.graph import after_execute, after_generation, after_validate, build_graph
+from agent.repair import get_strategy
 from agent.run import CHECKPOINTS_NAME
+from sandbox import SandboxSettings
 from scenweave.pipeline import is_infrastructure_error
 from schemas import validate_xosc
 from tests.agent.conftest import fenced, reference_source
 from tests.corpus.params_examples import example_params
 
 NODES = {"retrieve", "generate", "execute", "validate", "repair", "fallback"}
+#: SPEC §9 as edges (source, target, conditional): the routers' choices are conditional
+EDGES = {
+    ("__start__", "retrieve", False), ("retrieve", "generate", False),
+    ("generate", "execute", True), ("generate", "fallback", True),
+    ("execute", "validate", True), ("execute", "repair", True), ("execute", "fallback", True),
+    ("validate", "__end__", True), ("validate", "repair", True), ("validate", "fallback", True),
+    ("repair", "execute", True), ("repair", "fallback", True),
+    ("fallback", "__end__", False),
+}
 
 
 def run(code: str, settings, tmp_path: Path, params: dict | None = None):
@@ -36,9 +49,35 @@ def events(out: Path, node: str) -> list[dict]:
             if e["node"] == node]
 
 
-def test_graph_has_the_six_nodes():
+def test_graph_has_the_six_nodes_and_only_the_spec_s_edges():
     graph = build_graph().compile().get_graph()
-    assert set(graph.nodes) >= NODES
+    assert set(graph.nodes) == NODES | {"__start__", "__end__"}
+    assert {(e.source, e.target, e.conditional) for e in graph.edges} == EDGES
+
+
+def routed(router, attempts: list[dict], final: dict | None = None, max_attempts: int = 3):
+    settings = AgentSettings(llm="replay", max_attempts=max_attempts)
+    context = AgentContext(settings=settings, llm=None, sandbox=None,
+                           strategy=get_strategy(settings.repair), trace=None)
+    state = {"attempts": attempts, **({"final": final} if final else {})}
+    if router is after_generation:
+        return router(state)
+    return router(state, Runtime(context=context))
+
+
+FAILED = {"error": {"type": "NameError", "message": "name 'hero' is not defined"}}
+
+
+def test_routers_repair_while_attempts_are_left_then_fall_back():
+    assert routed(after_generation, [{"error": None}]) == "execute"
+    assert routed(after_generation, [{"error": {"type": "LLMTimeout"}}]) == "fallback"
+    assert routed(after_execute, [{"error": None}]) == "validate"
+    assert routed(after_execute, [FAILED, FAILED]) == "repair"
+    assert routed(after_execute, [FAILED] * 3) == "fallback"
+    assert routed(after_execute, [FAILED], max_attempts=1) == "fallback"
+    assert routed(after_validate, [{"error": None}], final={"status": "ok"}) == "__end__"
+    assert routed(after_validate, [FAILED]) == "repair"
+    assert routed(after_validate, [FAILED] * 3) == "fallback"
 
 
 @pytest.mark.parametrize("code", ["BRAKE", "U4_1"])
@@ -176,3 +215,45 @@ def test_a_past_trace_replays_to_the_same_outcome(replay, tmp_path, sandbox_sett
     again = run_scenario(example_params("BRAKE"), again_dir, again_settings)
     assert (again.status, again.attempts, again.error_taxonomy) == (
         first.status, first.attempts, first.error_taxonomy) == ("repaired", 2, ["syntax"])
+
+
+def test_a_script_that_never_ends_is_killed_and_repaired(replay, tmp_path, sandbox_settings):
+    reference = reference_source("BRAKE")
+    endless = reference.replace('    """Build the braking', '    while True:\n        pass\n'
+                                '    """Build the braking')
+    assert endless != reference
+    quick = SandboxSettings(backend=sandbox_settings.backend, wall_time_s=3)
+    outcome, out = run("BRAKE", replay([fenced(endless), fenced(reference)], sandbox=quick),
+                       tmp_path)
+    assert outcome.status == "repaired" and outcome.error_taxonomy == ["timeout"]
+    first = events(out, "execute")[0]
+    assert first["error"]["type"] == "Timeout" and "wall_time_s" in first["error"]["message"]
+    assert "Timeout" in events(out, "repair")[0]["prompt"]["user"]
+
+
+def test_an_import_of_a_missing_module_is_an_import_error(replay, tmp_path):
+    reference = reference_source("U4_1")
+    wrong = reference.replace("from pathlib import Path\n",
+                              "from pathlib import Path\n\nimport carla_helpers\n", 1)
+    assert wrong != reference
+    outcome, out = run("U4_1", replay([fenced(wrong), fenced(reference)]), tmp_path)
+    assert outcome.status == "repaired" and outcome.error_taxonomy == ["import"]
+    first = events(out, "execute")[0]
+    assert first["error"]["type"] == "ModuleNotFoundError"
+    assert "carla_helpers" in first["error"]["message"]
+
+
+def test_code_corrections_fixes_an_invented_class_member_in_the_sandbox(replay, tmp_path):
+    reference = reference_source("BRAKE")
+    invented = reference.replace(
+        "from pathlib import Path\n", "from pathlib import Path\n\n"
+        "from scenariogeneration import xosc\n", 1).replace(
+        "    ego = hero(", "    shape = xosc.DynamicsShapes.linar\n    ego = hero(", 1)
+    assert invented.count("DynamicsShapes.linar") == 1
+    # one recorded reply only: asking the LLM again would raise LLMUnavailable
+    outcome, out = run("BRAKE", replay([fenced(invented)], repair="code_corrections"), tmp_path)
+    assert outcome.status == "repaired" and outcome.error_taxonomy == ["api_hallucination"]
+    assert outcome.corrections == ["closest_attribute"]
+    assert "'DynamicsShapes' has no attribute 'linar'" in events(out, "execute")[0][
+        "error"]["message"]
+    assert (out / "scenario.py").read_text() == invented.replace(".linar", ".linear")

@@ -4,7 +4,7 @@ Each model gets its own run folder (``<bench>/runs/<model>/``, made by ``run_bat
 interrupted benchmark resumes), and the outcomes of all models are aggregated into
 ``bench.json``: per model and per class the success rate, first-attempt rate, latency
 (mean/std/p50/p95), tokens and the error taxonomy (Tables 6.2, 6.3), plus the figures of
-Figs. 6.1, 6.2 and 6.4 as PNG files and a self-contained ``bench.html``.
+Figs. 6.1, 6.2, 6.3 (per model) and 6.4 as PNG files and a self-contained ``bench.html``.
 
 The model name ``reference`` stands for no LLM at all (the deterministic reference scripts):
 a baseline for latency and a way to run the whole benchmark machinery without a model.
@@ -33,7 +33,9 @@ from scenweave.report import (
     metrics,
     metrics_row,
     page,
+    pct,
     plot_cumulative,
+    plot_latency_boxplot,
     plot_latency_per_class,
     plot_latency_vs_success,
     projected_curve,
@@ -48,9 +50,7 @@ LLM_BACKENDS = ("ollama", "embedded", "replay")
 REFERENCE = "reference"
 BENCH_FILE = "bench.json"
 BENCH_HTML = "bench.html"
-FIGURES = {"latency_vs_success": "fig6_1_latency_vs_success.png",
-           "latency_per_class": "fig6_2_latency_per_class.png",
-           "cumulative": "fig6_4_scenarios_per_hour.png"}
+BOXPLOT_PREFIX = "fig6_3_latency_boxplot_"
 
 
 class BenchError(Exception):
@@ -86,13 +86,9 @@ class BenchResult:
             m = entry["overall"]
             mean = m["latency_s"]["mean"]
             latency = "–" if mean is None else f"{mean:.2f}"
-            parts.append(f"{model}: SR {_pct(m['success_rate'])}, "
-                         f"1st {_pct(m['first_attempt_rate'])}, {latency} s")
+            parts.append(f"{model}: SR {pct(m['success_rate'])}, "
+                         f"1st {pct(m['first_attempt_rate'])}, {latency} s")
         return f"bench {self.root.name}: " + "; ".join(parts) + f" -> {self.root / BENCH_FILE}"
-
-
-def _pct(value: float | None) -> str:
-    return "–" if value is None else f"{100 * value:.0f}%"
 
 
 def model_dir_name(model: str) -> str:
@@ -184,24 +180,50 @@ def aggregate(outcomes_by_model: dict[str, list[dict]]) -> dict:
     }
 
 
-def figures(summary: dict, outcomes_by_model: dict[str, list[dict]]) -> dict[str, bytes]:
-    """Figs. 6.1, 6.2 and 6.4 of the benchmark as PNG bytes, by the keys of ``FIGURES``."""
+@dataclass
+class Figure:
+    """One PNG of the benchmark: its file name in the benchmark folder and its caption."""
+
+    file: str
+    png: bytes
+    caption: str
+    alt: str
+
+
+def figures(summary: dict, outcomes_by_model: dict[str, list[dict]]) -> dict[str, Figure]:
+    """Figs. 6.1, 6.2, 6.3 (one boxplot per model) and 6.4 of the benchmark, in page order;
+    keys as in ``bench.json``'s ``figures``."""
     overall = {model: entry["overall"] for model, entry in summary["models"].items()}
     curves = {model: projected_curve([v for v in map(latency_s, outcomes) if v is not None])
               for model, outcomes in outcomes_by_model.items()}
-    return {"latency_vs_success": plot_latency_vs_success(overall),
-            "latency_per_class": plot_latency_per_class(outcomes_by_model),
-            "cumulative": plot_cumulative(curves)}
+    made = {
+        "latency_vs_success": Figure(
+            "fig6_1_latency_vs_success.png", plot_latency_vs_success(overall),
+            "Latency vs success rate per model (Fig. 6.1).", "latency vs success"),
+        "latency_per_class": Figure(
+            "fig6_2_latency_per_class.png", plot_latency_per_class(outcomes_by_model),
+            "Mean latency ± std per class and model (Fig. 6.2).", "latency per class"),
+    }
+    for model, outcomes in outcomes_by_model.items():
+        made[f"latency_boxplot/{model}"] = Figure(
+            f"{BOXPLOT_PREFIX}{model_dir_name(model)}.png", plot_latency_boxplot(outcomes),
+            f"Distribution of latencies per class, {model} (Fig. 6.3).",
+            f"latency boxplot {model}")
+    made["cumulative"] = Figure(
+        "fig6_4_scenarios_per_hour.png", plot_cumulative(curves),
+        "Projected scenarios over one hour of sequential running per model (Fig. 6.4).",
+        "scenarios per hour")
+    return made
 
 
 def write_bench(root: Path, summary: dict, outcomes_by_model: dict[str, list[dict]]) -> Path:
     """Write ``bench.json``, the figure PNGs and ``bench.html`` into ``root``."""
-    pngs = figures(summary, outcomes_by_model)
-    for key, png in pngs.items():
-        _write_bytes_atomic(root / FIGURES[key], png)
-    summary = {**summary, "figures": dict(FIGURES)}
+    made = figures(summary, outcomes_by_model)
+    for made_figure in made.values():
+        _write_bytes_atomic(root / made_figure.file, made_figure.png)
+    summary = {**summary, "figures": {key: f.file for key, f in made.items()}}
     write_json_atomic(root / BENCH_FILE, summary)
-    write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, pngs))
+    write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, made))
     return root / BENCH_FILE
 
 
@@ -216,7 +238,7 @@ def _write_bytes_atomic(path: Path, data: bytes) -> None:
         raise
 
 
-def render_bench(name: str, summary: dict, pngs: dict[str, bytes]) -> str:
+def render_bench(name: str, summary: dict, made: dict[str, Figure]) -> str:
     """The benchmark as a static HTML page: the thesis tables and figures."""
     models = list(summary["models"])
 
@@ -225,8 +247,7 @@ def render_bench(name: str, summary: dict, pngs: dict[str, bytes]) -> str:
 
     def rates(entry: dict, code: str) -> str:
         group = entry["by_class"].get(code, {})
-        return (f"{cell(group.get('success_rate'), '.0%')} / "
-                f"{cell(group.get('first_attempt_rate'), '.0%')}")
+        return f"{pct(group.get('success_rate'))} / {pct(group.get('first_attempt_rate'))}"
 
     per_class_sr = [[code, *(rates(entry, code) for entry in summary["models"].values())]
                     for code in summary["latency_table"]]
@@ -245,11 +266,6 @@ def render_bench(name: str, summary: dict, pngs: dict[str, bytes]) -> str:
                                    for error, row in summary["error_table"].items()])
         if summary["error_table"] else "<p>No errors.</p>",
         "<h2>Figures</h2>",
-        figure(pngs["latency_vs_success"], "Latency vs success rate per model (Fig. 6.1).",
-               "latency vs success"),
-        figure(pngs["latency_per_class"], "Mean latency ± std per class and model (Fig. 6.2).",
-               "latency per class"),
-        figure(pngs["cumulative"], "Projected scenarios over one hour of sequential running "
-               "per model (Fig. 6.4).", "scenarios per hour"),
+        *(figure(f.png, f"{f.caption} File {f.file}.", f.alt) for f in made.values()),
     ]
     return page(f"ScenWeave benchmark {name}", "\n".join(parts))

@@ -233,7 +233,8 @@ def _rate(part: int, whole: int) -> float | None:
     return round(part / whole, 4) if whole else None
 
 
-def _pct(value: float | None) -> str:
+def pct(value: float | None) -> str:
+    """A rate as a whole percentage, ``–`` for none."""
     return "–" if value is None else f"{100 * value:.0f}%"
 
 
@@ -287,8 +288,8 @@ def page(title: str, body: str) -> str:
 def metrics_row(name: str, m: dict) -> list[Any]:
     """One row of the per-class / per-model metrics tables."""
     lat = m["latency_s"]
-    return [name, m["n"], *(m["counts"][s] for s in STATUSES), _pct(m["success_rate"]),
-            _pct(m["delivered_rate"]), _pct(m["first_attempt_rate"]), _sec(lat["mean"]),
+    return [name, m["n"], *(m["counts"][s] for s in STATUSES), pct(m["success_rate"]),
+            pct(m["delivered_rate"]), pct(m["first_attempt_rate"]), _sec(lat["mean"]),
             _sec(lat["p50"]), _sec(lat["p95"]),
             "–" if m["per_hour"] is None else f"{m['per_hour']:.0f}",
             m["tokens_in"] + m["tokens_out"]]

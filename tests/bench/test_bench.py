@@ -3,9 +3,11 @@ benchmark end to end with the ``reference`` model (no LLM)."""
 
 from __future__ import annotations
 
+import base64
 import json
 import random
 
+import lxml.html
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -90,6 +92,7 @@ def test_reference_benchmark_aggregates_real_outcomes(tmp_path):
     for name in written["figures"].values():
         assert (tmp_path / "b" / name).read_bytes().startswith(b"\x89PNG")
     assert "Table 6.2" in (tmp_path / "b" / "bench.html").read_text()
+    assert_boxplots(tmp_path / "b", written, ["reference"])
 
 
 def test_cli_prints_one_line_per_benchmark(tmp_path):
@@ -123,6 +126,23 @@ def test_agent_benchmark_with_replayed_models(tmp_path):
     assert set(aggregate["models"]) == {"model-a", "model-b"}
     assert aggregate["settings"]["repair"] == "patch"
     assert aggregate["settings"]["replay_file"] == str(replies)
+    assert_boxplots(tmp_path / "replay", aggregate, ["model-a", "model-b"])
+
+
+def assert_boxplots(root, aggregate: dict, models: list[str]) -> None:
+    """Fig. 6.3 per model: listed in bench.json, a PNG that decodes, drawn in bench.html."""
+    from matplotlib.image import imread
+
+    html = lxml.html.fromstring((root / "bench.html").read_bytes())
+    shown = {img.get("alt"): img.get("src") for img in html.xpath("//figure/img")}
+    for model in models:
+        name = aggregate["figures"][f"latency_boxplot/{model}"]
+        assert name.startswith("fig6_3_") and model in name
+        pixels = imread(root / name)  # raises unless it is a PNG it can decode
+        assert pixels.shape[0] > 100 and pixels.shape[1] > 100
+        assert pixels.std() > 0  # something is drawn, not one flat colour
+        inline = base64.b64decode(shown[f"latency boxplot {model}"].split(",", 1)[1])
+        assert inline == (root / name).read_bytes()
 
 
 def test_an_unknown_repair_strategy_stops_the_benchmark_before_it_runs(tmp_path):

@@ -12,8 +12,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ingest.atomic import write_json_atomic
-from ingest.highway import DEFAULT_BINNING, canonicalize_highway_file, iter_highway_files
-from ingest.issues import IngestError, IngestReport, Issue, RecordIssue
+from ingest.highway import (
+    DEFAULT_BINNING,
+    HighwayFileResult,
+    canonicalize_highway_file,
+    iter_highway_files,
+)
+from ingest.issues import IngestError, IngestReport, Issue, RecordIssue, unexpected_issue
 from ingest.layouts import HighwayLayouts, load_layouts
 from ingest.records import check_record
 from ingest.urban import canonicalize_urban_file, iter_urban_files
@@ -38,7 +43,10 @@ def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayout
         raise IngestError(f"input folder not found: {raw_dir}")
     layouts = layouts or load_layouts()
     for path in iter_highway_files(raw_dir):
-        result = canonicalize_highway_file(path, layouts, binning)
+        try:
+            result = canonicalize_highway_file(path, layouts, binning)
+        except Exception as err:  # noqa: BLE001 - last line of defence: one file, not the batch
+            result = HighwayFileResult(None, [], [unexpected_issue(path.name, err)])
         report.files_read += 1
         report.add(result.issues)
         yield from _checked(result.records, path.name, report)

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ingest.freeride import SLOTS, slot_present
+from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
-from ingest.layouts import FAMILY_OF_CLASS
+from ingest.layouts import FAMILY_OF_CLASS, default_layouts
 
 KMH = 3.6
 HIGHWAY_MANEUVER_START_S = 2.0
@@ -42,6 +42,7 @@ def _extract_highway(record: dict) -> dict:
     if family is None:
         raise RecordIssue(f"unknown highway class {code!r}", field="maneuver_class")
     raw = record["params"]
+    conventions = record_conventions(record)
     base = {
         "scenario_id": record["scenario_id"],
         "maneuver_class": code,
@@ -55,14 +56,24 @@ def _extract_highway(record: dict) -> dict:
         "npc_position": record["npc_position"],
     }
     try:
-        base.update(HIGHWAY_EXTRACTORS[family](raw, code))
+        base.update(HIGHWAY_EXTRACTORS[family](raw, code, conventions))
     except KeyError as err:
         raise RecordIssue("missing in params", field=f"params.{err.args[0]}") from err
     base.update(dict.fromkeys(SPAWN_KEYS))
     return finish(base)
 
 
-def _brake(raw: dict, code: str) -> dict:
+def record_conventions(record: dict) -> dict:
+    """The layout conventions the record was read with (sign, sentinels); records written
+    without them (older ingests, other tools) get the bundled layout's."""
+    conventions = record.get("conventions")
+    if isinstance(conventions, dict):
+        return conventions
+    layout = default_layouts().classes.get(record["maneuver_class"])
+    return layout.conventions if layout else {}
+
+
+def _brake(raw: dict, code: str, conventions: dict) -> dict:
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": raw["lead_vel_kmh"] / KMH,
@@ -73,8 +84,12 @@ def _brake(raw: dict, code: str) -> dict:
     }
 
 
-def _cut(raw: dict, code: str) -> dict:
-    sign = -1.0 if code == "COUTB" else 1.0
+def _cut(raw: dict, code: str, conventions: dict) -> dict:
+    try:
+        sign = float(conventions["relative_speed_sign"])
+    except KeyError as err:
+        raise RecordIssue("the layout gives no relative_speed_sign for this class",
+                          field="conventions.relative_speed_sign") from err
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
@@ -85,7 +100,7 @@ def _cut(raw: dict, code: str) -> dict:
     }
 
 
-def _lane_change(raw: dict, code: str) -> dict:
+def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
@@ -93,7 +108,7 @@ def _lane_change(raw: dict, code: str) -> dict:
     }
 
 
-def _follow(raw: dict, code: str) -> dict:
+def _follow(raw: dict, code: str, conventions: dict) -> dict:
     sign = -1.0 if code == "FLB" else 1.0
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
@@ -108,8 +123,7 @@ def _follow(raw: dict, code: str) -> dict:
     }
 
 
-def _free_ride(raw: dict, code: str) -> dict:
-    sign = -1.0 if code == "FRB" else 1.0
+def _free_ride(raw: dict, code: str, conventions: dict) -> dict:
     params: dict = {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
@@ -117,20 +131,14 @@ def _free_ride(raw: dict, code: str) -> dict:
     }
     if code == "FRF":
         params["driving_side"] = str(raw.get("driving_side", "Right")).lower()
+    sign = -1.0 if code == "FRB" else 1.0
+    sentinels = conventions.get("sentinels", {})
     for slot in SLOTS:
-        present = slot_present(raw, slot)
-        params[f"{slot}_present"] = present
-        params[f"{slot}_speed_ms"] = raw[f"{slot}_vel_begin_ms"] if present else 0.0
-        params[f"{slot}_end_speed_ms"] = raw[f"{slot}_vel_end_ms"] if present else 0.0
-        params[f"{slot}_distance_m"] = sign * abs(raw[f"{slot}_posx_begin_m"]) if present else 0.0
-        params[f"{slot}_end_distance_m"] = (sign * abs(raw[f"{slot}_posx_end_m"])
-                                            if present else 0.0)
-        params[f"{slot}_vehicle_type"] = (raw[f"{slot}_vehicle_type"].lower()
-                                          if present else None)
+        params.update(slot_params(raw, slot, sign, sentinels))
     return params
 
 
-HIGHWAY_EXTRACTORS: dict[str, Callable[[dict, str], dict]] = {
+HIGHWAY_EXTRACTORS: dict[str, Callable[[dict, str, dict], dict]] = {
     "BRAKE": _brake, "CUT": _cut, "LC": _lane_change, "FL": _follow, "FR": _free_ride,
 }
 
@@ -221,6 +229,9 @@ def finish(params: dict) -> dict:
         params["ego_end_speed_ms"] = params["ego_speed_ms"]
     elif params["maneuver_class"] == "COUTF":
         params["ego_end_speed_ms"] = params["ego_speed_ms"] * COUTF_EGO_SPEEDUP
+    if params["domain"] == "urban":  # thesis Table 5.1 names, same values (docs/params.md)
+        params["init_speed_ms"] = params["ego_speed_ms"]
+        params["final_speed_ms"] = params["ego_end_speed_ms"]
     params["timeout_s"] = TIMEOUT_FACTOR * (params["maneuver_start_s"] + params["duration_s"])
     params["required_lane_sides"] = _required_lane_sides(params)
     speeds = [v for k, v in params.items() if k.endswith("speed_ms") and isinstance(v, float)]

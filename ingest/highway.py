@@ -154,6 +154,7 @@ def _record(layout: ClassLayout, params: dict, row: int, stem: str, file: str,
         "source": {"file": file, "row_index": row},
         "behavior_type": params.get("behavior_type") if layout.family == "FL" else None,
         "params": params,
+        "conventions": layout.conventions,
     }
 
 
@@ -161,17 +162,12 @@ def _npc_presence(layout: ClassLayout, params: dict) -> tuple[bool, str | None]:
     if layout.family == "LC":
         return False, None
     if layout.family == "FR":
-        position, speed = _slot_sentinels(layout)
-        present = any(slot_present(params, slot, position, speed) for slot in SLOTS)
+        sentinels = layout.conventions.get("sentinels", {})
+        present = any(slot_present(params, slot, sentinels) for slot in SLOTS)
         return present, layout.npc_position if present else None
     if layout.family == "CUT":
         return True, "front" if params["npc_distance_m"] >= 0 else "behind"
     return True, layout.npc_position
-
-
-def _slot_sentinels(layout: ClassLayout) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    columns = layout.column_by_name
-    return columns["center_posx_begin_m"].sentinels, columns["center_vel_begin_ms"].sentinels
 
 
 def iter_highway_files(folder: Path) -> Iterator[Path]:

@@ -53,6 +53,12 @@ class RecordIssue(Exception):
         return Issue(file=file, message=self.message, row=self.row, field=self.field)
 
 
+def unexpected_issue(file: str, err: Exception) -> Issue:
+    """An exception no check foresaw, as an issue naming the file (the batch goes on)."""
+    return Issue(file=file, message=f"unexpected {type(err).__name__} while reading the file: "
+                                    f"{err}")
+
+
 @dataclass
 class IngestReport:
     """Counts and issues of one ingest run, written as ``ingest_report.json``."""

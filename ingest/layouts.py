@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +75,19 @@ class ClassLayout:
     def column_by_name(self) -> dict[str, Column]:
         return {c.name: c for c in self.columns}
 
+    @cached_property
+    def conventions(self) -> dict:
+        """What extraction must know of this layout beyond the column names; copied into
+        every canonical record (``conventions``) so params follow the layout the file was
+        read with: the relative-speed sign (cut classes) and each column's sentinels."""
+        found: dict = {}
+        if self.family == "CUT":
+            found["relative_speed_sign"] = self.relative_speed_sign
+        sentinels = {c.name: list(c.sentinels) for c in self.columns if c.sentinels}
+        if sentinels:
+            found["sentinels"] = sentinels
+        return found
+
 
 @dataclass(frozen=True)
 class HighwayLayouts:
@@ -100,6 +113,12 @@ def load_layouts(path: Path | str | None = None) -> HighwayLayouts:
                           source=where)
 
 
+@cache
+def default_layouts() -> HighwayLayouts:
+    """The bundled layouts, read once (for records that carry no ``conventions``)."""
+    return load_layouts()
+
+
 def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
     if code not in FAMILY_OF_CLASS:
         raise LayoutError(f"{where}: unknown class {code!r} (known: {', '.join(FAMILY_OF_CLASS)})")
@@ -114,13 +133,14 @@ def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
     if missing:
         raise LayoutError(f"{where}.columns: missing required field(s) {', '.join(missing)}")
     sign = spec.get("relative_speed_sign")
-    if FAMILY_OF_CLASS[code] == "CUT" and sign not in (1, -1):
+    if FAMILY_OF_CLASS[code] == "CUT" and (isinstance(sign, bool) or sign not in (1, -1)):
         raise LayoutError(f"{where}.relative_speed_sign: must be 1 or -1, got {sign!r}")
     npc_position = spec.get("npc_position")
     if npc_position not in ("front", "behind", None):
         raise LayoutError(f"{where}.npc_position: must be 'front', 'behind' or null")
     return ClassLayout(code=code, tag=str(_require(spec, "tag", str, where)),
-                       npc_position=npc_position, columns=columns, relative_speed_sign=sign)
+                       npc_position=npc_position, columns=columns,
+                       relative_speed_sign=int(sign) if sign in (1, -1) else None)
 
 
 def _column(spec: Any, where: str) -> Column:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ingest.codes import TRAFFIC_LIGHT_STATES, decode
-from ingest.issues import Issue, RecordIssue
+from ingest.issues import Issue, RecordIssue, unexpected_issue
 from ingest.tags import URBAN_NAMES, URBAN_TAGS
 
 RECORD_VERSION = "urban.v1"
@@ -27,6 +27,15 @@ EGO_FIELDS = ("ego_speed", "longitudinal_acceleration_wheels", "steer_wheel_angl
               "dist_to_marking_left", "dist_to_marking_right")
 OBSTACLE_FIELDS = ("unique_id", "pos_x", "pos_y", "relative_velocity_x", "absolute_velocity_x",
                    "mobile_object_classification", "obstacle_relative_lane")
+OPTIONAL_OBSTACLE_FIELDS = ("relative_velocity_y", "blinker", "time_to_collision")
+CLIMATE_FIELDS = ("day_period", "outside_temperature", "precipitation")
+CLIMATE_FLAGS = ("dazzled", "fog")
+#: way-point element types the record uses, with the lowest value that makes sense (numbers)
+NUMERIC_ELEMENTS: dict[str, float | None] = {
+    "SpeedLimit": 0, "LaneWidth": 0, "NumberOfLanes": 0, "FrontCurvature": None,
+    "RearCurvature": None, "Slope": None, "RoadType": 0, "GuardRail": 0, "Junction": 0,
+    "PresenceOfEmergencyLane": 0, "TrafficSignType": 0,
+}
 
 
 def iter_urban_files(folder: Path) -> Iterator[Path]:
@@ -46,6 +55,8 @@ def canonicalize_urban_file(path: Path) -> tuple[dict | None, list[Issue]]:
         return canonicalize_scene(scene, name, folder_code=path.parent.name), []
     except RecordIssue as issue:
         return None, [issue.to_issue(name)]
+    except Exception as err:  # noqa: BLE001 - last line of defence: one file, not the batch
+        return None, [unexpected_issue(name, err)]
 
 
 def _read_json(path: Path) -> dict:
@@ -129,6 +140,15 @@ def _get(obj: dict, key: str, kind: type | tuple[type, ...], where: str = "") ->
     return value
 
 
+def _optional_number(obj: dict, key: str, where: str, allow_bool: bool = False) -> None:
+    """An optional numeric field: absent or null is fine (and true/false for flags when
+    ``allow_bool``); anything else must be a finite number."""
+    value = obj.get(key)
+    if value is None or allow_bool and isinstance(value, bool):
+        return
+    _get(obj, key, float, where)
+
+
 def _kind_name(kind: type | tuple[type, ...]) -> str:
     return "number" if kind == (int, float) else getattr(kind, "__name__", str(kind))
 
@@ -151,13 +171,19 @@ def _frames(scene: dict) -> list[dict]:
         ego = _get(frame, "ego_vehicle", dict, where)
         for key in EGO_FIELDS:
             _get(ego, key, float, f"{where}.ego_vehicle")
-        _get(frame, "temporal_climatic", dict, where)
+        climate = _get(frame, "temporal_climatic", dict, where)
+        for key in (*CLIMATE_FIELDS, *CLIMATE_FLAGS):
+            _optional_number(climate, key, f"{where}.temporal_climatic",
+                             allow_bool=key in CLIMATE_FLAGS)
         obstacles = _get(frame, "obstacles", list, where)
         for j, obstacle in enumerate(obstacles):
+            at = f"{where}.obstacles[{j}]"
             if not isinstance(obstacle, dict):
-                raise RecordIssue("expected an object", field=f"{where}.obstacles[{j}]")
+                raise RecordIssue("expected an object", field=at)
             for key in OBSTACLE_FIELDS:
-                _get(obstacle, key, float, f"{where}.obstacles[{j}]")
+                _get(obstacle, key, float, at)
+            for key in OPTIONAL_OBSTACLE_FIELDS:
+                _optional_number(obstacle, key, at)
         frames.append(frame)
     return frames
 
@@ -176,7 +202,8 @@ def _metadata(segment: dict, source: str, times: list[float], scene: dict) -> di
     steps = [b - a for a, b in zip(times, times[1:], strict=False)]
     median = statistics.median(steps)
     regular = max(abs(s - median) for s in steps) <= REGULAR_STEP_TOLERANCE * median
-    countries = [a.get("value") for a in scene.get("attributes", [])
+    attributes = _get(scene, "attributes", list) if "attributes" in scene else []
+    countries = [a.get("value") for a in attributes
                  if isinstance(a, dict) and a.get("type") == "code_country"]
     return {
         "source_file": source,
@@ -212,7 +239,8 @@ def _infrastructure(scene: dict) -> dict:
             if not isinstance(element, dict):
                 raise RecordIssue("expected an object", field=at_element)
             kind = _get(element, "type", str, at_element)
-            values[kind] = element.get("value")
+            values[kind] = (_element_value(element, kind, at_element)
+                            if kind in NUMERIC_ELEMENTS else element.get("value"))
         if "TrafficSignType" in values:
             code = values["TrafficSignType"]
             signs.append({"position_m": at, "type_code": code,
@@ -228,6 +256,18 @@ def _infrastructure(scene: dict) -> dict:
             if key in values and key not in static:
                 static[key] = values[key]
     return {"traffic_signs": signs, "geometry_profile": profile, "static": static}
+
+
+def _element_value(element: dict, kind: str, where: str) -> float:
+    """The numeric value of a known way-point element; RecordIssue names type and path."""
+    try:
+        value = _get(element, "value", float, where)
+    except RecordIssue as issue:
+        raise RecordIssue(f"{kind}: {issue.message}", field=issue.field) from issue
+    low = NUMERIC_ELEMENTS[kind]
+    if low is not None and value < low:
+        raise RecordIssue(f"{kind}: {value} is below {low}", field=f"{where}.value")
+    return value
 
 
 def _environment(first: dict, infra: dict, scene: dict) -> dict:

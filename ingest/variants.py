@@ -9,7 +9,9 @@ import numpy as np
 from ingest.extract import extract_params, finish
 from ingest.urban import DEFAULT_PERTURBATION
 
-DERIVED_ONLY_FOR = {
+DERIVED_ONLY_FOR = {  # keys ``finish`` recomputes from the perturbed ones
+    "init_speed_ms": lambda p: True,
+    "final_speed_ms": lambda p: True,
     "npc_end_speed_ms": lambda p: "delta_speed_ms" in p,
     "ego_end_speed_ms": lambda p: p["maneuver_class"] in ("BRAKE", "BR_BK", "CINF", "CINB",
                                                           "COUTF", "COUTB"),

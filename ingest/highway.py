@@ -132,7 +132,8 @@ def _to_float(cell: object) -> float:
 
 
 def _parse_enum(cells: np.ndarray, column: Column) -> tuple[np.ndarray, list[tuple[int, str]]]:
-    stripped = np.array([c.strip() if isinstance(c, str) else c for c in cells], dtype=object)
+    # a cell that is no string (a pickled list or array) is never valid; as None it compares
+    stripped = np.array([c.strip() if isinstance(c, str) else None for c in cells], dtype=object)
     valid = np.isin(stripped, np.array(column.values, dtype=object))
     problems = [(int(row), f"{cells[row]!r} is not one of {', '.join(column.values)}")
                 for row in np.flatnonzero(~valid)]

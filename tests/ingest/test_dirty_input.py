@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from ingest import ingest_directory
 from scenweave.cli import cli
-from tests.ingest.builders import scene, write_npy, write_scene
+from tests.ingest.builders import obstacle, scene, write_npy, write_scene
 
 GOOD_LC = [["126", "133.2", "4", "No", "Left"], ["100.8", "97.2", "3", "Yes", "Right"]]
 GOOD_BRAKE = ["108", "90", "2.0", "-36", "30.5", "0.4", "Yes", "Truck"]
@@ -163,3 +163,100 @@ def test_custom_layout_file_is_checked_and_used(tmp_path):
                                       str(tmp_path / "o2"), "--layout", str(custom)])
     assert result.exit_code != 0
     assert "missing required field(s) ego_vel_end_kmh" in str(result.exception)
+
+
+WAY_POINT = "environment.infrastructure.way_points[0].infrastructure_elements"
+
+
+def _bad_urban(mutate) -> dict:
+    data = scene("U4_2", [36] * 5, [0, 1, 2, 3, 4], [0, 10, 20, 30, 40], light=(40.0, 167),
+                 obstacles=[[obstacle(7, 25.0 - i, 9.0, 10.0)] for i in range(5)])
+    mutate(data)
+    return data
+
+
+def _set_element(data: dict, index: int, value) -> None:
+    data["environment"]["infrastructure"]["way_points"][0]["infrastructure_elements"][index][
+        "value"] = value
+
+
+@pytest.mark.parametrize("mutate, field, words", [
+    (lambda d: _set_element(d, 3, "3.5"), f"{WAY_POINT}[3].value",
+     "LaneWidth: expected number, got str '3.5'"),
+    (lambda d: _set_element(d, 0, "fifty"), f"{WAY_POINT}[0].value",
+     "SpeedLimit: expected number, got str 'fifty'"),
+    (lambda d: _set_element(d, 0, -30), f"{WAY_POINT}[0].value", "SpeedLimit: -30 is below 0"),
+    (lambda d: _set_element(d, 2, [2]), f"{WAY_POINT}[2].value",
+     "NumberOfLanes: expected number, got list"),
+    (lambda d: d["key_times"][3]["temporal_climatic"].update(precipitation="heavy"),
+     "key_times[3].temporal_climatic.precipitation", "expected number, got str 'heavy'"),
+    (lambda d: d["key_times"][0]["temporal_climatic"].update(day_period={"night": 1}),
+     "key_times[0].temporal_climatic.day_period", "expected number, got dict"),
+    (lambda d: d["key_times"][1]["obstacles"][0].update(relative_velocity_y="0.2"),
+     "key_times[1].obstacles[0].relative_velocity_y", "expected number, got str '0.2'"),
+    (lambda d: d["key_times"][2]["obstacles"][0].update(time_to_collision=float("nan")),
+     "key_times[2].obstacles[0].time_to_collision", "not a finite number"),
+    (lambda d: d.update(attributes="250"), "attributes", "expected list, got str '250'"),
+])
+def test_badly_typed_urban_value_is_one_issue_naming_file_and_field(tmp_path, mutate, field,
+                                                                     words):
+    raw = tmp_path / "raw"
+    write_scene(raw, _bad_urban(lambda d: None), "1.0.json")
+    write_scene(raw, _bad_urban(mutate), "2.0.json")
+    report, out = _ingest(tmp_path)
+    [issue] = report.issues
+    assert (issue.file, issue.field) == ("U4_2/2.0.json", field)
+    assert words in issue.message
+    assert len(_records(out, "urban", "U4_2")) == 1
+
+
+def test_null_and_boolean_climate_flags_are_accepted(tmp_path):
+    def mutate(data):
+        for frame in data["key_times"]:
+            frame["temporal_climatic"].update(fog=False, dazzled=True, outside_temperature=None)
+    write_scene(tmp_path / "raw", _bad_urban(mutate), "1.0.json")
+    report, out = _ingest(tmp_path)
+    assert report.issues == []
+    [record] = _records(out, "urban", "U4_2")
+    assert record["environment"]["fog"] is False and record["environment"]["dazzled"] is True
+    assert record["environment"]["temperature_c"] is None
+
+
+def test_an_unforeseen_error_in_one_file_is_an_issue_naming_it_and_the_batch_goes_on(
+        tmp_path, monkeypatch):
+    # stands in for a bug no check foresaw: the TTC scan fails on the second file only
+    import ingest.urban
+
+    real_min_ttc = ingest.urban._min_ttc
+
+    def failing_on_second(frames):
+        if frames[0]["time"] == 2.0:
+            raise ZeroDivisionError("float division by zero")
+        return real_min_ttc(frames)
+
+    monkeypatch.setattr(ingest.urban, "_min_ttc", failing_on_second)
+    raw = tmp_path / "raw"
+    for begin in (1.0, 2.0, 3.0):
+        data = scene("U1_1", [36] * 3, [begin, begin + 1, begin + 2], [0, 10, 20])
+        write_scene(raw, data)
+    report, out = _ingest(tmp_path)
+    [issue] = report.issues
+    assert issue.file == "U1_1/2.0.json" and issue.row is None
+    assert issue.message == ("unexpected ZeroDivisionError while reading the file: "
+                             "float division by zero")
+    assert len(_records(out, "urban", "U1_1")) == 2
+
+
+def test_a_list_or_array_cell_in_an_enum_column_costs_only_its_row(tmp_path):
+    raw = tmp_path / "raw"
+    raw.mkdir()
+    table = np.empty((3, 5), dtype=object)
+    for i, row in enumerate([GOOD_LC[0], GOOD_LC[1], GOOD_LC[0]]):
+        table[i, :] = row
+    table[1, 4] = np.array(["Left", "Right"], dtype=object)
+    np.save(raw / "LCF_BINS_VALUES.npy", table, allow_pickle=True)
+    report, out = _ingest(tmp_path)
+    [issue] = report.issues
+    assert (issue.file, issue.row, issue.field) == ("LCF_BINS_VALUES.npy", 1, "direction")
+    assert "is not one of Left, Right" in issue.message
+    assert [r["source"]["row_index"] for r in _records(out, "highway", "LCF")] == [0, 2]

@@ -83,3 +83,118 @@ def test_every_bad_cell_is_reported_and_every_good_row_survives(tmp_path, rows):
            if cell in ("x", "nan", "", "1e999") or (name == "duration_s" and float(cell) < 0.1)}
     assert {(i.row, i.field) for i in report.issues} == bad
     assert len(params) == len(rows) - len({row for row, _ in bad})
+
+
+# the SPEC §2 formulas, written here rather than read from the layout the code uses
+REL_SIGN = {"CINF": 1.0, "CINB": 1.0, "COUTF": 1.0, "COUTB": -1.0}
+gap_ahead = st.floats(0.5, 150, allow_nan=False).map(lambda v: f"{v:.2f}")
+gap_behind = st.floats(-150, -0.5, allow_nan=False).map(lambda v: f"{v:.2f}")
+
+
+@settings_
+@given(data=st.data(), code=st.sampled_from(sorted(REL_SIGN)))
+def test_npc_speed_is_ego_plus_or_minus_rel_per_class(tmp_path, data, code):
+    side = gap_behind if code.endswith("B") else gap_ahead
+    rows = data.draw(st.lists(st.tuples(speed, signed, signed, duration, side, yes_no,
+                                        left_right, vehicle), min_size=1, max_size=6))
+    params, report = _params(tmp_path, code, rows)
+    assert report.issues == []
+    for p, (ego, rel, delta, *_rest) in zip(params, rows, strict=True):
+        npc_kmh = float(ego) + REL_SIGN[code] * float(rel)  # COUTB: ego - REL, others ego + REL
+        assert p["npc_speed_ms"] == pytest.approx(max(npc_kmh, 0.0) / 3.6)
+        assert p["npc_end_speed_ms"] == pytest.approx(
+            max(max(npc_kmh, 0.0) / 3.6 + float(delta) / 3.6, 0.0))
+        assert p["ego_speed_ms"] == pytest.approx(float(ego) / 3.6)
+
+
+SLOT_STATES = ("present", "present_end_sentinel", "position_sentinel", "speed_sentinel_3_6",
+               "speed_sentinel_1_0", "type_none")
+slot_speed = st.floats(0, 50, allow_nan=False).map(lambda v: f"{v:.2f}")
+
+
+def _slot_cells(draw, state: str, ahead: bool) -> dict:
+    gap = gap_ahead if ahead else gap_behind.filter(lambda v: v != "-1.00")
+    cells = {"posx_begin_m": draw(gap), "posx_end_m": draw(gap), "vel_begin_ms": draw(slot_speed),
+             "vel_end_ms": draw(slot_speed), "vehicle_type": draw(vehicle)}
+    if state == "present_end_sentinel":
+        cells |= {"posx_end_m": "-1", "vel_end_ms": draw(st.sampled_from(["-3.6", "-1.0"]))}
+    elif state == "position_sentinel":
+        cells["posx_begin_m"] = "-1"
+    elif state.startswith("speed_sentinel"):
+        cells["vel_begin_ms"] = "-3.6" if state.endswith("3_6") else "-1.0"
+    elif state == "type_none":
+        cells["vehicle_type"] = "None"
+    return cells
+
+
+@st.composite
+def free_ride_row(draw, code: str) -> tuple[list[str], dict[str, str], dict[str, dict]]:
+    states = {slot: draw(st.sampled_from(SLOT_STATES)) for slot in ("center", "right", "left")}
+    slots = {slot: _slot_cells(draw, state, code == "FRF") for slot, state in states.items()}
+    cells = {f"{slot}_{what}": value for slot, c in slots.items() for what, value in c.items()}
+    cells |= {"ego_vel_begin_kmh": draw(speed), "ego_vel_end_kmh": draw(speed),
+              "ego_dist_traveled_m": "250", "ego_acc_mean_ms2": "0.1", "ego_lane_index": "2",
+              "lane_count": "4", "duration_s": draw(duration), "driving_side": "Right",
+              "other_dir_traffic": "No", "ego_lat_offset_m": "0", "speed_limit_kmh": "130"}
+    return [cells[name] for name in LAYOUTS.classes[code].names], states, slots
+
+
+@settings_
+@given(data=st.data(), code=st.sampled_from(["FRF", "FRB"]))
+def test_free_ride_sentinels_make_slots_absent_and_nothing_else(tmp_path, data, code):
+    drawn = data.draw(st.lists(free_ride_row(code), min_size=1, max_size=5))
+    params, report = _params(tmp_path, code, [row for row, _, _ in drawn])
+    assert report.issues == []
+    sign = 1.0 if code == "FRF" else -1.0
+    for p, (_, states, slots) in zip(params, drawn, strict=True):
+        present = {s: states[s].startswith("present") for s in states}
+        assert p["has_npc"] is any(present.values())
+        assert p["npc_position"] == (("front" if code == "FRF" else "behind")
+                                     if any(present.values()) else None)
+        assert p["required_lane_sides"] == [s for s in ("left", "right") if present[s]]
+        for slot, cells in slots.items():
+            assert p[f"{slot}_present"] is present[slot]
+            if not present[slot]:
+                assert (p[f"{slot}_speed_ms"], p[f"{slot}_end_speed_ms"], p[f"{slot}_distance_m"],
+                        p[f"{slot}_end_distance_m"], p[f"{slot}_vehicle_type"]) == (
+                            0.0, 0.0, 0.0, 0.0, None)
+                continue
+            ends_seen = states[slot] == "present"
+            end_posx = cells["posx_end_m" if ends_seen else "posx_begin_m"]
+            end_vel = cells["vel_end_ms" if ends_seen else "vel_begin_ms"]
+            start_posx, start_vel = float(cells["posx_begin_m"]), float(cells["vel_begin_ms"])
+            assert p[f"{slot}_speed_ms"] == pytest.approx(start_vel)
+            assert p[f"{slot}_end_speed_ms"] == pytest.approx(float(end_vel))
+            assert p[f"{slot}_distance_m"] == pytest.approx(sign * abs(start_posx))
+            assert p[f"{slot}_end_distance_m"] == pytest.approx(sign * abs(float(end_posx)))
+            assert p[f"{slot}_vehicle_type"] == cells["vehicle_type"].lower()
+        starts = [sign * abs(float(slots[s]["posx_begin_m"])) for s in slots if present[s]]
+        assert p["gap_ahead_m"] == pytest.approx(max([g for g in starts if g > 0], default=0.0))
+        assert p["gap_behind_m"] == pytest.approx(max([-g for g in starts if g < 0], default=0.0))
+
+
+fl_number = st.one_of(speed, st.just("-1"), st.just("-3.6"))
+
+
+@settings_
+@given(rows=st.lists(st.tuples(fl_number, fl_number, fl_number, fl_number, fl_number,
+                               fl_number, fl_number, duration, yes_no,
+                               st.sampled_from(["B1", "B2", "B3", "B4"]), vehicle),
+                     min_size=1, max_size=8),
+       code=st.sampled_from(["FLF", "FLB"]))
+def test_follow_classes_have_no_sentinels_a_negative_cell_is_an_error(tmp_path, rows, code):
+    # FL files carry no 'absent' markers: -1 or -3.6 is a bad value (its row is reported),
+    # never a missing lead; a good row always has its lead, ahead (FLF) or behind (FLB)
+    params, report = _params(tmp_path, code, rows)
+    bad = {i for i, r in enumerate(rows) if any(float(c) < 0 for c in r[:7])}
+    assert {i.row for i in report.issues} == bad
+    good = [r for i, r in enumerate(rows) if i not in bad]
+    sign = 1.0 if code == "FLF" else -1.0
+    for p, r in zip(params, good, strict=True):
+        assert p["has_npc"] is True
+        assert p["npc_position"] == ("front" if code == "FLF" else "behind")
+        assert p["npc_speed_ms"] == pytest.approx(float(r[2]) / 3.6)
+        assert p["npc_end_speed_ms"] == pytest.approx(float(r[3]) / 3.6)
+        assert p["npc_distance_m"] == pytest.approx(sign * float(r[4]))
+        assert p["npc_distance_end_m"] == pytest.approx(sign * float(r[5]))
+        assert p["behavior_type"] == r[9]

@@ -39,25 +39,25 @@ def write_urban_samples(out_dir: Path, seed: int, per_class: int) -> list[Path]:
         rng = np.random.default_rng([seed, 100 + offset])
         folder = out_dir / code
         folder.mkdir(parents=True, exist_ok=True)
-        used: set[str] = set()
+        used: set[float] = set()
         for _ in range(per_class):
-            scene = make_scene(code, rng)
-            name = f"{scene['segment']['begin_time']:.1f}.json"
-            if name in used:
-                continue
-            used.add(name)
-            path = folder / name
+            scene = make_scene(code, rng, taken=used)
+            used.add(scene["segment"]["begin_time"])
+            path = folder / f"{scene['segment']['begin_time']:.1f}.json"
             path.write_text(json.dumps(scene, indent=1), encoding="utf-8")
             paths.append(path)
     return paths
 
 
-def make_scene(code: str, rng: np.random.Generator) -> dict:
-    """One ADScene instance of class ``code``."""
+def make_scene(code: str, rng: np.random.Generator, taken: set[float] | None = None) -> dict:
+    """One ADScene instance of class ``code``; its begin_time (the file name) is not one of
+    ``taken``: a drawn time already used moves on by 0.1 s until it is free."""
     profile = _ego_profile(code, rng)
     night = rng.random() < 0.2
     rain = rng.random() < 0.2
     begin = round(float(rng.uniform(60, 7200)), 1)
+    while begin in (taken or ()):
+        begin = round(begin + 0.1, 1)
     t_abs = begin + profile.t
     actors = _actors(code, rng, profile)
     frames = [_frame(i, profile, actors, rng, night, rain) for i in range(len(profile.t))]

@@ -91,3 +91,16 @@ def test_all_sample_data_ingests_cleanly(sample, tmp_path):
     assert len(report.records_by_class) == 17
     assert report.records_written == 12 * 200 + 5 * 8
     assert sum(1 for _ in load_records(tmp_path)) == report.records_written
+
+
+def test_every_urban_class_gets_per_class_files_even_when_begin_times_collide(tmp_path):
+    # with seed 6 the 20th U4_3 scene draws the begin time of the 13th (857.3 s); its file
+    # must get a name of its own instead of being dropped
+    paths = write_urban_samples(tmp_path, seed=6, per_class=20)
+    for code in ("U1_1", "U4_1", "U4_2", "U4_3", "U4_4"):
+        files = sorted((tmp_path / code).glob("*.json"))
+        assert len(files) == 20, code
+        begins = {json.loads(f.read_text())["segment"]["begin_time"] for f in files}
+        assert {f"{b:.1f}.json" for b in begins} == {f.name for f in files}
+    assert len(paths) == 100
+    assert {"857.3.json", "857.4.json"} <= {f.name for f in (tmp_path / "U4_3").iterdir()}

@@ -3,12 +3,9 @@ live test when an Ollama server is reachable."""
 
 from __future__ import annotations
 
-import json
 import os
 import socket
-import threading
 import time
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import httpx
 import ollama as ollama_client
@@ -17,77 +14,13 @@ import pytest
 from agent import AgentSettings, LLMTimeout, LLMUnavailable
 from agent.llm import Prompt, get_llm
 from agent.llm.log import recent_calls
-
-PULLED = "qwen2.5-coder:7b"
-
-
-class FakeOllama(ThreadingHTTPServer):
-    """Answers /api/chat and /api/tags like Ollama; records every request it gets."""
-
-    daemon_threads = True
-
-    def __init__(self) -> None:
-        super().__init__(("127.0.0.1", 0), OllamaHandler)
-        self.requests: list[tuple[str, dict]] = []
-        self.delay_s = 0.0
-        self.fail_status = 0  # e.g. 500: /api/chat answers this error instead
-        self.reply = "```python\nprint('hi')\n```"
-
-    @property
-    def url(self) -> str:
-        return f"http://127.0.0.1:{self.server_address[1]}"
-
-
-class OllamaHandler(BaseHTTPRequestHandler):
-    server: FakeOllama
-
-    def log_message(self, *args) -> None:
-        pass
-
-    def do_GET(self) -> None:
-        self.server.requests.append((self.path, {}))
-        if self.path == "/api/tags":
-            self._send(200, {"models": [{"name": PULLED, "model": PULLED, "size": 1}]})
-        else:
-            self._send(404, {"error": "not found"})
-
-    def do_POST(self) -> None:
-        body = json.loads(self.rfile.read(int(self.headers["Content-Length"])) or b"{}")
-        self.server.requests.append((self.path, body))
-        time.sleep(self.server.delay_s)
-        if self.path != "/api/chat":
-            self._send(404, {"error": "not found"})
-        elif self.server.fail_status:
-            self._send(self.server.fail_status, {"error": "llama runner process has terminated"})
-        elif body.get("model") != PULLED:
-            self._send(404, {"error": f"model '{body.get('model')}' not found"})
-        else:
-            self._send(200, {"model": PULLED, "created_at": "2026-11-22T00:00:00Z",
-                             "message": {"role": "assistant", "content": self.server.reply},
-                             "done": True, "done_reason": "stop", "prompt_eval_count": 321,
-                             "eval_count": 54, "total_duration": 1_000_000,
-                             "eval_duration": 500_000})
-
-    def _send(self, status: int, data: dict) -> None:
-        payload = json.dumps(data).encode()
-        try:
-            self.send_response(status)
-            self.send_header("Content-Type", "application/json")
-            self.send_header("Content-Length", str(len(payload)))
-            self.end_headers()
-            self.wfile.write(payload)
-        except (BrokenPipeError, ConnectionResetError):
-            pass  # the client gave up (the timeout test)
+from scenweave.testing.fake_ollama import PULLED, TOKENS_IN, TOKENS_OUT, FakeOllama
 
 
 @pytest.fixture
 def server():
-    fake = FakeOllama()
-    thread = threading.Thread(target=fake.serve_forever, args=(0.05,), daemon=True)
-    thread.start()
-    yield fake
-    fake.shutdown()
-    fake.server_close()
+    with FakeOllama() as fake:
+        yield fake
 
 
 def ollama(url: str | None, **overrides):
@@ -100,7 +33,7 @@ PROMPT = Prompt("You output only Python code.", "Write the script.", "BRAKE_1", 
 def test_reply_and_token_counts(server):
     reply = ollama(server.url).complete(PROMPT)
     assert reply.text == server.reply
-    assert (reply.tokens_in, reply.tokens_out) == (321, 54)
+    assert (reply.tokens_in, reply.tokens_out) == (TOKENS_IN, TOKENS_OUT)
     assert (reply.backend, reply.model) == ("ollama", PULLED)
     assert reply.meta["done_reason"] == "stop"
 
@@ -124,7 +57,8 @@ def test_every_call_is_logged(server):
     ollama(server.url).complete(PROMPT)
     [call] = recent_calls(5)
     assert (call["backend"], call["model"], call["scenario_id"]) == ("ollama", PULLED, "BRAKE_1")
-    assert (call["prompt"], call["reply"], call["tokens_out"]) == (PROMPT.user, server.reply, 54)
+    assert (call["prompt"], call["reply"], call["tokens_out"]) == (PROMPT.user, server.reply,
+                                                                    TOKENS_OUT)
 
 
 def test_unreachable_server_names_the_setting():
@@ -230,6 +164,6 @@ def test_the_agent_runs_on_ollama(server, tmp_path, sandbox_settings):
     settings = AgentSettings(llm="ollama", ollama_host=server.url, sandbox=sandbox_settings)
     outcome = run_scenario(example_params("CINF"), tmp_path, settings)
     assert (outcome.status, outcome.attempts) == ("ok", 1)
-    assert (outcome.tokens_in, outcome.tokens_out) == (321, 54)
+    assert (outcome.tokens_in, outcome.tokens_out) == (TOKENS_IN, TOKENS_OUT)
     assert outcome.llm == {"backend": "ollama", "model": PULLED}
     assert [path for path, _ in server.requests] == ["/api/tags", "/api/chat"]

@@ -3,7 +3,6 @@ processes started as ``scenweave worker`` subprocesses."""
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -11,11 +10,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
 
-from scenweave.cli import cli
+from scenweave.testing.redis_server import RedisServer
 from tests.worker.gates import GATES_ENV
-from tests.worker.redis_server import RedisServer
+from tests.worker.records import ingest_with_poisoned_record
 
 GATED_MATCHER = "tests.worker.gates:GatedMatcher"
 REPO = Path(__file__).resolve().parents[2]
@@ -40,14 +38,7 @@ def redis_url(redis_server):
 @pytest.fixture(scope="module")
 def records(sample_raw, tmp_path_factory) -> Path:
     """Canonical records of the sample data; BRAKE row 1 asks for a gap no spawn fits."""
-    out = tmp_path_factory.mktemp("records")
-    result = CliRunner().invoke(cli, ["ingest", str(sample_raw), "--out", str(out)])
-    assert result.exit_code == 0, result.output
-    path = out / "highway" / "BRAKE.json"
-    data = json.loads(path.read_text())
-    data[1]["params"]["npc_distance_m"] = 4000.0
-    path.write_text(json.dumps(data))
-    return out
+    return ingest_with_poisoned_record(sample_raw, tmp_path_factory.mktemp("records"))
 
 
 @pytest.fixture

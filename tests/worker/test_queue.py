@@ -12,19 +12,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-import schemas
 from scenweave.cli import cli
 from scenweave.pipeline import is_infrastructure_error
 from scenweave.run_folder import safe_name
+from scenweave.testing.redis_server import free_port
 from scenweave.worker import QueueError, connect
 from tests.worker.conftest import GATED_MATCHER
-from tests.worker.redis_server import free_port
-
-BRAKE = [f"BRAKE_B0_BRAKE_BINS_VALUES_row00000{i}" for i in range(3)]
-LCF = [f"LCF_B0_LCF_BINS_VALUES_row00000{i}" for i in range(3)]
-POISONED = BRAKE[1]
-#: until schemas.validate_xosc lands every scenario fails at validation; the queue still works
-VALIDATOR_LANDED = hasattr(schemas, "validate_xosc")
+from tests.worker.records import BRAKE, LCF, POISONED
 
 
 def submit(records: Path, runs: Path, url: str, *extra: str) -> str:
@@ -59,8 +53,7 @@ def finished(run: Path) -> int:
 
 def assert_made_past_spawn(result: dict) -> None:
     assert result["spawn_id"] is not None, result["error"]
-    if VALIDATOR_LANDED:
-        assert result["status"] == "ok", result["error"]
+    assert result["status"] == "ok", result["error"]
 
 
 def test_two_workers_share_a_batch_and_a_poisoned_record_fails_alone(records, tmp_path, gates,

@@ -24,8 +24,8 @@ if importlib.util.find_spec("llama_cpp") is None or importlib.util.find_spec("ll
 @pytest.mark.parametrize("code, repair", [("BRAKE", "error_feedback"), ("U4_1", "patch")])
 def test_embedded_model_end_to_end(code, repair, tmp_path, sandbox_settings):
     params = example_params(code)
-    settings = AgentSettings(llm="embedded", repair=repair, max_tokens=320,
-                             sandbox=sandbox_settings)
+    settings = AgentSettings(llm="embedded", repair=repair, sandbox=sandbox_settings)
+    assert settings.output_tokens == 512  # room for the longest reference script and fences
     out = tmp_path / "scenario"
     out.mkdir()
     outcome = run_scenario(params, out, settings)
@@ -38,7 +38,7 @@ def test_embedded_model_end_to_end(code, repair, tmp_path, sandbox_settings):
     assert [e["number"] for e in asked] == list(range(1, outcome.attempts + 1))
     for event in asked:
         assert event["prompt"]["user"] and event["reply"] is not None
-        assert event["tokens_in"] > 100 and 0 < event["tokens_out"] <= 320
+        assert event["tokens_in"] > 100 and 0 < event["tokens_out"] <= settings.output_tokens
     assert outcome.tokens_out == sum(e["tokens_out"] for e in asked)
     calls = recent_calls(10)
     assert len(calls) == outcome.attempts

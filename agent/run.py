@@ -25,8 +25,8 @@ from agent.repair import get_strategy
 from agent.settings import AgentSettings
 from sandbox import Sandbox, get_sandbox
 from scenweave.pipeline import TRACE_NAME, Trace
+from scenweave.traces import CHECKPOINTS_NAME
 
-CHECKPOINTS_NAME = "checkpoints.sqlite"
 #: graph steps allowed per scenario: retrieve + (generate|repair, execute, validate) x attempts
 #: + fallback, with room to spare
 STEPS_PER_ATTEMPT = 3

@@ -141,6 +141,7 @@ class BwrapSandbox(Sandbox):
     def _rlimits(self, without_cgroup: bool) -> list[str]:
         s = self.settings
         limits = ["prlimit", f"--fsize={s.file_size_limit}", "--core=0", "--nofile=256",
+                  "--msgqueue=0",
                   f"--cpu={s.cpu_time_limit_s}"]
         if without_cgroup:  # weaker stand-ins: per-uid process count, address space
             limits += [f"--nproc={s.pids}", f"--as={4 * s.memory_mb * MIB}"]
@@ -148,7 +149,8 @@ class BwrapSandbox(Sandbox):
 
     def _mounts(self, attempt: Attempt | None) -> list[str]:
         s = self.settings
-        args = ["--unshare-all", "--die-with-parent", "--new-session", "--as-pid-1",
+        args = ["--unshare-all", "--unshare-user", "--disable-userns", "--die-with-parent",
+                "--new-session", "--as-pid-1",
                 "--cap-drop", "ALL", "--hostname", "sandbox",
                 "--ro-bind", "/usr", "/usr", *_system_dir_args(),
                 "--ro-bind", str(_venv_root(s.python)), str(_venv_root(s.python)),
@@ -162,7 +164,9 @@ class BwrapSandbox(Sandbox):
         corpus = s.corpus_path()
         if corpus is not None and corpus.is_dir():
             args += ["--ro-bind", str(corpus), CORPUS_MOUNT]
-        return args
+        # last: every mount point exists now; the root and /dev (and so /dev/shm) become
+        # read-only, leaving /tmp and /out, both sized, the only writable places
+        return [*args, "--remount-ro", "/dev", "--remount-ro", "/"]
 
 
 def _system_dir_args() -> list[str]:

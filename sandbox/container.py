@@ -3,8 +3,9 @@
 Works against Docker or podman's Docker-compatible API. Traps this avoids (measured, see
 notes/sandbox.md): podman ignores ``network_disabled`` (``network_mode="none"`` instead),
 container logs are unbounded unless ``max-size`` is set, ``read_only`` silently adds writable
-unsized ``/tmp``, ``/var/tmp`` and ``/run`` (each gets a sized tmpfs here), swap doubles the
-memory allowance unless ``memswap_limit`` equals ``mem_limit``.
+unsized ``/tmp``, ``/var/tmp`` and ``/run`` (a sized ``/tmp`` and read-only others here), a
+64 MB ``/dev/shm`` comes with the default IPC mode, swap doubles the memory allowance unless
+``memswap_limit`` equals ``mem_limit``.
 """
 
 from __future__ import annotations
@@ -144,7 +145,8 @@ class DockerSandbox(Sandbox):
         corpus = s.corpus_path()
         if corpus is not None and corpus.is_dir():
             volumes[str(corpus)] = {"bind": CORPUS_MOUNT, "mode": "ro"}
-        small_tmpfs = f"size={s.tmpfs_mb}m,mode=1777"
+        # podman adds writable /var/tmp and /run to a read-only root: mount them read-only
+        closed = "ro,size=4k"
         try:
             return self.client.containers.create(
                 s.image, command=attempt.harness_command(SANDBOX_PYTHON, warm),
@@ -152,8 +154,9 @@ class DockerSandbox(Sandbox):
                 mem_limit=s.memory_mb * MIB, memswap_limit=s.memory_mb * MIB,
                 pids_limit=s.pids, nano_cpus=int(s.cpus * 1e9), cap_drop=["ALL"],
                 security_opt=["no-new-privileges"], environment=SANDBOX_ENV,
-                tmpfs={"/tmp": small_tmpfs, "/var/tmp": small_tmpfs, "/run": small_tmpfs,
-                       OUT_MOUNT: f"size={s.output_max_bytes},mode=1777"},
+                tmpfs={"/tmp": f"size={s.tmpfs_mb}m,mode=1777", "/var/tmp": closed,
+                       "/run": closed, OUT_MOUNT: f"size={s.output_max_bytes},mode=1777"},
+                ipc_mode="none",  # no /dev/shm (a 64 MB writable tmpfs otherwise)
                 ulimits=self._ulimits(), volumes=volumes, working_dir="/tmp",
                 hostname="sandbox", labels={"scenweave.sandbox": "attempt"},
                 log_config=LogConfig(type="json-file", config={"max-size": LOG_MAX_SIZE}),
@@ -170,6 +173,7 @@ class DockerSandbox(Sandbox):
                 Ulimit(name="nproc", soft=s.pids, hard=s.pids),
                 Ulimit(name="fsize", soft=s.file_size_limit, hard=s.file_size_limit),
                 Ulimit(name="core", soft=0, hard=0),
+                Ulimit(name="msgqueue", soft=0, hard=0),  # no POSIX queues in /dev/mqueue
                 Ulimit(name="cpu", soft=cpu_s, hard=cpu_s)]
 
     def close(self) -> None:

@@ -8,10 +8,13 @@ runs in this same process and can tamper with all of it, so the host trusts noth
 
 import base64
 import contextlib
+import ctypes
+import errno
 import importlib.util
 import json
 import os
 import stat
+import struct
 import sys
 import time
 import traceback
@@ -24,6 +27,41 @@ SCENARIO = OUT + "/scenario.xosc"
 GO = JOB + "/go"
 #: what every reference script imports: a warm sandbox imports them while it waits
 WARM_IMPORTS = ("scenariogeneration", "corpus.corpus_utils")
+#: machine -> (audit arch, unshare, clone, clone3): what the seccomp filter needs to know
+SYSCALLS = {"x86_64": (0xC000003E, 272, 56, 435), "aarch64": (0xC00000B7, 97, 220, 435)}
+CLONE_NEWUSER = 0x10000000
+PR_SET_SECCOMP, SECCOMP_MODE_FILTER, PR_SET_NO_NEW_PRIVS = 22, 2, 38
+LOAD, JEQ, JGE, JSET, RET = 0x20, 0x15, 0x35, 0x45, 0x06  # classic BPF opcodes (with K)
+ALLOW, DENY, NOSYS = 0x7FFF0000, 0x00050000 | errno.EPERM, 0x00050000 | errno.ENOSYS
+
+
+class SockFprog(ctypes.Structure):
+    _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_void_p)]
+
+
+def forbid_user_namespaces() -> None:
+    """Refuse new user namespaces to this process and all it starts (seccomp, irrevocable).
+
+    In one the script could mount a tmpfs of its own, i.e. write where the sandbox allows
+    nothing; podman's default seccomp profile permits it. bwrap's --disable-userns does the
+    same for that backend; this covers both. clone3 answers ENOSYS (libc falls back to clone,
+    whose flags a filter can see); other ABIs' calls are refused.
+    """
+    machine = os.uname().machine
+    if machine not in SYSCALLS:
+        raise OSError(f"harness: no seccomp syscall table for machine {machine}")
+    arch, unshare, clone, clone3 = SYSCALLS[machine]
+    program = [(LOAD, 0, 0, 4), (JEQ, 1, 0, arch), (RET, 0, 0, DENY),  # 0-2: native ABI only
+               (LOAD, 0, 0, 0), (JGE, 6, 0, 0x40000000),  # 3-4: x32 numbers: deny
+               (JEQ, 5, 0, unshare), (JEQ, 5, 0, clone3), (JEQ, 0, 2, clone),  # 5-7
+               (LOAD, 0, 0, 16), (JSET, 1, 0, CLONE_NEWUSER),  # 8-9: clone's flags
+               (RET, 0, 0, ALLOW), (RET, 0, 0, DENY), (RET, 0, 0, NOSYS)]  # 10-12
+    code = ctypes.create_string_buffer(b"".join(struct.pack("HBBI", *op) for op in program))
+    fprog = SockFprog(len(program), ctypes.addressof(code))
+    libc = ctypes.CDLL(None, use_errno=True)
+    if (libc.prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0
+            or libc.prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ctypes.byref(fprog), 0, 0) != 0):
+        raise OSError(ctypes.get_errno(), "harness: cannot install the seccomp filter")
 
 
 def wait_for_job(idle_s: float) -> None:
@@ -81,6 +119,7 @@ def produced_files(limit_bytes: int) -> list:
 
 def main() -> int:
     """Run the job and write the report; exit 0 when the script raised nothing."""
+    forbid_user_namespaces()
     limit = int(sys.argv[1]) if len(sys.argv) > 1 else 16 * 1024 * 1024
     if len(sys.argv) > 3 and sys.argv[2] == "--warm":
         wait_for_job(float(sys.argv[3]))

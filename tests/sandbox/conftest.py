@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import os
 import shutil
-from collections.abc import Iterator
+import tempfile
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
-from sandbox import SandboxSettings, SandboxUnavailable, get_sandbox
+from sandbox import Sandbox, SandboxSettings, SandboxUnavailable, get_sandbox
 from sandbox.engine import engine_answers, start_podman_service
 
 #: short limits keep the attack suite quick; the limits themselves are what is under test
@@ -48,17 +49,15 @@ def _settings(backend: str, request, **overrides) -> SandboxSettings:
     return SandboxSettings(backend=backend, **{**FAST, **overrides})
 
 
-@pytest.fixture(params=["bwrap", "docker"])
-def make_box(request):
-    """Build a working sandbox of the parametrised backend with the given setting overrides."""
+def _box_maker(backend: str, request) -> Iterator[Callable[..., Sandbox]]:
     boxes = []
 
-    def make(**overrides):
-        settings = _settings(request.param, request, **overrides)
+    def make(**overrides) -> Sandbox:
+        settings = _settings(backend, request, **overrides)
         try:
             box = get_sandbox(settings)
         except SandboxUnavailable as err:
-            pytest.fail(f"{request.param} is installed but does not work: {err}")
+            pytest.fail(f"{backend} is installed but does not work: {err}")
         boxes.append(box)
         return box
 
@@ -67,7 +66,29 @@ def make_box(request):
         box.close()
 
 
+@pytest.fixture(params=["bwrap", "docker"])
+def make_box(request):
+    """Build a working sandbox of the parametrised backend with the given setting overrides."""
+    yield from _box_maker(request.param, request)
+
+
+@pytest.fixture
+def make_docker_box(request):
+    """``make_box`` for the docker backend only (for evidence only a container engine leaves)."""
+    yield from _box_maker("docker", request)
+
+
 @pytest.fixture
 def box(make_box):
     """A sandbox with the quick test limits."""
     return make_box()
+
+
+@pytest.fixture
+def work_dir() -> Iterator[Path]:
+    """A staging folder for ``SandboxSettings.work_dir`` that the sandbox uid can reach
+    (pytest's own temporary folders are private to root)."""
+    folder = Path(tempfile.mkdtemp(prefix="scenweave-test-work-"))
+    folder.chmod(0o755)
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)

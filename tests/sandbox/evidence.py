@@ -1,12 +1,24 @@
-"""Host-side evidence for the attack tests: listeners, processes, canaries."""
+"""Host-side evidence for the attack tests: listeners, processes, canaries, and a look inside
+a sandbox held open at the end of its script."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
+import signal
 import socket
+import stat
+import time
 import uuid
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
+from typing import TypeVar
+
+from sandbox import ExecResult
+
+T = TypeVar("T")
 
 
 def marker() -> str:
@@ -65,3 +77,85 @@ class Listener:
     def close(self) -> None:
         self.tcp.close()
         self.udp.close()
+
+
+#: scripts that end with ``hold(tag)`` keep their sandbox standing (as ``<tag> 30``, a sleep)
+#: so the host can look inside through ``/proc/<pid>/root`` before it is torn down
+HOLD = """
+import os
+def hold(tag):
+    os.execv("/bin/sleep", [tag, "30"])  # the tag as argv[0]: sleep takes no extra operand
+"""
+
+
+def held_run(box, code: str, params: dict, out_dir: Path,
+             look: Callable[[int], T]) -> tuple[ExecResult, T]:
+    """Run ``HOLD + code`` (which ends with ``hold(params["tag"])``), call ``look`` with the
+    host pid of the held sandbox, then kill it; return the run's result and what was seen."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        running = pool.submit(box.run, HOLD + code, params, out_dir)
+        try:
+            seen = look(wait_for_processes(params["tag"], running)[0])
+        finally:
+            for pid in processes_with(params["tag"]):
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, signal.SIGKILL)
+        return running.result(), seen
+
+
+def wait_for_processes(tag: str, running: Future, count: int = 1) -> list[int]:
+    """The host pids of ``count`` processes tagged ``tag`` once the sandbox run in ``running``
+    has started them; AssertionError with the run's result if it ends first."""
+    while not running.done():
+        if len(found := processes_with(tag)) >= count:
+            return found
+        time.sleep(0.02)
+    raise AssertionError(f"the script never started {count} processes tagged {tag}: "
+                         f"{running.result()}")
+
+
+def cpu_seconds(pids: list[int]) -> float:
+    """User plus system CPU time the kernel accounted to ``pids`` (gone ones count 0)."""
+    ticks = 0
+    for pid in pids:
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+        except OSError:
+            continue
+        ticks += int(fields[11]) + int(fields[12])  # utime, stime (fields 14, 15 of stat)
+    return ticks / os.sysconf("SC_CLK_TCK")
+
+
+def bytes_under(folder: Path) -> int:
+    """Total size of the regular files under ``folder``, never following links."""
+    total = 0
+    for parent, _, names in os.walk(folder):
+        for name in names:
+            info = os.lstat(os.path.join(parent, name))
+            total += info.st_size if stat.S_ISREG(info.st_mode) else 0
+    return total
+
+
+def peak_memory_bytes(pid: int) -> int | None:
+    """The peak memory use (tmpfs pages included) of the memory cgroup ``pid`` runs in, read
+    on the host (cgroup v1 or v2); None when it has no memory cgroup to read."""
+    for line in Path(f"/proc/{pid}/cgroup").read_text().splitlines():
+        _, controllers, path = line.split(":", 2)
+        if controllers == "memory":
+            peak = Path("/sys/fs/cgroup/memory", path.lstrip("/"), "memory.max_usage_in_bytes")
+        elif controllers == "":
+            peak = Path("/sys/fs/cgroup", path.lstrip("/"), "memory.peak")
+        else:
+            continue
+        if peak.exists():
+            return int(peak.read_text())
+    return None
+
+
+def file_size(path: Path) -> int | None:
+    """Size of the regular file at ``path`` (never following a link), else None."""
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    return info.st_size if stat.S_ISREG(info.st_mode) else None

@@ -3,7 +3,9 @@
 Traps this avoids (measured, see notes/sandbox.md): bwrap started as root stays escapable, so
 it is started as an unprivileged uid through ``setpriv``; the launcher's environment would leak
 through ``/proc/1/environ``, so bwrap gets the sandbox environment only and ``--as-pid-1``;
-bwrap sets no resource limits, so a per-run cgroup and ``prlimit`` do.
+bwrap sets no resource limits, so a per-run cgroup and ``prlimit`` do; bwrap's root and
+``/dev`` (with ``/dev/shm``) are writable tmpfs the size of host RAM, so both are remounted
+read-only; a nested user namespace could mount a tmpfs of its own, so ``--disable-userns``.
 """
 
 from __future__ import annotations

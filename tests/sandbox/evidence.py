@@ -103,6 +103,16 @@ def held_run(box, code: str, params: dict, out_dir: Path,
         return running.result(), seen
 
 
+def run_seeing_processes(box, code: str, params: dict, out_dir: Path,
+                         count: int) -> ExecResult:
+    """Run ``code`` and return its result, once the host has seen ``count`` processes tagged
+    ``params["tag"]`` alive during the run (AssertionError if it never did)."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        running = pool.submit(box.run, code, params, out_dir)
+        wait_for_processes(params["tag"], running, count)
+        return running.result()
+
+
 def wait_for_processes(tag: str, running: Future, count: int = 1) -> list[int]:
     """The host pids of ``count`` processes tagged ``tag`` once the sandbox run in ``running``
     has started them; AssertionError with the run's result if it ends first."""

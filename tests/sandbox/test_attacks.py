@@ -283,15 +283,22 @@ def test_signalling_the_host_hits_nothing(box, tmp_path):
     code = """
 import os, signal
 def generate(params, out_path):
+    inside = os.fork()
+    if inside == 0:
+        os.execv("/bin/sleep", ["sleep", "60"])
     for pid in [os.getppid(), params["host_pid"], params["bystander"], -1, 0, 1]:
         try:
             os.kill(pid, signal.SIGKILL)
         except OSError:
             pass
+    status = os.waitpid(inside, 0)[1]
+    open(out_path, "w").write(f"sandboxed sleeper: {os.waitstatus_to_exitcode(status)}")
 """
     try:
-        box.run(code, {"host_pid": os.getpid(), "bystander": bystander.pid}, tmp_path)
+        result = box.run(code, {"host_pid": os.getpid(), "bystander": bystander.pid}, tmp_path)
         assert bystander.poll() is None, "a host process was killed from inside the sandbox"
+        assert result.ok, result  # control: the kills were sent, and hit the sandbox's own
+        assert (tmp_path / "scenario.xosc").read_text() == "sandboxed sleeper: -9"
         os.kill(os.getpid(), 0)
     finally:
         bystander.send_signal(signal.SIGKILL)

@@ -25,12 +25,14 @@ from tests.sandbox.evidence import (
     held_run,
     marker,
     processes_with,
+    run_seeing_processes,
     wait_for_processes,
 )
 
-#: forks sleepers tagged with params["tag"] until refused; writes how many it got
+#: forks sleepers tagged with params["tag"] until refused; writes how many it got, and
+#: gives the host a second to see them
 FORK_BOMB = """
-import os
+import os, time
 def generate(params, out_path):
     forks = 0
     for _ in range(2000):
@@ -41,6 +43,7 @@ def generate(params, out_path):
         except OSError:
             break
     open(out_path, "w").write(str(forks))
+    time.sleep(1)
 """
 #: allocates (and touches) 8 MiB at a time, printing the running total, up to 512 MiB
 MEMORY_BOMB = """
@@ -74,7 +77,7 @@ def generate(params, out_path):
 def test_fork_bomb_is_capped_and_leaves_no_process(make_box, tmp_path):
     box = make_box(pids=24)
     tag = marker()
-    result = box.run(FORK_BOMB, {"tag": tag}, tmp_path)
+    result = run_seeing_processes(box, FORK_BOMB, {"tag": tag}, tmp_path, count=8)
     assert processes_with(tag) == []
     assert result.ok, result
     assert 0 < int((tmp_path / "scenario.xosc").read_text()) < 24
@@ -133,7 +136,7 @@ def generate(params, out_path):
 def test_daemon_does_not_outlive_the_attempt(box, tmp_path):
     tag = marker()
     code = """
-import os, signal
+import os, signal, time
 def generate(params, out_path):
     if os.fork() == 0:
         os.setsid()
@@ -142,8 +145,9 @@ def generate(params, out_path):
             os.execv("/bin/sleep", [params["tag"], "300"])
         os._exit(0)
     open(out_path, "w").write("daemon started")
+    time.sleep(1)  # the host sees the daemon alive
 """
-    result = box.run(code, {"tag": tag}, tmp_path)
+    result = run_seeing_processes(box, code, {"tag": tag}, tmp_path, count=1)
     assert result.ok, result
     assert processes_with(tag) == []
 
@@ -224,7 +228,7 @@ def test_without_a_cgroup_rlimits_still_stop_bombs(tmp_path, work_dir):
     box = get_sandbox(settings)
     assert "no cgroup controller" in box.cgroup_problem
     tag = marker()
-    forks = box.run(FORK_BOMB, {"tag": tag}, tmp_path / "fork")
+    forks = run_seeing_processes(box, FORK_BOMB, {"tag": tag}, tmp_path / "fork", count=4)
     assert processes_with(tag) == []
     assert forks.ok and 0 < int((tmp_path / "fork" / "scenario.xosc").read_text()) < 16
     memory = box.run(MEMORY_BOMB, {}, tmp_path / "mem")

@@ -24,21 +24,27 @@ from typing import Any
 
 from scenariogeneration import xosc
 
+from corpus.kinematics import (
+    SAFETY_GAP_M,
+    YELLOW_PHASE_S,
+    SpeedProfile,
+    ego_reaction,
+    lane_change_length_m,
+    orange_light_yellow_s,
+    red_light_timing,
+    start_gap_m,
+    stop_at_line,
+)
+
 HERO = "hero"
 XML_DECLARATION = '<?xml version="1.0" encoding="utf-8"?>\n'
 MAP_NAME = "Town04"
 AUTHOR = "ScenWeave"
 #: a fixed header date, so that the same params always give byte-identical files
 HEADER_DATE = dt.datetime(2026, 1, 1, 0, 0, 0)
-#: how long a light shows yellow before it turns red (s)
-YELLOW_PHASE_S = 3.0
-#: shortest lane change scenario_runner is asked for (m); below it the change is a jump
-LANE_CHANGE_MIN_LENGTH_M = 5.0
 #: the right-turn target: this far past the stop line (m) and this far to the right (m)
 TURN_PAST_STOP_LINE_M = 10.0
 TURN_RIGHT_OFFSET_M = 15.0
-#: distance to the stop line assumed when the spawn stage gave none (m)
-DEFAULT_STOP_LINE_DISTANCE_M = 20.0
 
 #: RelativeTargetLane sign: +1 is one lane to the left of the driving direction, as in the
 #: OpenSCENARIO standard and scenario_runner since 0.9.12 (its issue #767; before, it was mirrored)
@@ -155,10 +161,26 @@ def position_from_ego(
     params: Mapping[str, Any], ahead_m: float, right_m: float = 0.0, turn_rad: float = 0.0
 ) -> xosc.WorldPosition:
     """A point ``ahead_m`` along the ego's heading and ``right_m`` to its right."""
-    heading = number(params, "ego_h")
-    x = number(params, "ego_x") + ahead_m * math.cos(heading) + right_m * math.sin(heading)
-    y = number(params, "ego_y") + ahead_m * math.sin(heading) - right_m * math.cos(heading)
-    return xosc.WorldPosition(x, y, number(params, "ego_z"), heading + turn_rad)
+    return _moved(params, "ego", ahead_m, right_m, turn_rad)
+
+
+def _moved(params: Mapping[str, Any], actor: str, ahead_m: float, right_m: float = 0.0,
+           turn_rad: float = 0.0) -> xosc.WorldPosition:
+    heading = number(params, f"{actor}_h")
+    x = number(params, f"{actor}_x") + ahead_m * math.cos(heading) + right_m * math.sin(heading)
+    y = number(params, f"{actor}_y") + ahead_m * math.sin(heading) - right_m * math.cos(heading)
+    return xosc.WorldPosition(x, y, number(params, f"{actor}_z"), heading + turn_rad)
+
+
+def start_position(params: Mapping[str, Any], actor: str, speed_ms: float) -> xosc.WorldPosition:
+    """Where a highway NPC starts so that its recorded gap holds at ``maneuver_start_s``.
+
+    The spawn stage put ``actor`` at the recorded gap; until the manoeuvre starts both cars
+    hold their start speeds, so the NPC starts that drift earlier along its lane heading.
+    """
+    drift = start_gap_m(0.0, speed_ms, number(params, "ego_speed_ms"),
+                        number(params, "maneuver_start_s"))
+    return _moved(params, actor, drift)
 
 
 # --- actors ----------------------------------------------------------------------------------
@@ -175,8 +197,9 @@ def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> 
 
 
 def highway_npc(params: Mapping[str, Any]) -> Actor:
-    """The highway NPC (lead, cutter or follower) at its spawn, with its start speed."""
-    return npc("npc", lane_position(params, "npc"), number(params, "npc_speed_ms"),
+    """The highway NPC (lead, cutter or follower), at the recorded gap when the manoeuvre starts."""
+    speed = number(params, "npc_speed_ms")
+    return npc("npc", start_position(params, "npc", speed), speed,
                params.get("npc_vehicle_type"))
 
 
@@ -187,7 +210,8 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
         if not params.get(f"{slot}_present"):
             continue
         name = f"npc_{slot}"
-        actors.append(npc(name, lane_position(params, slot), number(params, f"{slot}_speed_ms"),
+        speed = number(params, f"{slot}_speed_ms")
+        actors.append(npc(name, start_position(params, slot, speed), speed,
                           params.get(f"{slot}_vehicle_type")))
         events.append(speed_change(name, number(params, f"{slot}_end_speed_ms"),
                                    *manoeuvre_timing(params)))
@@ -224,9 +248,13 @@ def at_time(name: str, time_s: float, point: str = "start") -> xosc.ValueTrigger
 
 
 def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent:
-    """Event ``<key>_event`` holding action ``<key>``, started at ``start_s``."""
+    """Event ``<key>_event`` holding action ``<key>``, started at ``start_s``.
+
+    Priority ``parallel``: events of one Maneuver that start together (a lane change and a
+    speed change) both run; under OpenSCENARIO 1.0 ``overwrite`` would end the other one.
+    """
     finite(f"the start time of {key}", start_s)
-    event = xosc.Event(f"{key}_event", xosc.Priority.overwrite)
+    event = xosc.Event(f"{key}_event", xosc.Priority.parallel)
     event.add_action(key, action)
     event.add_trigger(at_time(f"{key}_start", start_s))
     return StoryEvent(group, event)
@@ -242,9 +270,8 @@ def speed_change(entity: str, target_ms: float, duration_s: float, start_s: floa
                        xosc.AbsoluteSpeedAction(target_ms, dynamics), start_s)
 
 
-def lane_change_length_m(v_start_ms: float, v_end_ms: float, duration_s: float) -> float:
-    """Distance driven during a lane change of ``duration_s`` (scenario_runner wants metres)."""
-    return max(LANE_CHANGE_MIN_LENGTH_M, (v_start_ms + v_end_ms) / 2 * duration_s)
+def _profile_change(entity: str, profile: SpeedProfile) -> StoryEvent:
+    return speed_change(entity, profile.end_speed, profile.duration_s, profile.start_s)
 
 
 def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
@@ -281,6 +308,54 @@ def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
                        number(params, "ego_end_speed_ms"), *manoeuvre_timing(params))
 
 
+# --- storyboards shared by several classes ---------------------------------------------------
+
+def npc_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """Cut-in and cut-out: the ego drives its recorded speed profile while, at the recorded
+    gap, the NPC changes one lane toward ``lane_change_direction`` and changes its speed."""
+    return [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+
+
+def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """Car following (ahead or behind, one lane): both cars drive their recorded speed profiles."""
+    return [hero_speed_profile(params), npc_speed_profile(params)]
+
+
+def ego_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """The ego changes one lane toward ``lane_change_direction`` and drives its speed profile."""
+    return [hero_lane_change(params), hero_speed_profile(params)]
+
+
+def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> StoryEvent:
+    """The ego's speed change when the lead brakes: as recorded, unless the lead ends slower.
+
+    Then the ego slows to the lead's end speed, ``REACTION_TIME_S`` after the lead starts
+    braking, over the lead's braking time or faster if that is needed to keep its distance
+    (``corpus.kinematics.ego_reaction``): an ego holding its speed would run into the lead.
+    """
+    duration, start = manoeuvre_timing(params)
+    ego_speed, lead_speed = number(params, "ego_speed_ms"), number(params, "npc_speed_ms")
+    lead = SpeedProfile(lead_speed, number(params, "npc_end_speed_ms"), start, duration)
+    if lead.end_speed >= number(params, "ego_end_speed_ms"):
+        return hero_speed_profile(params)
+    gap = start_gap_m(number(params, "npc_distance_m"), lead_speed, ego_speed, start)
+    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[highway_npc(params).vehicle_type])
+    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    reaction = ego_reaction(ego_speed, lead, gap, number(params, "timeout_s"), clearance)
+    return _profile_change(HERO, reaction)
+
+
+def stop_line_m(params: Mapping[str, Any]) -> float:
+    """Distance from the ego's spawn to the stop line of the junction ahead."""
+    return number(params, "spawn_stop_line_distance_m")
+
+
+def hero_stops_at_line(params: Mapping[str, Any]) -> StoryEvent:
+    """The ego brakes to 0 within ``brake_time_s`` and comes to rest before the stop line."""
+    return _profile_change(HERO, stop_at_line(number(params, "ego_speed_ms"),
+                                              number(params, "brake_time_s"), stop_line_m(params)))
+
+
 def drive_to(entity: str, key: str, position: Any, start_s: float) -> StoryEvent:
     """``entity`` drives along the road network to ``position`` (AcquirePositionAction)."""
     return story_event(entity, key, xosc.AcquirePositionAction(position), start_s)
@@ -288,10 +363,8 @@ def drive_to(entity: str, key: str, position: Any, start_s: float) -> StoryEvent
 
 def right_turn_target(params: Mapping[str, Any]) -> xosc.WorldPosition:
     """A point past the junction on the right of the ego, where a right turn ends."""
-    stop_line_m = (params.get("spawn_stop_line_distance_m") or params.get("tfl_ds_m")
-                   or DEFAULT_STOP_LINE_DISTANCE_M)
-    return position_from_ego(params, stop_line_m + TURN_PAST_STOP_LINE_M, TURN_RIGHT_OFFSET_M,
-                             -math.pi / 2)
+    return position_from_ego(params, stop_line_m(params) + TURN_PAST_STOP_LINE_M,
+                             TURN_RIGHT_OFFSET_M, -math.pi / 2)
 
 
 def traffic_light(params: Mapping[str, Any], key: str, state: str, at_s: float) -> StoryEvent:
@@ -301,11 +374,28 @@ def traffic_light(params: Mapping[str, Any], key: str, state: str, at_s: float) 
     return story_event("traffic_light", f"traffic_light_{key}", action, at_s)
 
 
-def light_turns_red(params: Mapping[str, Any]) -> list[StoryEvent]:
-    """Yellow at ``yellow_delay_s`` (the ego is 5 m from the light), red after the phase."""
-    yellow_s = number(params, "yellow_delay_s")
+def light_turns_red(params: Mapping[str, Any], yellow_s: float) -> list[StoryEvent]:
+    """Yellow at ``yellow_s``, red ``YELLOW_PHASE_S`` later."""
+    finite("the time the light turns yellow", yellow_s)
     return [traffic_light(params, "yellow", "yellow", yellow_s),
             traffic_light(params, "red", "red", yellow_s + YELLOW_PHASE_S)]
+
+
+def red_light_for_stop(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """A stop at red: green (or already yellow when the ego must brake at once), yellow a
+    reaction time before the ego starts braking, red ``YELLOW_PHASE_S`` later."""
+    stop = stop_at_line(number(params, "ego_speed_ms"), number(params, "brake_time_s"),
+                        stop_line_m(params))
+    initial, yellow_s = red_light_timing(stop)
+    return [traffic_light(params, "initial", initial, 0.0), *light_turns_red(params, yellow_s)]
+
+
+def orange_light_for_pass(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """A pass on orange: yellow as the ego is 5 m before the stop line, then red."""
+    duration, start = manoeuvre_timing(params)
+    ego = SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
+                       start, duration)
+    return light_turns_red(params, orange_light_yellow_s(ego, stop_line_m(params)))
 
 
 # --- the scenario ----------------------------------------------------------------------------

@@ -1,21 +1,20 @@
-"""Highway cut-in from behind (CINB): a faster car overtakes the ego and cuts in.
+"""Highway cut-in behind (CINB): a car from the next lane merges into my lane behind me.
 
-A vehicle in the adjacent lane starts behind the ego (npc_distance_m is negative), passes
-it and, at maneuver_start_s, swerves into the ego's lane toward lane_change_direction
-within duration_s, ending up right in front of the ego after the overtake; its speed goes
-from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+A vehicle drives in the adjacent lane behind the ego (npc_distance_m is negative). At
+maneuver_start_s, when it is that far behind, it merges into the ego's lane behind the ego,
+changing lanes toward lane_change_direction within duration_s, and then follows the ego
+closely; its speed goes from npc_speed_ms to npc_end_speed_ms. The ego stays in front and
+keeps or changes its speed as recorded.
 """
 
 from pathlib import Path
 
 from corpus.corpus_utils import (
     hero,
-    hero_speed_profile,
     highway_npc,
     lane_position,
     make_scenario,
-    npc_lane_change,
-    npc_speed_profile,
+    npc_lane_change_story,
     write_scenario,
 )
 
@@ -23,9 +22,9 @@ TAG = "cut_in_behind"
 
 
 def generate(params: dict, out_path: str) -> Path:
-    """Build the cut-in-from-behind scenario from ``params`` and write it to ``out_path``."""
+    """Build the cut-in-behind scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
-    overtaker = highway_npc(params)
-    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
-    scenario = make_scenario(params, TAG, actors=[ego, overtaker], events=events)
+    merger = highway_npc(params)
+    events = npc_lane_change_story(params)
+    scenario = make_scenario(params, TAG, actors=[ego, merger], events=events)
     return write_scenario(scenario, out_path)

@@ -1,9 +1,9 @@
 """Highway cut-in in front (CINF): a car from the next lane cuts into my lane just ahead.
 
-A vehicle driving in the adjacent lane, npc_distance_m ahead of the ego, merges into the
-ego's lane in front of it: at maneuver_start_s it changes lanes toward
-lane_change_direction within duration_s, squeezing into the gap ahead of the ego, while its
-speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as
+A vehicle drives in the adjacent lane. At maneuver_start_s, when it is npc_distance_m
+ahead of the ego, it merges into the ego's lane in front of it, changing lanes toward
+lane_change_direction within duration_s and squeezing into the gap ahead of the ego, while
+its speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as
 recorded.
 """
 
@@ -11,12 +11,10 @@ from pathlib import Path
 
 from corpus.corpus_utils import (
     hero,
-    hero_speed_profile,
     highway_npc,
     lane_position,
     make_scenario,
-    npc_lane_change,
-    npc_speed_profile,
+    npc_lane_change_story,
     write_scenario,
 )
 
@@ -27,6 +25,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the cut-in-in-front scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     cutter = highway_npc(params)
-    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+    events = npc_lane_change_story(params)
     scenario = make_scenario(params, TAG, actors=[ego, cutter], events=events)
     return write_scenario(scenario, out_path)

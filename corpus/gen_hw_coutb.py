@@ -1,21 +1,20 @@
 """Highway cut-out behind (COUTB): the car tailgating the ego pulls out of its lane.
 
 A vehicle drives behind the ego in the same lane (npc_distance_m is negative). At
-maneuver_start_s this follower pulls out, changing lanes toward lane_change_direction
-within duration_s and leaving the ego's lane from behind, while its speed goes from
-npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as recorded.
+maneuver_start_s, when it is that far behind, this follower pulls out, changing lanes toward
+lane_change_direction within duration_s and leaving the ego's lane from behind, while its
+speed goes from npc_speed_ms to npc_end_speed_ms. The ego keeps or changes its speed as
+recorded.
 """
 
 from pathlib import Path
 
 from corpus.corpus_utils import (
     hero,
-    hero_speed_profile,
     highway_npc,
     lane_position,
     make_scenario,
-    npc_lane_change,
-    npc_speed_profile,
+    npc_lane_change_story,
     write_scenario,
 )
 
@@ -26,6 +25,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the cut-out-behind scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
     follower = highway_npc(params)
-    events = [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+    events = npc_lane_change_story(params)
     scenario = make_scenario(params, TAG, actors=[ego, follower], events=events)
     return write_scenario(scenario, out_path)

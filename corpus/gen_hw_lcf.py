@@ -9,9 +9,8 @@ vehicle takes part.
 from pathlib import Path
 
 from corpus.corpus_utils import (
+    ego_lane_change_story,
     hero,
-    hero_lane_change,
-    hero_speed_profile,
     lane_position,
     make_scenario,
     write_scenario,
@@ -23,6 +22,6 @@ TAG = "lane_change_front"
 def generate(params: dict, out_path: str) -> Path:
     """Build the ego lane-change scenario from ``params`` and write it to ``out_path``."""
     ego = hero(lane_position(params, "ego"), params["ego_speed_ms"])
-    events = [hero_lane_change(params), hero_speed_profile(params)]
+    events = ego_lane_change_story(params)
     scenario = make_scenario(params, TAG, actors=[ego], events=events)
     return write_scenario(scenario, out_path)

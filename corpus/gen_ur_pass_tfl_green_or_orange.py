@@ -2,9 +2,9 @@
 
 The ego approaches a signalised intersection at init_speed_ms and crosses it, its speed
 going to final_speed_ms over duration_s. The light is green; when the record saw it orange
-(amber, tfl_state), it turns yellow after yellow_delay_s, as the ego is about 5 m before
-it, so the ego passes on orange, and red a few seconds later. A lead vehicle drives ahead
-when the record had one.
+(amber, tfl_state), it turns yellow as the ego is 5 m before the stop line
+(spawn_stop_line_distance_m ahead of its start), so the ego passes on orange, and red a few
+seconds later. A lead vehicle drives ahead when the record had one.
 """
 
 from pathlib import Path
@@ -12,8 +12,8 @@ from pathlib import Path
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
-    light_turns_red,
     make_scenario,
+    orange_light_for_pass,
     traffic_light,
     urban_lead,
     world_position,
@@ -28,6 +28,6 @@ def generate(params: dict, out_path: str) -> Path:
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
     if params["tfl_state"] == "orange":
-        events += light_turns_red(params)
+        events += orange_light_for_pass(params)
     scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
     return write_scenario(scenario, out_path)

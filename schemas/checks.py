@@ -11,6 +11,8 @@ import re
 
 from lxml import etree
 
+from corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
+from schemas.fidelity import SPEED_TOL_MS
 from schemas.findings import Finding
 from schemas.scenario_doc import ScenarioDoc, number
 
@@ -18,6 +20,9 @@ from schemas.scenario_doc import ScenarioDoc, number
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))
 NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
 NPC_LANE_CHANGE_CLASSES = {"CINF", "CINB", "COUTF", "COUTB"}
+CUT_IN_CLASSES = {"CINF", "CINB"}
+BRAKE_CLASSES = {"BRAKE", "BR_BK"}
+STOPPING_LIGHT_STATES = {"yellow", "orange", "red"}
 EGO_LANE_CHANGE_CLASSES = {"LCF", "LCB"}
 LIGHT_NAME = re.compile(r"^pos=(-?\d+(\.\d+)?),(-?\d+(\.\d+)?)$")
 SPEED_TOLERANCE = 1e-6
@@ -49,6 +54,7 @@ def structural(doc: ScenarioDoc, domain: str, maneuver_class: str | None) -> lis
     found += _ego_spawn(doc, domain)
     found += _speeds(doc, domain)
     found += _delays(doc)
+    found += _overwrites(doc)
     if domain == "highway":
         groups = root.findall(".//ManeuverGroup")
         if len(groups) > 1 and len(doc.entities) < 2:
@@ -116,6 +122,25 @@ def _delays(doc: ScenarioDoc) -> list[Finding]:
     return found
 
 
+def _overwrites(doc: ScenarioDoc) -> list[Finding]:
+    """Events of one Maneuver starting together, one with priority overwrite: under
+    OpenSCENARIO 1.0 starting it ends the other (CARLA happens to run both)."""
+    found = []
+    for maneuver in doc.root.iter("Maneuver"):
+        starts: dict[float | None, list[etree._Element]] = {}
+        for event in maneuver.findall("Event"):
+            starts.setdefault(doc.event_start(event), []).append(event)
+        for start, events in starts.items():
+            overwriting = [e for e in events if e.get("priority") == "overwrite"]
+            if start is not None and len(events) > 1 and overwriting:
+                found.append(Finding(
+                    "SEM_OVERWRITE", f"event {overwriting[0].get('name')!r} starts at {start} s "
+                    f"with priority overwrite alongside {len(events) - 1} other event(s) of "
+                    f"Maneuver {maneuver.get('name')!r}: it ends them (use parallel)",
+                    line=line(overwriting[0])))
+    return found
+
+
 # -- manoeuvre semantics --------------------------------------------------------------------
 
 def semantics(doc: ScenarioDoc, maneuver_class: str | None, params: dict | None) -> list[Finding]:
@@ -153,7 +178,90 @@ def _highway_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list
             "npc_speed_ms", 0) - SPEED_TOLERANCE
         if braking and not _slows_down(doc, others):
             found.append(Finding("SEM_NO_BRAKE", f"{code}: no NPC SpeedAction slows the lead down"))
+    if code in BRAKE_CLASSES and params and "npc" in others:
+        found += _rear_end(doc, params)
+    if code in NPC_LANE_CHANGE_CLASSES and params:
+        found += _cut_lanes(doc, code, params)
     return found
+
+
+def _rear_end(doc: ScenarioDoc, params: dict) -> list[Finding]:
+    """The ego must not run into the braking lead: both speed profiles from the file, the
+    gap at t = 0 from ``npc_distance_m`` and where the file places the lead (straight lane).
+
+    Skipped when the file's start speeds are not the params' (FIDELITY_SPEED reports that
+    cause; a collision would only be its consequence).
+    """
+    ego, lead = doc.speed_profile("hero"), doc.speed_profile("npc")
+    lengths = [doc.vehicle_length(e) for e in ("hero", "npc")]
+    gap = _start_gap(doc, params)
+    timeout = doc.stop_time
+    if None in (ego, lead, gap, timeout, *lengths) or _other_start_speeds(params, ego, lead):
+        return []
+    closest = min_gap_m(lead, ego, gap, timeout)
+    touching = sum(lengths) / 2
+    if closest < touching:
+        return [Finding("SEM_COLLISION", f"the ego runs into the braking lead: their centres "
+                        f"come {closest:.1f} m close, {touching:.1f} m is bumper to bumper (the "
+                        "ego must slow down after the lead brakes)")]
+    return []
+
+
+def _other_start_speeds(params: dict, *profiles: SpeedProfile) -> bool:
+    wanted = (params.get("ego_speed_ms"), params.get("npc_speed_ms"))
+    return any(want is not None and abs(profile.v0 - want) > SPEED_TOL_MS
+               for want, profile in zip(wanted, profiles, strict=True))
+
+
+def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
+    """Gap to the lead at t = 0: ``npc_distance_m`` at the spawn, corrected by how far the
+    file moves the lead from its spawn along its heading."""
+    distance = params.get("npc_distance_m")
+    position = doc.spawn_position("npc")
+    spawn = [params.get(f"npc_{axis}") for axis in "xyh"]
+    if distance is None:
+        return None
+    if position is None or position.tag != "WorldPosition" or None in spawn:
+        speeds = [params.get(k) for k in ("npc_speed_ms", "ego_speed_ms", "maneuver_start_s")]
+        return None if None in speeds else start_gap_m(distance, *speeds)
+    x, y, h = spawn
+    moved = ((number(position, "x") or 0.0) - x) * math.cos(h) \
+        + ((number(position, "y") or 0.0) - y) * math.sin(h)
+    return distance + moved
+
+
+def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
+    """A cut-in starts in the lane next to the ego's and ends in it; a cut-out starts in it.
+
+    The ego's lane is followed along the map (``spawn_db.advance_along_lane``) to where the
+    NPC stands, so a gap across a road boundary compares the right lane ids.
+    """
+    keys = [params.get(k) for k in ("ego_road_id", "ego_lane_id", "ego_s", "npc_distance_m",
+                                    "npc_road_id", "npc_lane_id")]
+    change = doc.events.get("npc_lane_change")
+    target = None if change is None else number(change.action.find(".//RelativeTargetLane"),
+                                                 "value")
+    if None in keys or target is None:
+        return []
+    ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
+    try:
+        import spawn_db
+
+        road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance)
+    except Exception:  # noqa: BLE001 - a map the database does not know: nothing to compare
+        return []
+    if str(road) != str(npc_road):
+        return []
+    npc_lane = int(npc_lane)
+    ends_in = npc_lane + int(target) if npc_lane < 0 else npc_lane - int(target)
+    if code in CUT_IN_CLASSES and (npc_lane == lane or ends_in != lane):
+        return [Finding("SEM_CUT_IN_LANE", f"{code}: the NPC starts in lane {npc_lane} and "
+                        f"changes to lane {ends_in}; the ego's lane there is {lane} (a cut-in "
+                        "starts next to it and ends in it)", line=line(change.action))]
+    if code not in CUT_IN_CLASSES and npc_lane != lane:
+        return [Finding("SEM_CUT_OUT_LANE", f"{code}: the NPC starts in lane {npc_lane}, not "
+                        f"in the ego's lane {lane} (a cut-out leaves the ego's lane)")]
+    return []
 
 
 def _slows_down(doc: ScenarioDoc, entities: list[str]) -> bool:
@@ -186,10 +294,12 @@ def _urban_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[F
                                  "tied to the map", line=line(action)))
     states = [(t, (a.get("state") or "").lower()) for t, a in lights]
     if code == "U4_1":
-        if not any(s in ("red", "yellow", "orange") for _, s in states):
+        if not any(s in STOPPING_LIGHT_STATES for _, s in states):
             found.append(Finding("URB_LIGHT_NOT_RED", "U4_1: the light never turns yellow or red"))
         if not _ego_stops(doc):
             found.append(Finding("URB_NO_STOP", "U4_1: no SpeedAction brings the ego to 0 m/s"))
+        else:
+            found += _stop(doc, states, params)
     if code in ("U4_2", "U4_3", "U4_4") and states and states[0][1] != "green":
         found.append(Finding("URB_LIGHT_START", f"{code}: the light starts {states[0][1]!r}, "
                              "the ego passes on green"))
@@ -197,7 +307,7 @@ def _urban_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[F
         found.append(Finding("URB_RED_ON_GREEN", f"{code}: a green-light class turns the light "
                              "red"))
     if code == "U4_2" and params:
-        found += _red_before_pass(states, params)
+        found += _pass_timing(doc, states, params)
     if code == "U4_4":
         found += _right_turn(doc)
     return found
@@ -211,16 +321,48 @@ def _ego_stops(doc: ScenarioDoc) -> bool:
     return False
 
 
-def _red_before_pass(states: list[tuple[float | None, str]], params: dict) -> list[Finding]:
-    distance = params.get("spawn_stop_line_distance_m") or params.get("tfl_ds_m")
-    speed = params.get("ego_speed_ms")
-    if not distance or not speed:
+def _state_at(states: list[tuple[float | None, str]], t: float) -> str | None:
+    """The light's state at time ``t`` (the last change at or before it)."""
+    shown = [s for start, s in states if start is not None and start <= t]
+    return shown[-1] if shown else None
+
+
+def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
+          params: dict | None) -> list[Finding]:
+    """U4_1: the ego brakes only once the light is no longer green, and (with the spawn's
+    stop line in params) comes to rest at or before the stop line."""
+    ego = doc.speed_profile(doc.ego_name)
+    if ego is None:
         return []
-    passes_at = distance / speed
-    early = [t for t, s in states if s == "red" and t is not None and t < passes_at]
-    if early:
-        return [Finding("URB_RED_BEFORE_PASS", f"U4_2: the light turns red at {early[0]:.2f} s, "
-                        f"before the ego reaches it ({passes_at:.2f} s)")]
+    found = []
+    braking = _state_at(states, ego.start_s + 1e-6)
+    if braking == "green":
+        found.append(Finding("URB_BRAKE_ON_GREEN", f"U4_1: the ego starts braking at "
+                             f"{ego.start_s:.2f} s while the light is still green"))
+    stop_line = (params or {}).get("spawn_stop_line_distance_m")
+    stopping = ego.distance(ego.end_s)
+    if stop_line is not None and stopping > stop_line + 1e-3:
+        found.append(Finding("URB_STOP_PAST_LINE", f"U4_1: the ego comes to rest {stopping:.1f} m "
+                             f"from its start, past the stop line {stop_line:.1f} m ahead"))
+    return found
+
+
+def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
+                 params: dict) -> list[Finding]:
+    """U4_2: the ego crosses the stop line before the light is red; on an orange record,
+    after it turned yellow (else it passes on green)."""
+    stop_line = params.get("spawn_stop_line_distance_m")
+    ego = doc.speed_profile(doc.ego_name) if doc.ego_name else None
+    if stop_line is None or ego is None:
+        return []
+    passes_at = ego.time_to_cover(stop_line)
+    state = _state_at(states, passes_at)
+    if state == "red":
+        return [Finding("URB_RED_BEFORE_PASS", f"U4_2: the light is red when the ego reaches "
+                        f"the stop line ({passes_at:.2f} s)")]
+    if params.get("tfl_state") == "orange" and state == "green":
+        return [Finding("URB_PASS_ON_GREEN", f"U4_2: the record passed on orange, but the light "
+                        f"is still green when the ego reaches the stop line ({passes_at:.2f} s)")]
     return []
 
 

@@ -12,6 +12,17 @@ from dataclasses import dataclass
 
 from lxml import etree
 
+from corpus.kinematics import (
+    SAFETY_GAP_M,
+    YELLOW_PHASE_S,
+    SpeedProfile,
+    ego_reaction,
+    lane_change_length_m,
+    orange_light_yellow_s,
+    red_light_timing,
+    start_gap_m,
+    stop_at_line,
+)
 from schemas.findings import Finding
 from schemas.scenario_doc import ScenarioDoc, number
 
@@ -19,8 +30,6 @@ SPEED_TOL_MS = 0.01
 TIME_TOL_S = 0.01
 POSITION_TOL_M = 0.05
 HEADING_TOL_RAD = 1e-3
-YELLOW_PHASE_S = 3.0  # red follows yellow after this long (docs/scenario-conventions.md)
-LANE_CHANGE_MIN_LENGTH_M = 5.0
 SLOTS = ("center", "right", "left")
 NPC_SPEED_CHANGE_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
 LANE_CHANGE_ACTOR = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
@@ -97,11 +106,30 @@ def _spawns(check: _Check) -> None:
         code = "FIDELITY_SPAWN" if entity == "hero" else "FIDELITY_GAP"
         if position is None:
             check.found.append(Finding("FIDELITY_MISSING", f"{entity} is not placed in Init"))
-            continue
-        if params.get("domain") == "highway":
+        elif params.get("domain") == "highway" and entity == "hero":
             _lane_position(check, code, entity, prefix, position)
+        elif params.get("domain") == "highway":
+            _world_position(check, code, f"{entity} (placed so its gap holds at "
+                            "maneuver_start_s)", _highway_npc_start(params, prefix), position)
         else:
             _world_position(check, code, entity, _expected_world(params, prefix), position)
+
+
+def _value(params: dict, key: str) -> float | None:
+    value = params.get(key)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    return float(value) if ok else None
+
+
+def _highway_npc_start(params: dict, prefix: str) -> tuple[float, ...] | None:
+    """The NPC's spawn moved back along its heading by the lead-in drift (conventions)."""
+    keys = [_value(params, k) for k in (*(f"{prefix}_{axis}" for axis in "xyzh"),
+                                        f"{prefix}_speed_ms", "ego_speed_ms", "maneuver_start_s")]
+    if None in keys:
+        return None
+    x, y, z, h, speed, ego_speed, start = keys
+    drift = start_gap_m(0.0, speed, ego_speed, start)
+    return x + drift * math.cos(h), y + drift * math.sin(h), z, h
 
 
 def _lane_position(check: _Check, code: str, entity: str, prefix: str,
@@ -157,26 +185,56 @@ def _init_speeds(check: _Check) -> None:
                     check.doc.init_private(entity))
 
 
-def _expected_speed_changes(params: dict) -> list[tuple[str, float | None, float | None]]:
-    """(action name, end speed, duration) of every speed change the class must contain."""
+SpeedChange = tuple[str, float | None, float | None, float | None]
+
+
+def _expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
+    """(action name, end speed, duration, start) of every speed change the class must contain."""
     code = params.get("maneuver_class")
-    if code == "U4_1":
-        changes = [("hero_speed_change", 0.0, params.get("brake_time_s"))]
+    duration, start = params.get("duration_s"), params.get("maneuver_start_s")
+    hero = _stop_at_line(params) if code == "U4_1" else _brake_reaction(doc, params) \
+        if code in ("BRAKE", "BR_BK") else None
+    if hero is not None:
+        changes = [("hero_speed_change", hero.end_speed, hero.duration_s, hero.start_s)]
+    elif code == "U4_1":  # without the spawn's stop line only the target is known
+        changes = [("hero_speed_change", 0.0, None, None)]
     else:
-        changes = [("hero_speed_change", params.get("ego_end_speed_ms"), params.get("duration_s"))]
+        changes = [("hero_speed_change", params.get("ego_end_speed_ms"), duration, start)]
     if code in NPC_SPEED_CHANGE_CLASSES:
-        changes.append(("npc_speed_change", params.get("npc_end_speed_ms"),
-                        params.get("duration_s")))
+        changes.append(("npc_speed_change", params.get("npc_end_speed_ms"), duration, start))
     if code in ("FRF", "FRB"):
-        changes += [(f"npc_{slot}_speed_change", params.get(f"{slot}_end_speed_ms"),
-                     params.get("duration_s")) for slot in SLOTS if params.get(f"{slot}_present")]
+        changes += [(f"npc_{slot}_speed_change", params.get(f"{slot}_end_speed_ms"), duration,
+                     start) for slot in SLOTS if params.get(f"{slot}_present")]
     return changes
+
+
+def _stop_at_line(params: dict) -> SpeedProfile | None:
+    """U4_1: the ego's braking that ends before the spawn's stop line (conventions)."""
+    keys = [_value(params, k) for k in ("ego_speed_ms", "brake_time_s",
+                                        "spawn_stop_line_distance_m")]
+    return None if None in keys else stop_at_line(*keys)
+
+
+def _brake_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
+    """BRAKE: the ego slows to the lead's end speed after a reaction time, if the lead ends
+    slower than the ego's recorded end speed (conventions)."""
+    keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
+                                        "npc_end_speed_ms", "duration_s", "maneuver_start_s",
+                                        "npc_distance_m", "timeout_s")]
+    lengths = [doc.vehicle_length(entity) for entity in ("hero", "npc")]
+    if None in keys or None in lengths:
+        return None
+    ego, ego_end, lead, lead_end, duration, start, distance, timeout = keys
+    if lead_end >= ego_end:
+        return None
+    profile = SpeedProfile(lead, lead_end, start, duration)
+    clearance = sum(lengths) / 2 + SAFETY_GAP_M
+    return ego_reaction(ego, profile, start_gap_m(distance, lead, ego, start), timeout, clearance)
 
 
 def _events(check: _Check) -> None:
     params, events = check.params, check.doc.events
-    start = params.get("maneuver_start_s")
-    for name, end_speed, duration in _expected_speed_changes(params):
+    for name, end_speed, duration, start in _expected_speed_changes(check.doc, params):
         event = events.get(name)
         if event is None:
             check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
@@ -212,7 +270,7 @@ def _lane_change(check: _Check, actor: str) -> None:
     v0, v1 = params.get(f"{prefix}_speed_ms"), params.get(f"{prefix}_end_speed_ms")
     duration = params.get("duration_s")
     if None not in (v0, v1, duration):
-        length = max(LANE_CHANGE_MIN_LENGTH_M, (v0 + v1) / 2 * duration)
+        length = lane_change_length_m(v0, v1, duration)
         dynamics = event.action.find(".//LaneChangeActionDynamics")
         check.close("FIDELITY_DURATION", f"{name} length (duration x speed)",
                     number(dynamics, "value"), length, POSITION_TOL_M + length * 1e-3, dynamics)
@@ -227,12 +285,12 @@ def _lights(check: _Check) -> None:
     x, y = params.get("tfl_x_carla"), params.get("tfl_y_carla")
     wanted = f"pos={x:.3f},{y:.3f}" if x is not None and y is not None else None
     events = check.doc.events
-    timing = {"traffic_light_initial": 0.0}
+    initial, yellow = _light_plan(params)
+    timing = {"traffic_light_initial": (0.0, initial)}
     if params.get("maneuver_class") == "U4_1" or params.get("tfl_state") == "orange":
-        yellow = params.get("yellow_delay_s")
-        timing["traffic_light_yellow"] = yellow
-        timing["traffic_light_red"] = None if yellow is None else yellow + YELLOW_PHASE_S
-    for name, start in timing.items():
+        timing["traffic_light_yellow"] = (yellow, "yellow")
+        timing["traffic_light_red"] = (None if yellow is None else yellow + YELLOW_PHASE_S, "red")
+    for name, (start, state) in timing.items():
         event = events.get(name)
         if event is None:
             check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
@@ -243,5 +301,22 @@ def _lights(check: _Check) -> None:
                                        f"{None if light is None else light.get('name')!r}, "
                                        f"params say {wanted!r}", "error",
                                        event.action.sourceline))
+        if light is not None and (light.get("state") or "").lower() != state:
+            check.found.append(Finding("FIDELITY_LIGHT", f"{name} shows {light.get('state')!r}, "
+                                       f"the scenario needs {state!r} then", "error",
+                                       light.sourceline))
         check.close("FIDELITY_TRIGGER", f"{name} time", event.start_s, start, TIME_TOL_S,
                     event.action)
+
+
+def _light_plan(params: dict) -> tuple[str, float | None]:
+    """(state at t = 0, time the light turns yellow) the class's light follows (conventions)."""
+    if params.get("maneuver_class") == "U4_1":
+        stop = _stop_at_line(params)
+        return ("green", None) if stop is None else red_light_timing(stop)
+    keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s",
+                                        "duration_s", "spawn_stop_line_distance_m")]
+    if None in keys:
+        return "green", None
+    *profile, stop_line = keys
+    return "green", orange_light_yellow_s(SpeedProfile(*profile), stop_line)

@@ -7,6 +7,8 @@ from functools import cached_property
 
 from lxml import etree
 
+from corpus.kinematics import SpeedProfile
+
 EGO_NAMES = ("hero", "ego")
 
 
@@ -56,6 +58,35 @@ class ScenarioDoc:
             "PrivateAction/LongitudinalAction/SpeedAction/SpeedActionTarget/AbsoluteTargetSpeed")
         return _number(target, "value")
 
+    def vehicle_length(self, entity: str) -> float | None:
+        """Length of the entity's bounding box (m)."""
+        return _number(self.root.find(f"Entities/ScenarioObject[@name='{entity}']/Vehicle/"
+                                      "BoundingBox/Dimensions"), "length")
+
+    def speed_profile(self, entity: str) -> SpeedProfile | None:
+        """The entity's start speed and its first storyboard speed change (time dynamics).
+
+        None when it has no start speed; a profile that holds the start speed when no
+        SpeedAction with ``time`` (or ``rate``) dynamics changes it.
+        """
+        v0 = self.init_speed(entity)
+        if v0 is None:
+            return None
+        changes = []
+        for event in self.events.values():
+            target = _number(event.action.find(".//SpeedActionTarget/AbsoluteTargetSpeed"),
+                             "value")
+            dynamics = event.action.find(".//SpeedActionDynamics")
+            value = _number(dynamics, "value")
+            if entity not in event.actors or None in (target, value, event.start_s):
+                continue
+            dimension = dynamics.get("dynamicsDimension")
+            duration = value if dimension == "time" else abs(target - v0) / value \
+                if dimension == "rate" and value > 0 else None
+            if duration is not None:
+                changes.append(SpeedProfile(v0, target, event.start_s, duration))
+        return min(changes, key=lambda c: c.start_s) if changes else SpeedProfile(v0, v0, 0, 0)
+
     @cached_property
     def events(self) -> dict[str, Event]:
         """Events by the name of their (single) action; unnamed actions by event name."""
@@ -80,6 +111,11 @@ class ScenarioDoc:
         environment = self.root.find("Storyboard/Init/Actions/GlobalAction/EnvironmentAction/"
                                      "Environment")
         return None if environment is None else environment.get("name")
+
+    @staticmethod
+    def event_start(event: etree._Element) -> float | None:
+        """Start time of an ``<Event>`` with a SimulationTimeCondition trigger."""
+        return _start_time(event)
 
     def all(self, tag: str) -> list[etree._Element]:
         return list(self.root.iter(tag))

@@ -8,6 +8,7 @@ import pytest
 from lxml import etree
 
 SINGLE_NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
+REACTION_S, YELLOW_PHASE_S, FIRST_LIGHT_CHANGE_S = 1.0, 3.0, 0.5
 BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
               "van": "vehicle.mercedes.sprinter", "motorcycle": "vehicle.yamaha.yzf"}
 
@@ -22,10 +23,47 @@ def start_time(doc: etree._ElementTree, key: str) -> float:
     return float(condition.find(".//SimulationTimeCondition").get("value"))
 
 
+def stop_at_line(p: dict) -> tuple[float, float]:
+    """U4_1: (start, duration) of the braking that ends 1 m before the spawn's stop line."""
+    v0, room = p["ego_speed_ms"], p["spawn_stop_line_distance_m"] - 1.0
+    if v0 <= 0:
+        return 0.0, p["brake_time_s"]
+    duration = min(p["brake_time_s"], 2 * room / v0)
+    return round((room - v0 * duration / 2) / v0, 3), round(duration, 3)
+
+
+def time_to_drive(p: dict, metres: float) -> float:
+    """When the ego, ``ego_speed_ms`` changing linearly to ``ego_end_speed_ms`` over
+    ``duration_s`` from t = 0 (urban), has driven ``metres`` (solved in closed form)."""
+    v0, v1, duration = p["ego_speed_ms"], p["ego_end_speed_ms"], p["duration_s"]
+    accel = (v1 - v0) / duration
+    ramp = (v0 + v1) / 2 * duration
+    if metres > ramp:
+        return duration + (metres - ramp) / v1
+    if accel == 0:
+        return metres / v0
+    return (-v0 + math.sqrt(v0 * v0 + 2 * accel * metres)) / accel
+
+
+def light_plan(p: dict) -> tuple[str, float | None]:
+    """(initial state, yellow time) of the U4_1 / U4_2 light."""
+    if p["maneuver_class"] == "U4_1":
+        cue = stop_at_line(p)[0] - REACTION_S
+        return ("green" if cue >= FIRST_LIGHT_CHANGE_S else "yellow",
+                round(max(cue, FIRST_LIGHT_CHANGE_S), 3))
+    if p["maneuver_class"] == "U4_2" and p["tfl_state"] == "orange":
+        reached = time_to_drive(p, p["spawn_stop_line_distance_m"] - 5.0)
+        return "green", round(max(reached, FIRST_LIGHT_CHANGE_S), 3)
+    return "green", None
+
+
 def expected_events(p: dict) -> dict[str, tuple]:
-    """Action name -> the values the conventions promise for it."""
+    """Action name -> the values the conventions promise for it (``None``: checked apart)."""
     code, start, dur = p["maneuver_class"], p["maneuver_start_s"], p["duration_s"]
     events = {"hero_speed_change": ("speed", p["ego_end_speed_ms"], dur, start)}
+    if code in ("BRAKE", "BR_BK") and p["npc_end_speed_ms"] < p["ego_end_speed_ms"]:
+        # the reaction's timing depends on the gap: assert_brake_reaction checks it
+        events["hero_speed_change"] = ("speed", p["npc_end_speed_ms"], None, None)
 
     def lane_change(entity: str, v0: float, v1: float) -> tuple:
         sign = 1 if p["lane_change_direction"] == "left" else -1
@@ -43,12 +81,14 @@ def expected_events(p: dict) -> dict[str, tuple]:
                 events[f"npc_{slot}_speed_change"] = ("speed", p[f"{slot}_end_speed_ms"], dur,
                                                       start)
     if code == "U4_1":
-        events["hero_speed_change"] = ("speed", 0.0, p["brake_time_s"], start)
+        brake_start, brake_duration = stop_at_line(p)
+        events["hero_speed_change"] = ("speed", 0.0, brake_duration, brake_start)
+    initial, yellow = light_plan(p) if code.startswith("U4") else ("green", None)
     if code in ("U4_1", "U4_2", "U4_3", "U4_4"):
-        events["traffic_light_initial"] = ("light", "green", 0.0)
-    if code == "U4_1" or (code == "U4_2" and p["tfl_state"] == "orange"):
-        events["traffic_light_yellow"] = ("light", "yellow", p["yellow_delay_s"])
-        events["traffic_light_red"] = ("light", "red", p["yellow_delay_s"] + 3.0)
+        events["traffic_light_initial"] = ("light", initial, 0.0)
+    if yellow is not None:
+        events["traffic_light_yellow"] = ("light", "yellow", yellow)
+        events["traffic_light_red"] = ("light", "red", yellow + YELLOW_PHASE_S)
     if code == "U4_4":
         events["hero_turn_right"] = ("route", start)
     return events
@@ -88,7 +128,8 @@ def assert_storyboard_matches(doc: etree._ElementTree, p: dict) -> None:
             assert float(action.find(".//AbsoluteTargetSpeed").get("value")) == target
             dynamics = action.find(".//SpeedActionDynamics")
             assert dynamics.get("dynamicsDimension") == "time"
-            assert float(dynamics.get("value")) == duration
+            if duration is not None:
+                assert float(dynamics.get("value")) == duration
         elif kind == "lane":
             sign, length, start = values
             assert int(action.find(".//RelativeTargetLane").get("value")) == sign
@@ -105,7 +146,10 @@ def assert_storyboard_matches(doc: etree._ElementTree, p: dict) -> None:
         else:
             (start,) = values
             assert action.find(".//AcquirePositionAction/Position/WorldPosition") is not None
-        assert start_time(doc, name) == start
+        if start is not None:
+            assert start_time(doc, name) == pytest.approx(start, abs=1e-9), name
+    if expected["hero_speed_change"][2] is None:
+        assert_brake_reaction(doc, p)
     for stop in (doc.find("Storyboard/StopTrigger//Condition[@name='timeout']"),
                  doc.find(".//Act/StopTrigger//Condition[@name='act_stop']")):
         assert float(stop.find(".//SimulationTimeCondition").get("value")) == p["timeout_s"]
@@ -131,7 +175,9 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
         private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
         assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
         position = private.find(".//TeleportAction/Position")[0]
-        if p["domain"] == "highway":
+        if p["domain"] == "highway" and name != "hero":
+            assert_npc_starts_for_its_gap(position, p, actor, speed)
+        elif p["domain"] == "highway":
             assert position.tag == "LanePosition"
             assert (int(position.get("roadId")), int(position.get("laneId")),
                     float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],
@@ -150,3 +196,57 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
             vehicle_type = p[f"{actor}_vehicle_type"]
             blueprint = doc.find(f"Entities/ScenarioObject[@name='{name}']/Vehicle").get("name")
             assert blueprint == BLUEPRINTS.get(vehicle_type, BLUEPRINTS["car"])
+
+
+def assert_npc_starts_for_its_gap(position: etree._Element, p: dict, actor: str,
+                                  speed: float) -> None:
+    """A highway NPC starts on its lane heading, behind (or ahead of) its spawn by the drift
+    ``(speed - ego_speed_ms) * maneuver_start_s``, so the recorded gap holds at the start."""
+    assert position.tag == "WorldPosition"
+    x, y, z, h = (float(position.get(k)) for k in "xyzh")
+    dx, dy = x - p[f"{actor}_x"], y - p[f"{actor}_y"]
+    heading = p[f"{actor}_h"]
+    along = dx * math.cos(heading) + dy * math.sin(heading)
+    across = dx * math.sin(heading) - dy * math.cos(heading)
+    drift = (speed - p["ego_speed_ms"]) * p["maneuver_start_s"]
+    assert along == pytest.approx(-drift, abs=1e-6) and across == pytest.approx(0, abs=1e-6)
+    assert (z, h) == (p[f"{actor}_z"], heading)
+
+
+def assert_brake_reaction(doc: etree._ElementTree, p: dict) -> None:
+    """BRAKE: the ego brakes no harder than the lead or 8 m/s^2 and keeps 2 m between the
+    bumpers (or brakes that hard when even that cannot keep them)."""
+    action = action_named(doc, "hero_speed_change")
+    duration = float(action.find(".//SpeedActionDynamics").get("value"))
+    target = float(action.find(".//AbsoluteTargetSpeed").get("value"))
+    start = start_time(doc, "hero_speed_change")
+    t0, lead_duration = p["maneuver_start_s"], p["duration_s"]
+    v_ego, v_lead, v_lead_end = p["ego_speed_ms"], p["npc_speed_ms"], p["npc_end_speed_ms"]
+    hardest_ms2 = max(8.0, (v_lead - v_lead_end) / lead_duration)
+    assert v_ego - target <= hardest_ms2 * duration + 1e-6
+    lengths = [float(doc.find(f"Entities/ScenarioObject[@name='{name}']//Dimensions")
+                     .get("length")) for name in ("hero", "npc")]
+    gap = p["npc_distance_m"] - (v_lead - v_ego) * t0
+    ego_x = lead_x = 0.0
+    steps = int(p["timeout_s"] / 0.001)
+    closest = gap
+    for step in range(steps):  # plain Euler integration, independent of corpus.kinematics
+        t = step * 0.001
+        lead_v = v_lead + (v_lead_end - v_lead) * _ramp(t, t0, lead_duration)
+        ego_v = v_ego + (target - v_ego) * _ramp(t, start, duration)
+        lead_x += lead_v * 0.001
+        ego_x += ego_v * 0.001
+        closest = min(closest, gap + lead_x - ego_x)
+    hardest = duration == pytest.approx(max(v_ego - target, 0.0) / hardest_ms2)
+    assert t0 <= start <= t0 + REACTION_S
+    assert start == t0 + REACTION_S or hardest  # reacting early only when braking hard is late
+    assert closest >= sum(lengths) / 2 + 2.0 - 0.05 or (hardest and start == t0), closest
+
+
+def _ramp(t: float, start: float, duration: float) -> float:
+    """0 before ``start``, 1 after ``start + duration``, linear in between."""
+    if t >= start + duration:
+        return 1.0
+    if t <= start:
+        return 0.0
+    return max((t - start) / duration, 0.0)

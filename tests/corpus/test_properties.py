@@ -44,8 +44,10 @@ def params_of_any_class(draw) -> dict:
         params |= {"ego_h": draw(st.floats(-3.14, 3.14)), "brake_time_s": draw(seconds)}
         if params["yellow_delay_s"] is not None:
             params["yellow_delay_s"] = draw(st.floats(1.0, 8.0))
-        if code == "U4_2":
+        if code == "U4_2":  # a pass: the ego keeps moving and reaches the stop line
             params["tfl_state"] = draw(st.sampled_from(["green", "orange"]))
+            params |= {"ego_speed_ms": draw(st.floats(1.0, 25.0)),
+                       "ego_end_speed_ms": draw(st.floats(1.0, 25.0))}
         if draw(st.booleans()):
             params |= {"lead_present": True, "lead_distance_m": draw(st.floats(3.0, 60.0)),
                        "lead_speed_ms": draw(speed), "lead_vehicle_type": draw(

@@ -1,16 +1,22 @@
 """Real sample records end to end: MOOVE sample data -> ingest -> params -> every script.
 
 Twice: with spawn keys filled here by hand (Town04 road 45 / an urban pose), so the corpus is
-tested on its own, and with spawns from ``spawn_db.SpawnMatcher`` once that package is there.
+tested on its own, and with spawns from ``spawn_db.SpawnMatcher``, where the scenarios must also
+pass every ``validate_xosc`` check and the ASAM quality checker.
 """
 
 from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
 
 import pytest
 from lxml import etree
 
 import corpus
+import spawn_db
 from ingest import IngestReport, extract_params, iter_raw_records
+from schemas import run_asam_qc, validate_xosc
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}
@@ -27,7 +33,8 @@ def _place(params: dict) -> dict:
     for actor, lane in LANE_OF.items():
         distance = params.get(f"{actor}_distance_m", 0.0) if actor != "ego" else 0.0
         placed |= {f"{actor}_road_id": 45, f"{actor}_lane_id": lane,
-                   f"{actor}_s": 150.0 + distance}
+                   f"{actor}_s": 150.0 + distance, f"{actor}_x": 150.0 + distance,
+                   f"{actor}_y": 3.5 * lane, f"{actor}_z": 0.0, f"{actor}_h": 0.0}
     return placed
 
 
@@ -51,16 +58,40 @@ def test_every_sample_record_becomes_a_valid_faithful_scenario(sample_params, tm
         assert_storyboard_matches(doc, params)
 
 
-def test_scenarios_at_spawns_from_the_spawn_database(sample_raw, tmp_path, xsd_1_0):
-    spawn_db = pytest.importorskip("spawn_db")
-    if not hasattr(spawn_db, "SpawnMatcher"):
-        pytest.skip("spawn_db.SpawnMatcher is not there yet")
+@pytest.fixture(scope="module")
+def pipeline_scenarios(sample_raw, tmp_path_factory) -> list[tuple[dict, Path]]:
+    """The deterministic pipeline on the sample data: ingest -> spawn match -> corpus."""
     matcher = spawn_db.SpawnMatcher()
-    records = iter_raw_records(sample_raw, IngestReport())
-    for index, item in enumerate(records):
+    out = tmp_path_factory.mktemp("pipeline")
+    made = []
+    for index, item in enumerate(iter_raw_records(sample_raw, IngestReport())):
         params = matcher.assign(extract_params(item.record), index)
-        path = corpus.generate(params, tmp_path / f"{params['scenario_id']}.xosc")
+        name = params["scenario_id"].replace("/", "_")
+        made.append((params, corpus.generate(params, out / f"{name}.xosc")))
+    return made
+
+
+def test_scenarios_at_spawns_from_the_spawn_database(pipeline_scenarios, xsd_1_0):
+    for params, path in pipeline_scenarios:
         doc = etree.parse(str(path))
         assert xsd_1_0.validate(doc), (params["scenario_id"], xsd_1_0.error_log)
         assert_entities_match(doc, params)
         assert_storyboard_matches(doc, params)
+
+
+def test_pipeline_output_passes_every_validator_check(pipeline_scenarios):
+    """Fidelity, the manoeuvre semantics (stop before the line, no rear-end, cut-in lanes,
+    light timing) and the CARLA lint, with nothing to fix and not even a warning."""
+    for params, path in pipeline_scenarios:
+        result = validate_xosc(path, params, fix=False)
+        assert result.errors == [], (params["scenario_id"], [f.to_dict() for f in result.errors])
+
+
+def test_asam_quality_checker_finds_nothing_in_pipeline_output(pipeline_scenarios):
+    """Two records of every class through ``qc_openscenario``."""
+    seen: Counter = Counter()
+    for params, path in pipeline_scenarios:
+        seen[params["maneuver_class"]] += 1
+        if seen[params["maneuver_class"]] <= 2:
+            assert run_asam_qc(path) == [], params["scenario_id"]
+    assert set(seen) == set(corpus.retrieval.CLASS_TAGS)

@@ -149,12 +149,34 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
                                  "value", "3.0"), False),
     "URB_LIGHT_START": ("U4_3", _set("//TrafficSignalStateAction", "state", "yellow"), False),
     "URB_RED_ON_GREEN": ("U4_3", _set("//TrafficSignalStateAction", "state", "red"), False),
-    "URB_RED_BEFORE_PASS": ("U4_2", _set("//Event[@name='traffic_light_red_event']//"
-                                         "SimulationTimeCondition", "value", "0.5"), True),
+    "URB_RED_BEFORE_PASS": ("U4_2", lambda r: [_set(f"//Event[@name='traffic_light_{k}_event']"
+                                                    "//SimulationTimeCondition", "value", t)(r)
+                                               for k, t in (("yellow", "0.2"), ("red", "0.5"))],
+                            True),
+    # the audit's bad versions: U4_1 braking from t=0 over the recorded time, on green
+    "URB_STOP_PAST_LINE": ("U4_1", _set("//Action[@name='hero_speed_change']//"
+                                        "SpeedActionDynamics", "value", "7.9"), True),
+    "URB_BRAKE_ON_GREEN": ("U4_1", _set("//Action[@name='traffic_light_initial']//"
+                                        "TrafficSignalStateAction", "state", "green"), False),
+    # U4_2 on an orange record: the light turns yellow only after the ego has passed
+    "URB_PASS_ON_GREEN": ("U4_2", lambda r: [_set(f"//Event[@name='traffic_light_{k}_event']"
+                                                  "//SimulationTimeCondition", "value", t)(r)
+                                             for k, t in (("yellow", "6.0"), ("red", "9.0"))],
+                          True),
+    # the lead brakes, the ego holds its speed (the corpus before the fix)
+    "SEM_COLLISION": ("BRAKE", lambda r: [_set("//Action[@name='hero_speed_change']//" + path,
+                                               "value", value)(r) for path, value in (
+        ("AbsoluteTargetSpeed", "27.5"), ("SpeedActionDynamics", "3.4"))], True),
+    # two events of one Maneuver start together, one overwriting the other (OpenSCENARIO 1.0)
+    "SEM_OVERWRITE": ("CINF", _set("//Event[@name='npc_lane_change_event']", "priority",
+                                   "overwrite"), False),
+    # the cutter changes lanes away from the ego's lane
+    "SEM_CUT_IN_LANE": ("CINF", lambda r: _flip_lane(r), True),
     "URB_NO_TURN": ("U4_4", _remove("//Event[Action[@name='hero_turn_right']]"), False),
     "URB_TURN_NOT_RIGHT": ("U4_4", lambda r: _mirror_turn(r), False),
     "CARLA_VERSION": ("BRAKE", _set("//FileHeader", "revMinor", "2"), False),
     "CARLA_NO_HERO": ("BRAKE", _set("//Property[@name='type']", "value", "scenario"), False),
+    "XSD_INVALID": ("FLB", _set("//FileHeader", "subtitle", "not in the schema"), False),
     "CARLA_UNSUPPORTED": ("BRAKE", lambda r: setattr(
         r.xpath("//Action[@name='npc_speed_change']//SpeedAction")[0], "tag",
         "SynchronizeAction"), False),
@@ -163,7 +185,10 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
                                      "value", "5.0"), True),
     "FIDELITY_SPAWN": ("CINF", _set("//Private[@entityRef='hero']//LanePosition", "s", "1.0"),
                        True),
-    "FIDELITY_GAP": ("FLF", _set("//Private[@entityRef='npc']//LanePosition", "s", "1.0"), True),
+    # the cutter placed at the recorded gap at t=0: it drifts before the lane change at 2 s
+    "FIDELITY_GAP": ("CINF", lambda r: [_set("//Private[@entityRef='npc']//WorldPosition", axis,
+                                             str(example_params("CINF")[f"npc_{axis}"]))(r)
+                                        for axis in "xy"], True),
     "FIDELITY_DIRECTION": ("COUTB", lambda r: _flip_lane(r), True),
     "FIDELITY_DURATION": ("FLB", _set("//Action[@name='npc_speed_change']//SpeedActionDynamics",
                                       "value", "0.5"), True),
@@ -207,6 +232,63 @@ def test_each_check_code_fires_on_its_damage(tmp_path, check):
     result = validate_xosc(path, params if with_params else None, fix=False)
     assert check in _codes(result), [f.to_dict() for f in result.errors]
     assert not result.valid
+
+
+WARNING_CASES: dict[str, tuple[str, Mutation]] = {
+    "CARLA_BLUEPRINT": ("FLF", _set("//ScenarioObject[@name='npc']/Vehicle", "name", "audi_a2")),
+    "CARLA_CATALOG": ("FLF", lambda r: r.xpath("//ScenarioObject[@name='npc']")[0].replace(
+        r.xpath("//ScenarioObject[@name='npc']/Vehicle")[0], etree.fromstring(
+            '<CatalogReference catalogName="VehicleCatalog" entryName="car1"/>'))),
+}
+
+
+@pytest.mark.parametrize("check", sorted(WARNING_CASES))
+def test_each_warning_code_fires_on_its_damage_and_leaves_the_file_valid(tmp_path, check):
+    code, change = WARNING_CASES[check]
+    path, _ = _scenario(tmp_path, code)
+    _mutate(path, change)
+    result = validate_xosc(path, fix=False)
+    assert [f.code for f in result.errors if f.severity == "warning"] == [check]
+    assert result.valid, [f.to_dict() for f in result.errors]
+
+
+def test_a_scenario_without_a_hero_object_has_no_vehicle_for_carla(tmp_path):
+    path, _ = _scenario(tmp_path, "LCF")
+    _mutate(path, _set("//ScenarioObject[@name='hero']", "name", "ego"))
+    result = validate_xosc(path, fix=False)
+    assert "CARLA_NO_HERO" in _codes(result) and not result.valid
+
+
+@pytest.mark.parametrize("content", [b"\xff\xfe<OpenSCENARIO/>", None],
+                         ids=["not-utf8", "missing"])
+def test_an_unreadable_file_is_one_finding_naming_it(tmp_path, content):
+    path = tmp_path / "s.xosc"
+    if content is not None:
+        path.write_bytes(content)
+    result = validate_xosc(path)
+    assert [f.code for f in result.errors] == ["UNREADABLE"] and not result.valid
+    assert str(path) in result.errors[0].message
+
+
+def test_cut_out_that_starts_next_to_the_ego_lane_is_caught(tmp_path):
+    path, params = _scenario(tmp_path, "COUTF")
+    assert validate_xosc(path, params).valid
+    moved = params | {"npc_lane_id": params["npc_lane_id"] - 1}
+    assert "SEM_CUT_OUT_LANE" in _codes(validate_xosc(path, moved))
+
+
+def test_cut_in_that_starts_in_the_ego_lane_is_caught(tmp_path):
+    path, params = _scenario(tmp_path, "CINB")
+    assert validate_xosc(path, params).valid
+    same_lane = params | {"npc_lane_id": params["ego_lane_id"]}
+    assert "SEM_CUT_IN_LANE" in _codes(validate_xosc(path, same_lane))
+
+
+def test_stop_line_too_close_for_the_recorded_braking_is_caught(tmp_path):
+    """The scenario made for a stop line 24.4 m ahead runs past one 15 m ahead."""
+    path, params = _scenario(tmp_path, "U4_1")
+    closer = params | {"spawn_stop_line_distance_m": 15.0}
+    assert "URB_STOP_PAST_LINE" in _codes(validate_xosc(path, closer))
 
 
 @pytest.mark.parametrize("value, check", [("$startDelay", "DELAY_PARAM"),

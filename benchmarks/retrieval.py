@@ -27,7 +27,7 @@ QUERIES: dict[str, str] = {
     "the car in front slams on the brakes": "gen_hw_brake.py",
     "emergency braking of the lead vehicle on the highway": "gen_hw_brake.py",
     "a vehicle merges into my lane just ahead of me": "gen_hw_cinf.py",
-    "a faster car overtakes me and then cuts into my lane": "gen_hw_cinb.py",
+    "a car from the next lane merges into my lane behind me": "gen_hw_cinb.py",
     "the car ahead of me leaves my lane": "gen_hw_coutf.py",
     "the vehicle tailgating me pulls out into the next lane": "gen_hw_coutb.py",
     "I move over into the next lane where there is space ahead": "gen_hw_lcf.py",
@@ -49,7 +49,7 @@ QUERIES: dict[str, str] = {
 HELD_OUT: dict[str, str] = {
     "lead vehicle performs an emergency stop in front of me": "gen_hw_brake.py",
     "a truck squeezes into the gap in front of my car": "gen_hw_cinf.py",
-    "someone passes me on the left and swerves in right in front": "gen_hw_cinb.py",
+    "a vehicle on my left pulls in behind me and then follows me": "gen_hw_cinb.py",
     "the vehicle I was following changes lane and clears the way": "gen_hw_coutf.py",
     "the car behind me moves over to the other lane": "gen_hw_coutb.py",
     "ego merges into the adjacent lane with room ahead": "gen_hw_lcf.py",

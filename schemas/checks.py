@@ -26,6 +26,7 @@ STOPPING_LIGHT_STATES = {"yellow", "orange", "red"}
 EGO_LANE_CHANGE_CLASSES = {"LCF", "LCB"}
 LIGHT_NAME = re.compile(r"^pos=(-?\d+(\.\d+)?),(-?\d+(\.\d+)?)$")
 SPEED_TOLERANCE = 1e-6
+TURN_HEADING_TOL_DEG = 45.0
 
 
 def line(element: etree._Element | None) -> int | None:
@@ -309,7 +310,7 @@ def _urban_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[F
     if code == "U4_2" and params:
         found += _pass_timing(doc, states, params)
     if code == "U4_4":
-        found += _right_turn(doc)
+        found += _right_turn(doc, params)
     return found
 
 
@@ -366,7 +367,10 @@ def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
     return []
 
 
-def _right_turn(doc: ScenarioDoc) -> list[Finding]:
+def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
+    """U4_4: the ego is routed to a point on its right, facing right (a right turn ends
+    heading about 90 degrees clockwise of the start), and, with the spawn's stop line in
+    params, past that stop line: a point before it is reached without turning at all."""
     ego = doc.ego_name
     spawn = doc.spawn_position(ego) if ego else None
     targets = [e.action.find(".//AcquirePositionAction/Position/WorldPosition")
@@ -374,10 +378,21 @@ def _right_turn(doc: ScenarioDoc) -> list[Finding]:
     targets = [t for t in targets if t is not None]
     if not targets or spawn is None or spawn.tag != "WorldPosition":
         return [Finding("URB_NO_TURN", "U4_4: no AcquirePositionAction takes the ego anywhere")]
+    target = targets[0]
     h = number(spawn, "h") or 0.0
-    dx = (number(targets[0], "x") or 0.0) - (number(spawn, "x") or 0.0)
-    dy = (number(targets[0], "y") or 0.0) - (number(spawn, "y") or 0.0)
+    dx = (number(target, "x") or 0.0) - (number(spawn, "x") or 0.0)
+    dy = (number(target, "y") or 0.0) - (number(spawn, "y") or 0.0)
     if dx * math.sin(h) - dy * math.cos(h) <= 0:
         return [Finding("URB_TURN_NOT_RIGHT", "U4_4: the ego's target lies to the left of its "
-                        "heading", line=line(targets[0]))]
+                        "heading", line=line(target))]
+    turn = math.degrees(math.remainder((number(target, "h") or 0.0) - h, math.tau))
+    if not -90 - TURN_HEADING_TOL_DEG <= turn <= -90 + TURN_HEADING_TOL_DEG:
+        return [Finding("URB_TURN_HEADING", f"U4_4: the target heading is {turn:+.0f} degrees "
+                        "from the ego's; a right turn ends near -90", line=line(target))]
+    stop_line = (params or {}).get("spawn_stop_line_distance_m")
+    ahead = dx * math.cos(h) + dy * math.sin(h)
+    if stop_line is not None and ahead <= stop_line:
+        return [Finding("URB_TURN_BEFORE_LINE", f"U4_4: the target is {ahead:.1f} m ahead, "
+                        f"before the stop line {stop_line:.1f} m ahead: the ego turns before "
+                        "the junction", line=line(target))]
     return []

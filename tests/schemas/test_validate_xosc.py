@@ -8,6 +8,7 @@ fails here.
 from __future__ import annotations
 
 import json
+import math
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -174,6 +175,10 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
     "SEM_CUT_IN_LANE": ("CINF", lambda r: _flip_lane(r), True),
     "URB_NO_TURN": ("U4_4", _remove("//Event[Action[@name='hero_turn_right']]"), False),
     "URB_TURN_NOT_RIGHT": ("U4_4", lambda r: _mirror_turn(r), False),
+    "URB_TURN_HEADING": ("U4_4", _set("//Action[@name='hero_turn_right']//WorldPosition", "h",
+                                      "1.5708"), False),
+    # a point 15 m right, 5 m ahead: before the stop line 24.4 m ahead
+    "URB_TURN_BEFORE_LINE": ("U4_4", lambda r: _turn_target_at(r, 5.0, 15.0), True),
     "CARLA_VERSION": ("BRAKE", _set("//FileHeader", "revMinor", "2"), False),
     "CARLA_NO_HERO": ("BRAKE", _set("//Property[@name='type']", "value", "scenario"), False),
     "XSD_INVALID": ("FLB", _set("//FileHeader", "subtitle", "not in the schema"), False),
@@ -213,6 +218,14 @@ def _event_from(code: str, action: str) -> str:
 def _flip_lane(root: etree._Element) -> None:
     target = root.xpath("//RelativeTargetLane")[0]
     target.set("value", str(-int(float(target.get("value")))))
+
+
+def _turn_target_at(root: etree._Element, ahead: float, right: float) -> None:
+    spawn = root.xpath("//Private[@entityRef='hero']//WorldPosition")[0]
+    target = root.xpath("//Action[@name='hero_turn_right']//WorldPosition")[0]
+    x, y, h = (float(spawn.get(k)) for k in "xyh")
+    target.set("x", str(x + ahead * math.cos(h) + right * math.sin(h)))
+    target.set("y", str(y + ahead * math.sin(h) - right * math.cos(h)))
 
 
 def _mirror_turn(root: etree._Element) -> None:

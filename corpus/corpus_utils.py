@@ -192,8 +192,13 @@ def hero(position: Any, speed_ms: float) -> Actor:
 
 def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> Actor:
     """A scripted vehicle; unknown types become a car."""
-    return Actor(name, vehicle_type if vehicle_type in VEHICLE_MODELS else "car", position,
+    return Actor(name, known_type(vehicle_type), position,
                  finite(f"the start speed of {name}", speed_ms))
+
+
+def known_type(vehicle_type: str | None) -> str:
+    """``vehicle_type`` when it has a CARLA model here, else ``car``."""
+    return vehicle_type if vehicle_type in VEHICLE_MODELS else "car"
 
 
 def highway_npc(params: Mapping[str, Any]) -> Actor:
@@ -339,7 +344,7 @@ def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> StoryEvent:
     if lead.end_speed >= number(params, "ego_end_speed_ms"):
         return hero_speed_profile(params)
     gap = start_gap_m(number(params, "npc_distance_m"), lead_speed, ego_speed, start)
-    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[highway_npc(params).vehicle_type])
+    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[known_type(params.get("npc_vehicle_type"))])
     clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
     reaction = ego_reaction(ego_speed, lead, gap, number(params, "timeout_s"), clearance)
     return _profile_change(HERO, reaction)

@@ -16,8 +16,9 @@ from agent.context import AgentContext
 from agent.llm.base import LLMTimeout, LLMUnavailable
 from agent.repair.base import Candidate, Request
 from agent.state import AgentState, Attempt
-from agent.taxonomy import classify_exception, classify_validation
+from agent.taxonomy import classify_exception
 from scenweave.pipeline import CODE_NAME, XOSC_NAME
+from schemas.findings import failure_category
 
 ATTEMPTS_DIR = "attempts"
 NodeBody = Callable[[AgentState, AgentContext], tuple[dict, dict]]
@@ -95,9 +96,8 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
         status = "ok" if attempt["number"] == 1 else "repaired"
         update["final"] = {"status": status, "attempt": attempt["number"], "validation": verdict}
     else:
-        codes = [e["code"] for e in verdict["errors"]]
         _fail(attempt, {"type": "ValidationError", "message": _errors_text(verdict["errors"])},
-              classify_validation(codes))
+              failure_category(verdict["errors"]))
     update["attempts"] = _replace_last(state, attempt)
     return update, {"attempt": attempt["number"], **verdict, "taxonomy": attempt.get("taxonomy")}
 

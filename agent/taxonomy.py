@@ -30,9 +30,3 @@ def classify_exception(error_type: str | None, message: str | None = "") -> str:
         return "api_hallucination"
     return "runtime"
 
-
-def classify_validation(error_codes: list[str]) -> str:
-    """``fidelity`` when only parameter-fidelity checks failed, else ``validation``."""
-    if error_codes and all(code.startswith("FIDELITY") for code in error_codes):
-        return "fidelity"
-    return "validation"

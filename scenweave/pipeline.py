@@ -109,7 +109,7 @@ def base_outcome(params: dict) -> dict:
 
 def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace) -> dict:
     import corpus
-    from schemas import validate_xosc
+    from schemas import failure_category, validate_xosc
 
     retrieval = _timed(timings, "retrieve", lambda: corpus.retrieve(params))
     trace.event("retrieve", script=retrieval.script_path.name, method=retrieval.method)
@@ -127,7 +127,7 @@ def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace
         "retrieval": retrieval.method,
         "validation": {"valid": validation["valid"], "fixes_applied": validation["fixes_applied"],
                        "errors": errors[:20], "domain": validation.get("domain")},
-        "error_taxonomy": [] if validation["valid"] else _validation_taxonomy(errors),
+        "error_taxonomy": [] if validation["valid"] else [failure_category(errors)],
         "error": None if validation["valid"] else "; ".join(e["code"] for e in errors[:5]),
     }
 
@@ -147,11 +147,6 @@ def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:
         return work()
     finally:
         timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
-
-
-def _validation_taxonomy(errors: list[dict]) -> list[str]:
-    return sorted({"fidelity" if e["code"].startswith("FIDELITY") else "validation"
-                   for e in errors}) or ["validation"]
 
 
 def _taxonomy_of(err: Exception) -> str:

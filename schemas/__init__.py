@@ -7,12 +7,12 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from schemas.findings import Finding, ValidationResult
+from schemas.findings import Finding, ValidationResult, failure_category
 from schemas.qc import run_asam_qc
 from schemas.validate_xosc import validate_tree, validate_xosc
 
-__all__ = ["Finding", "ValidationResult", "load_json_schema", "run_asam_qc", "validate_tree",
-           "validate_xosc"]
+__all__ = ["Finding", "ValidationResult", "failure_category", "load_json_schema", "run_asam_qc",
+           "validate_tree", "validate_xosc"]
 
 SCHEMAS_DIR = Path(__file__).resolve().parent
 

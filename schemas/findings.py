@@ -38,3 +38,12 @@ class ValidationResult:
     def to_dict(self) -> dict:
         return {"valid": self.valid, "fixes_applied": list(self.fixes_applied),
                 "errors": [f.to_dict() for f in self.errors], "domain": self.domain}
+
+
+def failure_category(findings: list[dict]) -> str:
+    """The error-taxonomy word of a failed validation (thesis §6.1, extended): ``fidelity``
+    when only parameter-fidelity checks failed, else ``validation``. Warnings do not count."""
+    codes = [f["code"] for f in findings if f.get("severity", "error") == "error"]
+    if codes and all(code.startswith("FIDELITY") for code in codes):
+        return "fidelity"
+    return "validation"

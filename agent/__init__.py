@@ -3,11 +3,26 @@ it to a record's params, runs the result in a sandbox, validates it, repairs it,
 back to the reference script when attempts run out. See ``agent/graph.py``.
 
 ``run_scenario(params, out_dir, AgentSettings(...))`` -> :class:`AgentOutcome`.
+
+The names below load on first use, so ``agent.trace`` (the scenario folder's event log,
+shared with the ``--no-llm`` path) can be imported without loading LangGraph.
 """
 
-from agent.llm.base import LLMTimeout, LLMUnavailable
-from agent.run import AgentOutcome, close_shared, run_scenario
-from agent.settings import LLM_CHOICES, AgentSettings
+from __future__ import annotations
 
-__all__ = ["LLM_CHOICES", "AgentOutcome", "AgentSettings", "LLMTimeout", "LLMUnavailable",
-           "close_shared", "run_scenario"]
+import importlib
+from typing import Any
+
+_EXPORTS = {
+    "LLMTimeout": "agent.llm.base", "LLMUnavailable": "agent.llm.base",
+    "AgentOutcome": "agent.run", "close_shared": "agent.run", "run_scenario": "agent.run",
+    "LLM_CHOICES": "agent.settings", "AgentSettings": "agent.settings",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'agent' has no attribute {name!r}")
+    return getattr(importlib.import_module(_EXPORTS[name]), name)

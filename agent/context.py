@@ -10,8 +10,8 @@ from agent.settings import AgentSettings
 if TYPE_CHECKING:
     from agent.llm.base import LLM
     from agent.repair.base import RepairStrategy
+    from agent.trace import Trace
     from sandbox import Sandbox
-    from scenweave.pipeline import Trace
 
 
 @dataclass

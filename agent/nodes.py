@@ -17,7 +17,7 @@ from agent.llm.base import LLMTimeout, LLMUnavailable
 from agent.repair.base import Candidate, Request
 from agent.state import AgentState, Attempt
 from agent.taxonomy import classify_exception
-from scenweave.pipeline import CODE_NAME, XOSC_NAME
+from agent.trace import CODE_NAME, XOSC_NAME
 from schemas.findings import failure_category
 
 ATTEMPTS_DIR = "attempts"

@@ -23,9 +23,8 @@ from agent.graph import build_graph
 from agent.llm import LLM, get_llm
 from agent.repair import get_strategy
 from agent.settings import AgentSettings
+from agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
 from sandbox import Sandbox, get_sandbox
-from scenweave.pipeline import TRACE_NAME, Trace
-from scenweave.traces import CHECKPOINTS_NAME
 
 #: graph steps allowed per scenario: retrieve + (generate|repair, execute, validate) x attempts
 #: + fallback, with room to spare

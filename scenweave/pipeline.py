@@ -18,10 +18,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-XOSC_NAME = "scenario.xosc"
-CODE_NAME = "scenario.py"
-PARAMS_NAME = "params.json"
-TRACE_NAME = "trace.jsonl"
+from agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
+
+__all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
+           "process_scenario"]
 
 
 @dataclass
@@ -31,19 +31,6 @@ class PipelineSettings:
     no_llm: bool = True
     top_n: int = 5
     agent: Any = None  # agent.AgentSettings when no_llm is False
-
-
-class Trace:
-    """A readable event log, one JSON object per line, for the deterministic path."""
-
-    def __init__(self, path: Path):
-        self.path = path
-        self.started = time.perf_counter()
-
-    def event(self, node: str, **fields: Any) -> None:
-        entry = {"node": node, "t_s": round(time.perf_counter() - self.started, 4), **fields}
-        with open(self.path, "a", encoding="utf-8") as fh:
-            fh.write(json.dumps(entry, default=str) + "\n")
 
 
 def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,

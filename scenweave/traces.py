@@ -11,10 +11,9 @@ import sqlite3
 from contextlib import closing
 from pathlib import Path
 
-from scenweave.pipeline import TRACE_NAME
+from agent.trace import CHECKPOINTS_NAME, TRACE_NAME
 from scenweave.run_folder import STATUS_FILE, safe_name
 
-CHECKPOINTS_NAME = "checkpoints.sqlite"
 PREVIEW_LINES = 12
 
 

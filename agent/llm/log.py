@@ -13,7 +13,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from scenweave.home import home
+from agent.home import home
 
 if TYPE_CHECKING:
     from agent.llm.base import LLMReply, Prompt

@@ -12,7 +12,6 @@ a baseline for latency and a way to run the whole benchmark machinery without a 
 
 from __future__ import annotations
 
-import os
 import re
 import tempfile
 from collections.abc import Callable
@@ -21,7 +20,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from ingest.atomic import write_json_atomic, write_text_atomic
+from ingest.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.progress import progress
@@ -220,22 +219,11 @@ def write_bench(root: Path, summary: dict, outcomes_by_model: dict[str, list[dic
     """Write ``bench.json``, the figure PNGs and ``bench.html`` into ``root``."""
     made = figures(summary, outcomes_by_model)
     for made_figure in made.values():
-        _write_bytes_atomic(root / made_figure.file, made_figure.png)
+        write_bytes_atomic(root / made_figure.file, made_figure.png)
     summary = {**summary, "figures": {key: f.file for key, f in made.items()}}
     write_json_atomic(root / BENCH_FILE, summary)
     write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, made))
     return root / BENCH_FILE
-
-
-def _write_bytes_atomic(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def render_bench(name: str, summary: dict, made: dict[str, Figure]) -> str:

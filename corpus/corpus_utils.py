@@ -28,8 +28,8 @@ from corpus.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
-    ego_reaction,
     lane_change_length_m,
+    lead_reaction,
     orange_light_yellow_s,
     red_light_timing,
     start_gap_m,
@@ -42,9 +42,6 @@ MAP_NAME = "Town04"
 AUTHOR = "ScenWeave"
 #: a fixed header date, so that the same params always give byte-identical files
 HEADER_DATE = dt.datetime(2026, 1, 1, 0, 0, 0)
-#: the right-turn target: this far past the stop line (m) and this far to the right (m)
-TURN_PAST_STOP_LINE_M = 10.0
-TURN_RIGHT_OFFSET_M = 15.0
 
 #: RelativeTargetLane sign: +1 is one lane to the left of the driving direction, as in the
 #: OpenSCENARIO standard and scenario_runner since 0.9.12 (its issue #767; before, it was mirrored)
@@ -157,30 +154,12 @@ def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:
     return xosc.WorldPosition(*(number(params, f"{actor}_{axis}") for axis in "xyzh"))
 
 
-def position_from_ego(
-    params: Mapping[str, Any], ahead_m: float, right_m: float = 0.0, turn_rad: float = 0.0
-) -> xosc.WorldPosition:
-    """A point ``ahead_m`` along the ego's heading and ``right_m`` to its right."""
-    return _moved(params, "ego", ahead_m, right_m, turn_rad)
-
-
-def _moved(params: Mapping[str, Any], actor: str, ahead_m: float, right_m: float = 0.0,
-           turn_rad: float = 0.0) -> xosc.WorldPosition:
-    heading = number(params, f"{actor}_h")
-    x = number(params, f"{actor}_x") + ahead_m * math.cos(heading) + right_m * math.sin(heading)
-    y = number(params, f"{actor}_y") + ahead_m * math.sin(heading) - right_m * math.cos(heading)
-    return xosc.WorldPosition(x, y, number(params, f"{actor}_z"), heading + turn_rad)
-
-
-def start_position(params: Mapping[str, Any], actor: str, speed_ms: float) -> xosc.WorldPosition:
-    """Where a highway NPC starts so that its recorded gap holds at ``maneuver_start_s``.
-
-    The spawn stage put ``actor`` at the recorded gap; until the manoeuvre starts both cars
-    hold their start speeds, so the NPC starts that drift earlier along its lane heading.
-    """
-    drift = start_gap_m(0.0, speed_ms, number(params, "ego_speed_ms"),
-                        number(params, "maneuver_start_s"))
-    return _moved(params, actor, drift)
+def position_from_ego(params: Mapping[str, Any], ahead_m: float) -> xosc.WorldPosition:
+    """A point ``ahead_m`` along the ego's heading (the urban lead)."""
+    heading = number(params, "ego_h")
+    return xosc.WorldPosition(number(params, "ego_x") + ahead_m * math.cos(heading),
+                              number(params, "ego_y") + ahead_m * math.sin(heading),
+                              number(params, "ego_z"), heading)
 
 
 # --- actors ----------------------------------------------------------------------------------
@@ -202,9 +181,9 @@ def known_type(vehicle_type: str | None) -> str:
 
 
 def highway_npc(params: Mapping[str, Any]) -> Actor:
-    """The highway NPC (lead, cutter or follower), at the recorded gap when the manoeuvre starts."""
-    speed = number(params, "npc_speed_ms")
-    return npc("npc", start_position(params, "npc", speed), speed,
+    """The highway NPC (lead, cutter or follower) where the spawn stage put it for t = 0 (its
+    recorded gap holds when the manoeuvre starts)."""
+    return npc("npc", lane_position(params, "npc"), number(params, "npc_speed_ms"),
                params.get("npc_vehicle_type"))
 
 
@@ -215,8 +194,7 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
         if not params.get(f"{slot}_present"):
             continue
         name = f"npc_{slot}"
-        speed = number(params, f"{slot}_speed_ms")
-        actors.append(npc(name, start_position(params, slot, speed), speed,
+        actors.append(npc(name, lane_position(params, slot), number(params, f"{slot}_speed_ms"),
                           params.get(f"{slot}_vehicle_type")))
         events.append(speed_change(name, number(params, f"{slot}_end_speed_ms"),
                                    *manoeuvre_timing(params)))
@@ -315,10 +293,13 @@ def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
 
 # --- storyboards shared by several classes ---------------------------------------------------
 
-def npc_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:
-    """Cut-in and cut-out: the ego drives its recorded speed profile while, at the recorded
-    gap, the NPC changes one lane toward ``lane_change_direction`` and changes its speed."""
-    return [hero_speed_profile(params), npc_lane_change(params), npc_speed_profile(params)]
+def npc_lane_change_story(params: Mapping[str, Any],
+                          hero_event: StoryEvent | None = None) -> list[StoryEvent]:
+    """Cut-in and cut-out: at the recorded gap the NPC changes one lane toward
+    ``lane_change_direction`` and changes its speed; the ego drives its recorded speed profile
+    (or ``hero_event``, e.g. its reaction to a slower cutter)."""
+    return [hero_event or hero_speed_profile(params), npc_lane_change(params),
+            npc_speed_profile(params)]
 
 
 def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
@@ -338,16 +319,26 @@ def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> StoryEvent:
     braking, over the lead's braking time or faster if that is needed to keep its distance
     (``corpus.kinematics.ego_reaction``): an ego holding its speed would run into the lead.
     """
+    return _hero_reacts_to_npc(params, cut_in=False)
+
+
+def hero_reacts_to_cut_in(params: Mapping[str, Any]) -> StoryEvent:
+    """The ego's speed change when a car cuts in ahead: as recorded, unless the cutter ends
+    slower; then the same reaction as behind a braking lead, keeping its distance from the
+    moment the cutter starts to change into the ego's lane."""
+    return _hero_reacts_to_npc(params, cut_in=True)
+
+
+def _hero_reacts_to_npc(params: Mapping[str, Any], cut_in: bool) -> StoryEvent:
     duration, start = manoeuvre_timing(params)
     ego_speed, lead_speed = number(params, "ego_speed_ms"), number(params, "npc_speed_ms")
     lead = SpeedProfile(lead_speed, number(params, "npc_end_speed_ms"), start, duration)
-    if lead.end_speed >= number(params, "ego_end_speed_ms"):
-        return hero_speed_profile(params)
     gap = start_gap_m(number(params, "npc_distance_m"), lead_speed, ego_speed, start)
     models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[known_type(params.get("npc_vehicle_type"))])
     clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
-    reaction = ego_reaction(ego_speed, lead, gap, number(params, "timeout_s"), clearance)
-    return _profile_change(HERO, reaction)
+    reaction = lead_reaction(ego_speed, number(params, "ego_end_speed_ms"), lead, gap,
+                             number(params, "timeout_s"), clearance, cut_in)
+    return hero_speed_profile(params) if reaction is None else _profile_change(HERO, reaction)
 
 
 def stop_line_m(params: Mapping[str, Any]) -> float:
@@ -367,9 +358,9 @@ def drive_to(entity: str, key: str, position: Any, start_s: float) -> StoryEvent
 
 
 def right_turn_target(params: Mapping[str, Any]) -> xosc.WorldPosition:
-    """A point past the junction on the right of the ego, where a right turn ends."""
-    return position_from_ego(params, stop_line_m(params) + TURN_PAST_STOP_LINE_M,
-                             TURN_RIGHT_OFFSET_M, -math.pi / 2)
+    """Where the right turn ends: in the lane the junction's right movement leads to, as the
+    spawn stage found it on the map (``turn_exit_*``)."""
+    return world_position(params, "turn_exit")
 
 
 def traffic_light(params: Mapping[str, Any], key: str, state: str, at_s: float) -> StoryEvent:

@@ -105,14 +105,15 @@ def start_gap_m(gap_at_manoeuvre_m: float, npc_speed_ms: float, ego_speed_ms: fl
     return gap_at_manoeuvre_m - (npc_speed_ms - ego_speed_ms) * maneuver_start_s
 
 
-def min_gap_m(lead: SpeedProfile, follower: SpeedProfile, gap_m: float, until_s: float) -> float:
-    """Smallest distance between two cars in one lane over [0, ``until_s``].
+def min_gap_m(lead: SpeedProfile, follower: SpeedProfile, gap_m: float, until_s: float,
+              from_s: float = 0.0) -> float:
+    """Smallest distance between two cars in one lane over [``from_s``, ``until_s``].
 
     ``gap_m`` is the distance at t = 0 (lead ahead, positive). Between breakpoints both
     speeds are linear, so the gap is a parabola: its ends and its vertex (equal speeds) suffice.
     """
-    times = sorted({0.0, until_s, *(t for t in (*lead.breakpoints(), *follower.breakpoints())
-                                    if 0.0 < t < until_s)})
+    times = sorted({from_s, until_s, *(t for t in (*lead.breakpoints(), *follower.breakpoints())
+                                       if from_s < t < until_s)})
 
     def gap(t: float) -> float:
         return gap_m + lead.distance(t) - follower.distance(t)
@@ -126,8 +127,24 @@ def min_gap_m(lead: SpeedProfile, follower: SpeedProfile, gap_m: float, until_s:
     return smallest
 
 
+def lead_reaction(ego_speed_ms: float, ego_end_speed_ms: float, lead: SpeedProfile,
+                  gap_m: float, until_s: float, clearance_m: float,
+                  cut_in: bool = False) -> SpeedProfile | None:
+    """The ego's reaction to a car that ends up in front of it slower than the ego would drive,
+    or ``None`` when the car ends no slower than ``ego_end_speed_ms`` (the ego drives as
+    recorded).
+
+    A braking lead (``cut_in`` false) shares the ego's lane all along; a cutter (``cut_in``)
+    enters it when its manoeuvre starts, so only the distance from then on counts.
+    """
+    if lead.end_speed >= ego_end_speed_ms:
+        return None
+    return ego_reaction(ego_speed_ms, lead, gap_m, until_s, clearance_m,
+                        from_s=lead.start_s if cut_in else 0.0)
+
+
 def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s: float,
-                 clearance_m: float) -> SpeedProfile:
+                 clearance_m: float, from_s: float = 0.0) -> SpeedProfile:
     """The ego's answer to a lead that slows down: go to its end speed after a reaction time.
 
     The ego keeps ``ego_speed_ms`` until ``REACTION_TIME_S`` after the lead starts braking,
@@ -137,6 +154,7 @@ def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s:
     ``MAX_DECELERATION_MS2``, whichever is harder (what the record shows a car doing). When
     even that is too late (the record's ego did not crash, so it reacted faster), the ego
     starts braking earlier: the latest start, down to the lead's own, that keeps the distance.
+    The distance is watched from ``from_s`` on (a cutter is in the ego's lane only then).
     """
     target = lead.end_speed
     shortest = max(ego_speed_ms - target, 0.0) / max_deceleration_ms2(lead)
@@ -144,7 +162,7 @@ def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s:
 
     def safe(start: float, duration: float) -> bool:
         ego = SpeedProfile(ego_speed_ms, target, start, duration)
-        return min_gap_m(lead, ego, gap_m, until_s) >= clearance_m
+        return min_gap_m(lead, ego, gap_m, until_s, from_s) >= clearance_m
 
     start = lead.start_s + REACTION_TIME_S
     if not safe(start, shortest):

@@ -22,6 +22,8 @@ NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
 NPC_LANE_CHANGE_CLASSES = {"CINF", "CINB", "COUTF", "COUTB"}
 CUT_IN_CLASSES = {"CINF", "CINB"}
 BRAKE_CLASSES = {"BRAKE", "BR_BK"}
+#: a cutter that ends up in front of the ego: it shares the ego's lane from its cut-in on
+FRONT_CUT_IN_CLASSES = {"CINF"}
 STOPPING_LIGHT_STATES = {"yellow", "orange", "red"}
 EGO_LANE_CHANGE_CLASSES = {"LCF", "LCB"}
 LIGHT_NAME = re.compile(r"^pos=(-?\d+(\.\d+)?),(-?\d+(\.\d+)?)$")
@@ -179,16 +181,17 @@ def _highway_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list
             "npc_speed_ms", 0) - SPEED_TOLERANCE
         if braking and not _slows_down(doc, others):
             found.append(Finding("SEM_NO_BRAKE", f"{code}: no NPC SpeedAction slows the lead down"))
-    if code in BRAKE_CLASSES and params and "npc" in others:
-        found += _rear_end(doc, params)
+    if code in BRAKE_CLASSES | FRONT_CUT_IN_CLASSES and params and "npc" in others:
+        found += _rear_end(doc, code, params)
     if code in NPC_LANE_CHANGE_CLASSES and params:
         found += _cut_lanes(doc, code, params)
     return found
 
 
-def _rear_end(doc: ScenarioDoc, params: dict) -> list[Finding]:
-    """The ego must not run into the braking lead: both speed profiles from the file, the
-    gap at t = 0 from ``npc_distance_m`` and where the file places the lead (straight lane).
+def _rear_end(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
+    """The ego must not run into the NPC in front: a braking lead (from t = 0) or a cutter
+    (from its cut-in on). Both speed profiles come from the file, the gap at t = 0 from where
+    the file places the two cars (along the lane, :func:`_start_gap`).
 
     Skipped when the file's start speeds are not the params' (FIDELITY_SPEED reports that
     cause; a collision would only be its consequence).
@@ -199,12 +202,18 @@ def _rear_end(doc: ScenarioDoc, params: dict) -> list[Finding]:
     timeout = doc.stop_time
     if None in (ego, lead, gap, timeout, *lengths) or _other_start_speeds(params, ego, lead):
         return []
-    closest = min_gap_m(lead, ego, gap, timeout)
+    cut_in = code in FRONT_CUT_IN_CLASSES
+    change = doc.events.get("npc_lane_change")
+    from_s = (change.start_s if change is not None else None) if cut_in else 0.0
+    if from_s is None:
+        return []
+    closest = min_gap_m(lead, ego, gap, timeout, from_s)
     touching = sum(lengths) / 2
     if closest < touching:
-        return [Finding("SEM_COLLISION", f"the ego runs into the braking lead: their centres "
+        what = "the car that cut in ahead" if cut_in else "the braking lead"
+        return [Finding("SEM_COLLISION", f"{code}: the ego runs into {what}: their centres "
                         f"come {closest:.1f} m close, {touching:.1f} m is bumper to bumper (the "
-                        "ego must slow down after the lead brakes)")]
+                        "ego must slow down when the car ahead ends slower)")]
     return []
 
 
@@ -215,20 +224,49 @@ def _other_start_speeds(params: dict, *profiles: SpeedProfile) -> bool:
 
 
 def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
-    """Gap to the lead at t = 0: ``npc_distance_m`` at the spawn, corrected by how far the
-    file moves the lead from its spawn along its heading."""
-    distance = params.get("npc_distance_m")
+    """Distance from the ego to the NPC at t = 0, as the file places them.
+
+    Both on LanePositions of Town04: measured along the NPC's lane from beside the ego
+    (``spawn_db.distance_along_lane``). Otherwise the params' start gap (the recorded gap
+    minus the lead-in drift), corrected by how far a WorldPosition moves the NPC from its
+    spawn along its heading.
+    """
+    keys = [params.get(k) for k in ("npc_distance_m", "npc_speed_ms", "ego_speed_ms",
+                                    "maneuver_start_s")]
+    if None in keys:
+        return None
+    along = _lane_gap(doc)
+    if along is not None:
+        return along
+    gap = start_gap_m(*keys)
     position = doc.spawn_position("npc")
     spawn = [params.get(f"npc_{axis}") for axis in "xyh"]
-    if distance is None:
-        return None
     if position is None or position.tag != "WorldPosition" or None in spawn:
-        speeds = [params.get(k) for k in ("npc_speed_ms", "ego_speed_ms", "maneuver_start_s")]
-        return None if None in speeds else start_gap_m(distance, *speeds)
+        return gap
     x, y, h = spawn
     moved = ((number(position, "x") or 0.0) - x) * math.cos(h) \
         + ((number(position, "y") or 0.0) - y) * math.sin(h)
-    return distance + moved
+    return gap + moved
+
+
+def _lane_gap(doc: ScenarioDoc) -> float | None:
+    """Metres along the NPC's lane from beside the ego to the NPC, both on LanePositions."""
+    hero, npc = doc.spawn_position("hero"), doc.spawn_position("npc")
+    if hero is None or npc is None or {hero.tag, npc.tag} != {"LanePosition"}:
+        return None
+    values = [number(hero, "s"), number(npc, "laneId"), number(npc, "s")]
+    if None in values:
+        return None
+    hero_s, lane, npc_s = values
+    try:  # imported here: the map loads once, and only for scenarios that need it
+        import spawn_db
+    except ImportError:
+        return None
+    try:
+        return spawn_db.distance_along_lane(hero.get("roadId"), int(lane), hero_s,
+                                            npc.get("roadId"), int(lane), npc_s)
+    except spawn_db.SpawnDbError:  # not a Town04 lane position
+        return None
 
 
 def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
@@ -370,9 +408,12 @@ def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
 
 
 def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
-    """U4_4: the ego is routed to a point on its right, facing right (a right turn ends
-    heading about 90 degrees clockwise of the start), and, with the spawn's stop line in
-    params, past that stop line: a point before it is reached without turning at all."""
+    """U4_4: the ego is routed somewhere. When params carry the map's exit of the right
+    movement (``turn_exit_*``), FIDELITY_TURN compares the target with it: the approach may
+    curve before the junction, so where the exit lies seen from the spawn says little.
+    Without it, the target must lie on the ego's right, facing right (a right turn ends about
+    90 degrees clockwise of the start) and, with the spawn's stop line in params, past that
+    stop line: a point before it is reached without turning at all."""
     ego = doc.ego_name
     spawn = doc.spawn_position(ego) if ego else None
     targets = [e.action.find(".//AcquirePositionAction/Position/WorldPosition")
@@ -380,6 +421,8 @@ def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
     targets = [t for t in targets if t is not None]
     if not targets or spawn is None or spawn.tag != "WorldPosition":
         return [Finding("URB_NO_TURN", "U4_4: no AcquirePositionAction takes the ego anywhere")]
+    if (params or {}).get("turn_exit_x") is not None:
+        return []
     target = targets[0]
     h = number(spawn, "h") or 0.0
     dx = (number(target, "x") or 0.0) - (number(spawn, "x") or 0.0)

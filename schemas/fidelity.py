@@ -16,8 +16,8 @@ from corpus.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
-    ego_reaction,
     lane_change_length_m,
+    lead_reaction,
     orange_light_yellow_s,
     red_light_timing,
     start_gap_m,
@@ -30,8 +30,15 @@ SPEED_TOL_MS = 0.01
 TIME_TOL_S = 0.01
 POSITION_TOL_M = 0.05
 HEADING_TOL_RAD = 1e-3
+#: how far the right-turn target may lie from the spawn stage's exit point (m, rad)
+TURN_EXIT_TOL_M = 0.5
+TURN_EXIT_HEADING_TOL_RAD = 0.05
 SLOTS = ("center", "right", "left")
 NPC_SPEED_CHANGE_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
+#: classes whose ego reacts to an NPC that ends up in front slower; the cut-in watches the
+#: distance only from the cut-in on
+REACTION_CLASSES = {"BRAKE", "BR_BK", "CINF"}
+CUT_IN_REACTION = {"CINF"}
 LANE_CHANGE_ACTOR = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
                      "LCF": "hero", "LCB": "hero"}
 
@@ -58,6 +65,7 @@ def fidelity(doc: ScenarioDoc, params: dict) -> list[Finding]:
     _init_speeds(check)
     _events(check)
     _lights(check)
+    _turn_exit(check)
     check.close("FIDELITY_TIMEOUT", "stop-trigger time", doc.stop_time, params.get("timeout_s"),
                 TIME_TOL_S, doc.root.find("Storyboard/StopTrigger"))
     _weather(check)
@@ -108,9 +116,11 @@ def _spawns(check: _Check) -> None:
             check.found.append(Finding("FIDELITY_MISSING", f"{entity} is not placed in Init"))
         elif params.get("domain") == "highway" and entity == "hero":
             _lane_position(check, code, entity, prefix, position)
+        elif params.get("domain") == "highway" and position.tag == "LanePosition":
+            _lane_position(check, code, entity, prefix, position)
+            _gap_along_lane(check, entity, prefix, position)
         elif params.get("domain") == "highway":
-            _world_position(check, code, f"{entity} (placed so its gap holds at "
-                            "maneuver_start_s)", _highway_npc_start(params, prefix), position)
+            _world_position(check, code, entity, _pose(params, prefix), position)
         else:
             _world_position(check, code, entity, _expected_world(params, prefix), position)
 
@@ -121,15 +131,39 @@ def _value(params: dict, key: str) -> float | None:
     return float(value) if ok else None
 
 
-def _highway_npc_start(params: dict, prefix: str) -> tuple[float, ...] | None:
-    """The NPC's spawn moved back along its heading by the lead-in drift (conventions)."""
-    keys = [_value(params, k) for k in (*(f"{prefix}_{axis}" for axis in "xyzh"),
-                                        f"{prefix}_speed_ms", "ego_speed_ms", "maneuver_start_s")]
-    if None in keys:
-        return None
-    x, y, z, h, speed, ego_speed, start = keys
-    drift = start_gap_m(0.0, speed, ego_speed, start)
-    return x + drift * math.cos(h), y + drift * math.sin(h), z, h
+def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
+    """``(x, y, z, h)`` the spawn stage gave ``prefix``, or None when a key is missing."""
+    pose = [_value(params, f"{prefix}_{axis}") for axis in "xyzh"]
+    return None if None in pose else tuple(pose)
+
+
+def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._Element) -> None:
+    """A highway NPC stands at t = 0 where its recorded gap holds at ``maneuver_start_s``: the
+    recorded gap minus the lead-in drift (``start_gap_m``) ahead of the ego, along its lane.
+    Walking back that far along the NPC's lane (Town04) must reach the ego's ``s``."""
+    params = check.params
+    keys = [_value(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
+                                        "ego_speed_ms", "maneuver_start_s", "ego_s")]
+    ego_road, lane, s = params.get("ego_road_id"), number(position, "laneId"), \
+        number(position, "s")
+    if None in (*keys, ego_road, lane, s):
+        return
+    distance, speed, ego_speed, start, ego_s = keys
+    gap = start_gap_m(distance, speed, ego_speed, start)
+    try:  # imported here: the map loads once, and only for scenarios that need it
+        import spawn_db
+    except ImportError:
+        return
+    try:
+        road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s, -gap)
+    except spawn_db.SpawnDbError:
+        return  # not a Town04 lane position: FIDELITY_GAP above compared it with params
+    if str(road) != str(ego_road) or abs(back_s - ego_s) > POSITION_TOL_M:
+        check.found.append(Finding(
+            "FIDELITY_GAP", f"{entity} is not {gap:.2f} m ahead of the ego along its lane at "
+            f"t = 0 (the recorded {distance:g} m at maneuver_start_s minus the lead-in drift): "
+            f"{gap:.2f} m back along its lane is road {road} s={back_s:.2f}, the ego starts at "
+            f"road {ego_road} s={ego_s:g}", "error", position.sourceline))
 
 
 def _lane_position(check: _Check, code: str, entity: str, prefix: str,
@@ -192,8 +226,8 @@ def _expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]
     """(action name, end speed, duration, start) of every speed change the class must contain."""
     code = params.get("maneuver_class")
     duration, start = params.get("duration_s"), params.get("maneuver_start_s")
-    hero = _stop_at_line(params) if code == "U4_1" else _brake_reaction(doc, params) \
-        if code in ("BRAKE", "BR_BK") else None
+    hero = _stop_at_line(params) if code == "U4_1" else _npc_reaction(doc, params) \
+        if code in REACTION_CLASSES else None
     if hero is not None:
         changes = [("hero_speed_change", hero.end_speed, hero.duration_s, hero.start_s)]
     elif code == "U4_1":  # without the spawn's stop line only the target is known
@@ -215,9 +249,9 @@ def _stop_at_line(params: dict) -> SpeedProfile | None:
     return None if None in keys else stop_at_line(*keys)
 
 
-def _brake_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
-    """BRAKE: the ego slows to the lead's end speed after a reaction time, if the lead ends
-    slower than the ego's recorded end speed (conventions)."""
+def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
+    """BRAKE, CINF: the ego slows to the NPC's end speed after a reaction time, if the NPC
+    (braking lead, cutter) ends slower than the ego's recorded end speed (conventions)."""
     keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
                                         "npc_end_speed_ms", "duration_s", "maneuver_start_s",
                                         "npc_distance_m", "timeout_s")]
@@ -225,11 +259,10 @@ def _brake_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
     if None in keys or None in lengths:
         return None
     ego, ego_end, lead, lead_end, duration, start, distance, timeout = keys
-    if lead_end >= ego_end:
-        return None
     profile = SpeedProfile(lead, lead_end, start, duration)
     clearance = sum(lengths) / 2 + SAFETY_GAP_M
-    return ego_reaction(ego, profile, start_gap_m(distance, lead, ego, start), timeout, clearance)
+    return lead_reaction(ego, ego_end, profile, start_gap_m(distance, lead, ego, start), timeout,
+                         clearance, cut_in=params.get("maneuver_class") in CUT_IN_REACTION)
 
 
 def _events(check: _Check) -> None:
@@ -307,6 +340,30 @@ def _lights(check: _Check) -> None:
                                        light.sourceline))
         check.close("FIDELITY_TRIGGER", f"{name} time", event.start_s, start, TIME_TOL_S,
                     event.action)
+
+
+def _turn_exit(check: _Check) -> None:
+    """U4_4: the ego is routed to the exit the spawn stage found on the map (``turn_exit_*``:
+    into the lane the junction's right movement leads to), not to a point nearby."""
+    params = check.params
+    want = _pose(params, "turn_exit")
+    if params.get("maneuver_class") != "U4_4" or want is None:
+        return
+    event = check.doc.events.get("hero_turn_right")
+    target = None if event is None else event.action.find(
+        ".//AcquirePositionAction/Position/WorldPosition")
+    if target is None:
+        check.found.append(Finding("FIDELITY_MISSING", "no AcquirePositionAction "
+                                   "'hero_turn_right' with a WorldPosition"))
+        return
+    for axis, value in zip("xy", want, strict=False):
+        check.close("FIDELITY_TURN", f"right-turn target {axis} (the right movement's exit "
+                    "lane)", number(target, axis), value, TURN_EXIT_TOL_M, target)
+    got_h = number(target, "h")
+    if got_h is not None:  # headings equal modulo a full turn
+        got_h = want[3] + math.remainder(got_h - want[3], math.tau)
+    check.close("FIDELITY_TURN", "right-turn target heading", got_h, want[3],
+                TURN_EXIT_HEADING_TOL_RAD, target)
 
 
 def _light_plan(params: dict) -> tuple[str, float | None]:

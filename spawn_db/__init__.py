@@ -6,7 +6,9 @@ Public API:
   ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys filled).
 - ``lane_position_to_world(road_id, lane_id, s, offset=0)`` -> ``(x, y, z, h)`` and
   ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
-  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame); ``traffic_lights_carla()``
+  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame);
+  ``distance_along_lane(from_road, from_lane, from_s, to_road, to_lane, to_s)`` -> signed
+  metres along the lane (``None`` when not reached); ``traffic_lights_carla()``
   (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
 - ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``,
   ``carry_reviews``.
@@ -37,7 +39,7 @@ from spawn_db.errors import (
 )
 from spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
 from spawn_db.opendrive import load_opendrive
-from spawn_db.road_network import RoadNetwork
+from spawn_db.road_network import LanePoint, RoadNetwork
 from spawn_db.signals import is_traffic_light, signal_position
 
 
@@ -66,6 +68,22 @@ def advance_along_lane(road_id: int | str, lane_id: int, s: float, distance: flo
     return road, point.lane_id, point.s
 
 
+def distance_along_lane(from_road_id: int | str, from_lane_id: int, from_s: float,
+                        to_road_id: int | str, to_lane_id: int, to_s: float,
+                        cap_m: float = 1000.0, map_path: str | Path | None = None
+                        ) -> float | None:
+    """Signed metres driven along the lane from one lane position to another.
+
+    Positive when the second lies ahead in the driving direction, negative when behind;
+    ``None`` when it is not on the same lane (followed across road and junction boundaries
+    like :func:`advance_along_lane`) within ``cap_m``. Raises :class:`OpenDriveError` when the
+    first position is not on the map.
+    """
+    start = LanePoint(str(from_road_id), int(from_lane_id), float(from_s))
+    end = LanePoint(str(to_road_id), int(to_lane_id), float(to_s))
+    return road_network(map_path).distance_between(start, end, cap_m)
+
+
 def traffic_lights_carla(map_path: str | Path | None = None) -> dict[str, tuple[float, float]]:
     """Every dynamic traffic light of the map: signal id -> ``(x, y)`` in CARLA's frame.
 
@@ -85,6 +103,7 @@ __all__ = [
     "DEFAULT_DB_PATH", "DEFAULT_MAP_PATH", "Assessment", "LaneEndsError", "NoSpawnFits",
     "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
     "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
+    "distance_along_lane",
     "build_database", "carry_reviews", "lane_position_to_world", "load_database", "load_opendrive",
     "mark_reviewed", "road_network", "traffic_lights_carla", "write_database",
 ]

@@ -10,6 +10,11 @@ survivors are scored with Table 5.3 and ranked (urban manoeuvres without a light
 light-distance points for room to drive before the next light instead); ``assign`` picks candidate
 ``index % len(candidates)`` (round robin) and fills the params' spawn keys in the
 OpenSCENARIO frame (``y = -y_carla``, ``h = -radians(yaw_carla)``).
+
+Every highway NPC is placed where it stands at t = 0: its recorded gap holds at
+``maneuver_start_s`` (when it cuts in, brakes, ...), and until then both cars hold their start
+speeds, so at t = 0 it stands ``corpus.kinematics.start_gap_m`` ahead of the ego, measured
+along its lane (on a curve a straight shift would leave the lane).
 """
 
 from __future__ import annotations
@@ -20,10 +25,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from corpus.kinematics import start_gap_m
 from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from spawn_db.database import load_database
 from spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError
 from spawn_db.road_network import LanePoint, RoadNetwork
+from spawn_db.signals import junction_approach
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
 VEHICLE_MARGIN_M = 6.0
@@ -32,6 +39,14 @@ LIGHT_MOVEMENT_BY_TAG = {
     "stop_at_tfl_red": "straight", "pass_tfl_green_or_orange": "straight",
     "straight_tfl_green": "straight", "turn_right_at_tfl_green": "right",
 }
+#: the urban manoeuvre whose params get the right-turn exit (``turn_exit_*`` keys)
+RIGHT_TURN_TAG = "turn_right_at_tfl_green"
+#: the right turn ends this far into the lane the right movement leads to (m)
+TURN_EXIT_INTO_M = 10.0
+#: the junction a right turn crosses must start within this distance of the spawn (m)
+TURN_SEARCH_M = 500.0
+TURN_EXIT_KEYS = tuple(f"turn_exit_{key}" for key in ("x", "y", "z", "h", "road_id", "lane_id",
+                                                      "s"))
 #: free-ride slots and the lane each stands in relative to the ego
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 CUT_IN_CLASSES = ("CINF", "CINB")
@@ -129,7 +144,9 @@ class Requirements:
             raise ParamsError(f"{scenario_id}: required_lane_sides must hold 'left'/'right', "
                               f"got {list(sides)!r}")
         max_speed = number("max_speed_ms")
-        gap_ahead, gap_behind = number("gap_ahead_m"), number("gap_behind_m")
+        starts = [distance for _, _, distance in _placed_actors(params)]
+        gap_ahead = max(number("gap_ahead_m"), *starts, 0.0)
+        gap_behind = max(number("gap_behind_m"), *(-d for d in starts), 0.0)
         manoeuvre_end = number("maneuver_start_s", 0.0) + number("duration_s", 0.0)
         ahead = gap_ahead + max_speed * number("timeout_s") + VEHICLE_MARGIN_M
         return cls(
@@ -247,8 +264,46 @@ class SpawnMatcher:
             result.update(_pose_keys(actor, pose.x, pose.y, pose.z, pose.h))
             result.update(_lane_keys(actor, point))
         if params.get("domain") == "urban":
-            result.update(_light_keys(candidate.entry, Requirements.from_params(params)))
+            needs = Requirements.from_params(params)
+            result.update(_light_keys(candidate.entry, needs))
+            result.update(self._turn_exit_keys(ego, needs))
         return result
+
+    def _turn_exit_keys(self, ego: LanePoint, needs: Requirements) -> dict[str, Any]:
+        """``turn_exit_*``: where a right turn from the spawn ends (``None`` for other tags)."""
+        keys: dict[str, Any] = dict.fromkeys(TURN_EXIT_KEYS)
+        if needs.tag != RIGHT_TURN_TAG:
+            return keys
+        point = self.right_turn_exit(ego, needs.scenario_id)
+        pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
+        keys.update(_pose_keys("turn_exit", pose.x, pose.y, pose.z, pose.h))
+        keys.update(_lane_keys("turn_exit", point))
+        return keys
+
+    def right_turn_exit(self, ego: LanePoint, scenario_id: str = "") -> LanePoint:
+        """``TURN_EXIT_INTO_M`` into the lane the right movement of the junction ahead leads to.
+
+        Follows the ego's lane to the first junction, takes the connecting lane whose movement
+        is ``right`` (a signalised one first) and its successor, the exit lane.
+        """
+        network = self.network
+        travelled, approach = 0.0, None
+        for segment in network.walk(ego.road_id, ego.lane_id, ego.s):
+            approach = junction_approach(network, segment.key)
+            travelled += segment.length
+            if approach is not None or travelled > TURN_SEARCH_M:
+                break
+        rights = [] if approach is None else sorted(
+            (m for m in approach.movements if m.movement == "right"),
+            key=lambda m: m.signal is None)
+        exits = network.successors(rights[0].connecting_lane) if rights else []
+        if not exits:
+            raise NoSpawnFits(f"{scenario_id}: from road {ego.road_id} lane {ego.lane_id} "
+                              f"s={ego.s:g} no junction within {TURN_SEARCH_M:.0f} m "
+                              "has a right movement with an exit lane")
+        exit_lane = exits[0]
+        return network.advance(exit_lane.road_id, exit_lane.lane_id,
+                               network.entry_s(exit_lane), TURN_EXIT_INTO_M)
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
                params: dict[str, Any]) -> LanePoint:
@@ -352,19 +407,30 @@ def _spread_over_roads(candidates: list[SpawnCandidate]) -> list[SpawnCandidate]
     return sorted(ordered, key=lambda c: (-c.score, rank[c.spawn_id], c.spawn_id))
 
 
-def _placed_actors(params: dict[str, Any]):
-    """``(actor, adjacent side or None, signed distance along the lane)`` of every NPC."""
+def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]]:
+    """``(actor, adjacent side or None, signed distance along the lane at t = 0)`` of every
+    highway NPC: the recorded gap holds at ``maneuver_start_s``."""
     if params.get("domain") != "highway":
-        return
+        return []
+    placed = []
     if params.get("has_npc") and params.get("maneuver_class") not in FREE_RIDE_CLASSES:
         side = None
         if params.get("maneuver_class") in CUT_IN_CLASSES:
             sides = params.get("required_lane_sides") or []
             side = sides[0] if sides else None
-        yield "npc", side, float(params.get("npc_distance_m") or 0.0)
+        placed.append(("npc", side, _start_distance(params, "npc")))
     for slot, side in FREE_RIDE_SLOTS.items():
         if params.get(f"{slot}_present"):
-            yield slot, side, float(params.get(f"{slot}_distance_m") or 0.0)
+            placed.append((slot, side, _start_distance(params, slot)))
+    return placed
+
+
+def _start_distance(params: dict[str, Any], actor: str) -> float:
+    """Where ``actor`` stands at t = 0, ahead of the ego (m): its recorded gap minus the
+    lead-in drift (``corpus.kinematics.start_gap_m``)."""
+    number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+    return start_gap_m(number(f"{actor}_distance_m", 0.0), number(f"{actor}_speed_ms"),
+                       number("ego_speed_ms"), number("maneuver_start_s", 0.0))
 
 
 def _pose_keys(actor: str, x: float, y: float, z: float, h: float) -> dict[str, float]:

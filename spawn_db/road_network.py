@@ -227,6 +227,26 @@ class RoadNetwork:
             f"lane {lane_id} of road {road_id} at s={s:g}: the drivable lane ends "
             f"{travelled:.1f} m {'ahead' if forward else 'behind'}, {abs(distance):.1f} m needed")
 
+    def distance_between(self, start: LanePoint, end: LanePoint, cap: float) -> float | None:
+        """Signed metres along the lane from ``start`` to ``end`` (negative: ``end`` is behind).
+
+        Follows the walk of :meth:`walk` (straightest continuation) ahead, then behind, up to
+        ``cap`` metres each way; ``None`` when ``end`` is not on that lane within reach.
+        """
+        for forward in (True, False):
+            travelled = 0.0
+            for segment in self.walk(start.road_id, start.lane_id, start.s, forward):
+                low, high = sorted((segment.s_from, segment.s_to))
+                key = segment.key
+                if (key.road_id, key.lane_id) == (str(end.road_id), end.lane_id) \
+                        and low - 1e-6 <= end.s <= high + 1e-6:
+                    part = self.segment_length(key, segment.s_from, end.s)
+                    return (travelled + part) * (1 if forward else -1)
+                travelled += segment.length
+                if travelled > cap:
+                    break
+        return None
+
     def drivable_length(self, road_id: str | int, lane_id: int, s: float, forward: bool,
                         cap: float) -> float:
         """Metres drivable from a lane position (ahead or behind), at most ``cap``."""

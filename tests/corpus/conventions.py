@@ -7,6 +7,8 @@ import math
 import pytest
 from lxml import etree
 
+#: the ego reacts to a braking lead (from t = 0) or a cutter ahead (from its cut-in)
+REACTING_CLASSES = {"BRAKE", "BR_BK", "CINF"}
 SINGLE_NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
 REACTION_S, YELLOW_PHASE_S, FIRST_LIGHT_CHANGE_S = 1.0, 3.0, 0.5
 BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
@@ -61,7 +63,7 @@ def expected_events(p: dict) -> dict[str, tuple]:
     """Action name -> the values the conventions promise for it (``None``: checked apart)."""
     code, start, dur = p["maneuver_class"], p["maneuver_start_s"], p["duration_s"]
     events = {"hero_speed_change": ("speed", p["ego_end_speed_ms"], dur, start)}
-    if code in ("BRAKE", "BR_BK") and p["npc_end_speed_ms"] < p["ego_end_speed_ms"]:
+    if code in REACTING_CLASSES and p["npc_end_speed_ms"] < p["ego_end_speed_ms"]:
         # the reaction's timing depends on the gap: assert_brake_reaction checks it
         events["hero_speed_change"] = ("speed", p["npc_end_speed_ms"], None, None)
 
@@ -143,9 +145,10 @@ def assert_storyboard_matches(doc: etree._ElementTree, p: dict) -> None:
             x, y = signal.get("name").removeprefix("pos=").split(",")
             assert (float(x), float(y)) == pytest.approx((p["tfl_x_carla"], p["tfl_y_carla"]),
                                                          abs=5e-4)
-        else:
+        else:  # the right turn ends where the spawn stage found the right movement's exit
             (start,) = values
-            assert action.find(".//AcquirePositionAction/Position/WorldPosition") is not None
+            target = action.find(".//AcquirePositionAction/Position/WorldPosition")
+            assert [float(target.get(k)) for k in "xyzh"] == [p[f"turn_exit_{k}"] for k in "xyzh"]
         if start is not None:
             assert start_time(doc, name) == pytest.approx(start, abs=1e-9), name
     if expected["hero_speed_change"][2] is None:
@@ -175,9 +178,7 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
         private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
         assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
         position = private.find(".//TeleportAction/Position")[0]
-        if p["domain"] == "highway" and name != "hero":
-            assert_npc_starts_for_its_gap(position, p, actor, speed)
-        elif p["domain"] == "highway":
+        if p["domain"] == "highway":  # every highway actor stands where the spawn stage put it
             assert position.tag == "LanePosition"
             assert (int(position.get("roadId")), int(position.get("laneId")),
                     float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],
@@ -198,24 +199,10 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
             assert blueprint == BLUEPRINTS.get(vehicle_type, BLUEPRINTS["car"])
 
 
-def assert_npc_starts_for_its_gap(position: etree._Element, p: dict, actor: str,
-                                  speed: float) -> None:
-    """A highway NPC starts on its lane heading, behind (or ahead of) its spawn by the drift
-    ``(speed - ego_speed_ms) * maneuver_start_s``, so the recorded gap holds at the start."""
-    assert position.tag == "WorldPosition"
-    x, y, z, h = (float(position.get(k)) for k in "xyzh")
-    dx, dy = x - p[f"{actor}_x"], y - p[f"{actor}_y"]
-    heading = p[f"{actor}_h"]
-    along = dx * math.cos(heading) + dy * math.sin(heading)
-    across = dx * math.sin(heading) - dy * math.cos(heading)
-    drift = (speed - p["ego_speed_ms"]) * p["maneuver_start_s"]
-    assert along == pytest.approx(-drift, abs=1e-6) and across == pytest.approx(0, abs=1e-6)
-    assert (z, h) == (p[f"{actor}_z"], heading)
-
-
 def assert_brake_reaction(doc: etree._ElementTree, p: dict) -> None:
-    """BRAKE: the ego brakes no harder than the lead or 8 m/s^2 and keeps 2 m between the
-    bumpers (or brakes that hard when even that cannot keep them)."""
+    """BRAKE, CINF: the ego brakes no harder than the lead or 8 m/s^2 and keeps 2 m between
+    the bumpers (or brakes that hard when even that cannot keep them); behind a cutter, from
+    the moment it starts to cut in."""
     action = action_named(doc, "hero_speed_change")
     duration = float(action.find(".//SpeedActionDynamics").get("value"))
     target = float(action.find(".//AbsoluteTargetSpeed").get("value"))
@@ -229,14 +216,16 @@ def assert_brake_reaction(doc: etree._ElementTree, p: dict) -> None:
     gap = p["npc_distance_m"] - (v_lead - v_ego) * t0
     ego_x = lead_x = 0.0
     steps = int(p["timeout_s"] / 0.001)
-    closest = gap
+    watch_from = t0 if p["maneuver_class"] == "CINF" else 0.0
+    closest = gap if watch_from == 0.0 else math.inf
     for step in range(steps):  # plain Euler integration, independent of corpus.kinematics
         t = step * 0.001
         lead_v = v_lead + (v_lead_end - v_lead) * _ramp(t, t0, lead_duration)
         ego_v = v_ego + (target - v_ego) * _ramp(t, start, duration)
         lead_x += lead_v * 0.001
         ego_x += ego_v * 0.001
-        closest = min(closest, gap + lead_x - ego_x)
+        if t + 0.001 >= watch_from:
+            closest = min(closest, gap + lead_x - ego_x)
     hardest = duration == pytest.approx(max(v_ego - target, 0.0) / hardest_ms2)
     assert t0 <= start <= t0 + REACTION_S
     assert start == t0 + REACTION_S or hardest  # reacting early only when braking hard is late

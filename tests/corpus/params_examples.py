@@ -1,8 +1,9 @@
 """One realistic params dict per manoeuvre class, written by hand from docs/params.md.
 
-Spawn keys hold plausible CARLA Town04 values: highway road 45 (lanes -1..-4, s around 100),
-urban world coordinates in the OpenSCENARIO frame. Used until real sample records flow through
-``ingest.extract_params`` and ``spawn_db``, and as readable examples afterwards.
+Spawn keys: highway on Town04's curved road 45 (lanes -1..-4), the ego at s = 100 and every
+NPC where it stands at t = 0: its recorded gap minus the lead-in drift
+``(v_npc - v_ego) x maneuver_start_s``, measured along its lane (docs/params.md), poses from
+the map; urban world coordinates in the OpenSCENARIO frame, written by hand.
 """
 
 from __future__ import annotations
@@ -10,7 +11,11 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+import spawn_db
 from corpus.retrieval import CLASS_TAGS as TAGS  # checked against docs/params.md
+
+EGO_S = 100.0
+START_S = 2.0
 
 HIGHWAY_CLASSES = [code for code in TAGS if not code.startswith("U")]
 URBAN_CLASSES = [code for code in TAGS if code.startswith("U")]
@@ -27,49 +32,59 @@ def _common(code: str, duration_s: float, start_s: float, ego: float, ego_end: f
     }
 
 
-def _lane(actor: str, lane_id: int, s: float) -> dict:
-    return {f"{actor}_road_id": 45, f"{actor}_lane_id": lane_id, f"{actor}_s": s,
-            f"{actor}_x": 120.0 + s, f"{actor}_y": -30.5 + 3.5 * lane_id, f"{actor}_z": 0.3,
-            f"{actor}_h": 0.02}
+def _lane(actor: str, lane_id: int, ahead_m: float = 0.0) -> dict:
+    """Spawn keys of ``actor`` in ``lane_id`` of road 45, ``ahead_m`` along it from s = 100."""
+    road, lane, s = spawn_db.advance_along_lane(45, lane_id, EGO_S, ahead_m)
+    x, y, z, h = spawn_db.lane_position_to_world(road, lane, s)
+    return {f"{actor}_road_id": road, f"{actor}_lane_id": lane, f"{actor}_s": round(s, 4),
+            f"{actor}_x": round(x, 4), f"{actor}_y": round(y, 4), f"{actor}_z": round(z, 4),
+            f"{actor}_h": round(h, 6)}
 
 
-def _npc(speed: float, delta: float, distance: float, lane_id: int, vehicle: str = "car") -> dict:
+def _start_ahead(distance: float, speed: float, ego: float) -> float:
+    """How far ahead of the ego an actor stands at t = 0 for ``distance`` at the manoeuvre."""
+    return distance - (speed - ego) * START_S
+
+
+def _npc(speed: float, delta: float, distance: float, lane_id: int, ego: float,
+         vehicle: str = "car") -> dict:
     return {"has_npc": True, "npc_position": "front" if distance > 0 else "behind",
             "npc_speed_ms": speed, "delta_speed_ms": delta,
             "npc_end_speed_ms": max(speed + delta, 0.0), "npc_distance_m": distance,
             "npc_vehicle_type": vehicle, "other_dir_traffic": False,
-            **_lane("npc", lane_id, 100.0 + distance)}
+            **_lane("npc", lane_id, _start_ahead(distance, speed, ego))}
 
 
 def _highway(code: str) -> dict:
     if code in ("BRAKE", "BR_BK"):
-        params = _common(code, 3.4, 2.0, 27.5, 27.5)
-        params |= _npc(25.0, -11.0, 32.0, -3, "truck") | {"brake_intensity": 0.62}
+        params = _common(code, 3.4, START_S, 27.5, 27.5)
+        params |= _npc(25.0, -11.0, 32.0, -3, 27.5, "truck") | {"brake_intensity": 0.62}
     elif code in ("CINF", "CINB", "COUTF", "COUTB"):
         ego = 26.0
-        params = _common(code, 4.1, 2.0, ego, ego * 1.05 if code == "COUTF" else ego)
+        params = _common(code, 4.1, START_S, ego, ego * 1.05 if code == "COUTF" else ego)
         distance = 18.0 if code.endswith("F") else -14.0
         cut_in = code.startswith("CIN")
         move = "left" if code in ("CINF", "COUTB") else "right"
         # a cut-in starts in the lane opposite to its move, a cut-out in the ego lane
         lane = (-4 if move == "left" else -2) if cut_in else -3
-        params |= _npc(ego + (2.5 if code != "COUTB" else -2.5), -1.2, distance, lane, "van")
+        params |= _npc(ego + (2.5 if code != "COUTB" else -2.5), -1.2, distance, lane, ego,
+                       "van")
         params |= {"lane_change_direction": move,
                    "required_lane_sides": [("right" if move == "left" else "left") if cut_in
                                            else move]}
     elif code in ("LCF", "LCB"):
         move = "left" if code == "LCF" else "right"
-        params = _common(code, 5.3, 2.0, 24.0, 26.5)
+        params = _common(code, 5.3, START_S, 24.0, 26.5)
         params |= {"lane_change_direction": move, "other_dir_traffic": True,
                    "required_lane_sides": [move]}
     elif code in ("FLF", "FLB"):
-        params = _common(code, 6.0, 2.0, 23.0, 21.0)
+        params = _common(code, 6.0, START_S, 23.0, 21.0)
         distance = 40.0 if code == "FLF" else -35.0
-        params |= _npc(22.0, -3.0, distance, -2, "car")
+        params |= _npc(22.0, -3.0, distance, -2, 23.0, "car")
         params |= {"npc_distance_end_m": distance * 0.8, "npc_dist_traveled_m": 120.0,
                    "behavior_type": "B2"}
     else:
-        params = _common(code, 8.0, 2.0, 30.0, 31.0)
+        params = _common(code, 8.0, START_S, 30.0, 31.0)
         sign = 1.0 if code == "FRF" else -1.0
         slots = {"center": (True, -3, 45.0), "right": (True, -4, 20.0), "left": (False, -2, 0.0)}
         for slot, (present, lane, distance) in slots.items():
@@ -80,10 +95,10 @@ def _highway(code: str) -> dict:
                        f"{slot}_end_distance_m": sign * distance * 0.9,
                        f"{slot}_vehicle_type": "truck" if slot == "right" else "car"}
             if present:
-                params |= _lane(slot, lane, 100.0 + sign * distance)
+                params |= _lane(slot, lane, _start_ahead(sign * distance, 29.0, 30.0))
         params |= {"ego_dist_traveled_m": 244.0, "required_lane_sides": ["right"]}
         params |= {"driving_side": "right"} if code == "FRF" else {"other_dir_traffic": False}
-    return params | _lane("ego", -3, 100.0)
+    return params | _lane("ego", -3)
 
 
 def _urban(code: str) -> dict:
@@ -110,6 +125,10 @@ def _urban(code: str) -> dict:
     if code != "U1_1":
         params |= {"tfl_x_carla": 315.0, "tfl_y_carla": -140.2, "spawn_tfl_distance_m": 31.7,
                    "spawn_stop_line_distance_m": 24.4}
+    exit_keys = {"x": 326.4, "y": 208.9, "z": 0.3, "h": 0.0, "road_id": 8, "lane_id": -1,
+                 "s": 10.0}  # east, 10 m into the road the right movement leads to
+    params |= {f"turn_exit_{key}": value if code == "U4_4" else None
+               for key, value in exit_keys.items()}
     return params
 
 

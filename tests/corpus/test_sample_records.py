@@ -16,6 +16,7 @@ from lxml import etree
 import corpus
 import spawn_db
 from ingest import IngestReport, extract_params, iter_raw_records
+from ingest.samples import write_highway_samples
 from schemas import run_asam_qc, validate_xosc
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
@@ -28,10 +29,15 @@ def _place(params: dict) -> dict:
     if params["domain"] == "urban":
         placed |= {"ego_x": 313.2, "ego_y": 171.8, "ego_z": 0.3, "ego_h": 1.5708,
                    "tfl_x_carla": 315.04, "tfl_y_carla": -140.21, "spawn_tfl_distance_m": 31.7,
-                   "spawn_stop_line_distance_m": 24.4}
+                   "spawn_stop_line_distance_m": 24.4, "turn_exit_x": 326.4,
+                   "turn_exit_y": 208.9, "turn_exit_z": 0.3, "turn_exit_h": 0.0,
+                   "turn_exit_road_id": 8, "turn_exit_lane_id": -1, "turn_exit_s": 10.0}
         return placed
     for actor, lane in LANE_OF.items():
-        distance = params.get(f"{actor}_distance_m", 0.0) if actor != "ego" else 0.0
+        distance = 0.0
+        if actor != "ego" and f"{actor}_distance_m" in params:  # where it stands at t = 0
+            drift = (params[f"{actor}_speed_ms"] - params["ego_speed_ms"]) * 2.0
+            distance = params[f"{actor}_distance_m"] - drift
         placed |= {f"{actor}_road_id": 45, f"{actor}_lane_id": lane,
                    f"{actor}_s": 150.0 + distance, f"{actor}_x": 150.0 + distance,
                    f"{actor}_y": 3.5 * lane, f"{actor}_z": 0.0, f"{actor}_h": 0.0}
@@ -95,3 +101,42 @@ def test_asam_quality_checker_finds_nothing_in_pipeline_output(pipeline_scenario
         if seen[params["maneuver_class"]] <= 2:
             assert run_asam_qc(path) == [], params["scenario_id"]
     assert set(seen) == set(corpus.retrieval.CLASS_TAGS)
+
+
+@pytest.fixture(scope="module")
+def cut_ins_ahead(tmp_path_factory) -> list[tuple[dict, Path]]:
+    """CINF records of a larger sample (some cutters end slower than the ego, close ahead),
+    through ingest -> spawn match -> corpus."""
+    raw = tmp_path_factory.mktemp("cinf_raw")
+    write_highway_samples(raw, seed=11, per_class=12)
+    for path in raw.iterdir():
+        if not path.name.startswith("CINF_"):
+            path.unlink()
+    matcher = spawn_db.SpawnMatcher()
+    out = tmp_path_factory.mktemp("cinf")
+    made = []
+    for index, item in enumerate(iter_raw_records(raw, IngestReport())):
+        params = matcher.assign(extract_params(item.record), index)
+        made.append((params, corpus.generate(params, out / f"{params['scenario_id']}.xosc")))
+    return made
+
+
+def test_ego_reacts_to_a_slower_cutter_where_holding_its_speed_collides(cut_ins_ahead):
+    """The corpus before the fix: the ego kept its recorded speed behind a cutter that ended
+    slower. On some sample records that runs into the cutter (SEM_COLLISION); the ego's
+    reaction avoids it on all of them."""
+    collided = []
+    for params, path in cut_ins_ahead:
+        assert validate_xosc(path, params, fix=False).errors == [], params["scenario_id"]
+        tree = etree.parse(str(path))
+        action = tree.find(".//Action[@name='hero_speed_change']")
+        old = {"AbsoluteTargetSpeed": params["ego_end_speed_ms"],
+               "SpeedActionDynamics": params["duration_s"]}
+        for tag, value in old.items():
+            action.find(f".//{tag}").set("value", repr(value))
+        tree.find(".//Condition[@name='hero_speed_change_start']//SimulationTimeCondition").set(
+            "value", repr(params["maneuver_start_s"]))
+        tree.write(str(path))
+        if "SEM_COLLISION" in {f.code for f in validate_xosc(path, params, fix=False).errors}:
+            collided.append(params["scenario_id"])
+    assert len(collided) >= 2, collided

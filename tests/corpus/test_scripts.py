@@ -159,8 +159,8 @@ def test_there_are_sixteen_scripts_covering_every_class():
         assert corpus.retrieve(code).script_path.name in names
 
 
-@pytest.mark.parametrize(("code", "key"), [("BRAKE", "npc_x"), ("U4_1", "ego_x"),
-                                           ("U4_2", "tfl_x_carla"),
+@pytest.mark.parametrize(("code", "key"), [("BRAKE", "npc_s"), ("U4_1", "ego_x"),
+                                           ("U4_2", "tfl_x_carla"), ("U4_4", "turn_exit_x"),
                                            ("U4_1", "spawn_stop_line_distance_m")])
 def test_unfilled_spawn_key_is_a_clear_error(code, key, tmp_path):
     params = example_params(code) | {key: None}

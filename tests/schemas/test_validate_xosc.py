@@ -18,6 +18,7 @@ from click.testing import CliRunner
 from lxml import etree
 
 import corpus
+import spawn_db
 from scenweave.cli import cli
 from schemas import run_asam_qc, validate_xosc
 from tests.corpus.params_examples import TAGS, example_params
@@ -177,8 +178,8 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
     "URB_TURN_NOT_RIGHT": ("U4_4", lambda r: _mirror_turn(r), False),
     "URB_TURN_HEADING": ("U4_4", _set("//Action[@name='hero_turn_right']//WorldPosition", "h",
                                       "1.5708"), False),
-    # a point 15 m right, 5 m ahead: before the stop line 24.4 m ahead
-    "URB_TURN_BEFORE_LINE": ("U4_4", lambda r: _turn_target_at(r, 5.0, 15.0), True),
+    # the old fixed offset (stop line + 10 m ahead, 15 m right), not the right movement's exit
+    "FIDELITY_TURN": ("U4_4", lambda r: _turn_target_at(r, 24.4 + 10.0, 15.0), True),
     "CARLA_VERSION": ("BRAKE", _set("//FileHeader", "revMinor", "2"), False),
     "CARLA_NO_HERO": ("BRAKE", _set("//Property[@name='type']", "value", "scenario"), False),
     "XSD_INVALID": ("FLB", _set("//FileHeader", "subtitle", "not in the schema"), False),
@@ -191,9 +192,8 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
     "FIDELITY_SPAWN": ("CINF", _set("//Private[@entityRef='hero']//LanePosition", "s", "1.0"),
                        True),
     # the cutter placed at the recorded gap at t=0: it drifts before the lane change at 2 s
-    "FIDELITY_GAP": ("CINF", lambda r: [_set("//Private[@entityRef='npc']//WorldPosition", axis,
-                                             str(example_params("CINF")[f"npc_{axis}"]))(r)
-                                        for axis in "xy"], True),
+    "FIDELITY_GAP": ("CINF", lambda r: _set("//Private[@entityRef='npc']//LanePosition", "s",
+                                            str(_s_at_recorded_gap("CINF")))(r), True),
     "FIDELITY_DIRECTION": ("COUTB", lambda r: _flip_lane(r), True),
     "FIDELITY_DURATION": ("FLB", _set("//Action[@name='npc_speed_change']//SpeedActionDynamics",
                                       "value", "0.5"), True),
@@ -206,6 +206,13 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
                        True),
     "FIDELITY_MISSING": ("FRF", _remove("//Event[Action[@name='hero_speed_change']]"), True),
 }
+
+
+def _s_at_recorded_gap(code: str) -> float:
+    """``s`` of the example NPC's lane ``npc_distance_m`` along it from the ego's ``s``."""
+    p = example_params(code)
+    return spawn_db.advance_along_lane(p["npc_road_id"], p["npc_lane_id"], p["ego_s"],
+                                       p["npc_distance_m"])[2]
 
 
 def _event_from(code: str, action: str) -> str:
@@ -295,6 +302,31 @@ def test_cut_in_that_starts_in_the_ego_lane_is_caught(tmp_path):
     assert validate_xosc(path, params).valid
     same_lane = params | {"npc_lane_id": params["ego_lane_id"]}
     assert "SEM_CUT_IN_LANE" in _codes(validate_xosc(path, same_lane))
+
+
+def test_right_turn_before_the_stop_line_is_caught_without_the_maps_exit(tmp_path):
+    """Without ``turn_exit_*`` a point 15 m right and 5 m ahead, before the stop line 24.4 m
+    ahead, is reached without turning at all."""
+    path, params = _scenario(tmp_path, "U4_4")
+    _mutate(path, lambda r: _turn_target_at(r, 5.0, 15.0))
+    no_exit = params | {f"turn_exit_{k}": None for k in ("x", "y", "z", "h")}
+    assert "URB_TURN_BEFORE_LINE" in _codes(validate_xosc(path, no_exit, fix=False))
+    assert "FIDELITY_TURN" in _codes(validate_xosc(path, params, fix=False))
+
+
+@pytest.mark.parametrize("code", ["CINF", "BRAKE", "FRB"])
+def test_npc_placed_by_a_difference_in_s_on_a_curved_road_is_caught(tmp_path, code):
+    """Road 45 curves: an NPC whose start gap was set as a difference in ``s`` (file and params
+    agreeing) is not at that gap along its lane."""
+    path, params = _scenario(tmp_path, code)
+    actor = "center" if code == "FRB" else "npc"
+    entity = "npc_center" if code == "FRB" else "npc"
+    along = spawn_db.distance_along_lane(45, params[f"{actor}_lane_id"], params["ego_s"], 45,
+                                         params[f"{actor}_lane_id"], params[f"{actor}_s"])
+    by_s = params["ego_s"] + along
+    assert abs(by_s - params[f"{actor}_s"]) > 0.5  # the curve makes the two differ
+    _mutate(path, _set(f"//Private[@entityRef='{entity}']//LanePosition", "s", str(by_s)))
+    assert "FIDELITY_GAP" in _codes(validate_xosc(path, params | {f"{actor}_s": by_s}))
 
 
 def test_stop_line_too_close_for_the_recorded_braking_is_caught(tmp_path):

@@ -63,9 +63,10 @@ def test_assign_returns_a_new_dict_with_ego_and_npc_along_the_lane(matcher):
     result = matcher.assign(params, 0)
     assert params["spawn_id"] is None and "ego_x" not in params
     network = matcher.network
-    # the NPC stands 42 m ahead along the ego's lane: walking back 42 m finds the ego
+    # 42 m at the manoeuvre start (2 s); the lead is 2 m/s slower, so it starts 46 m ahead
+    # along the ego's lane: walking back 46 m finds the ego
     back = network.advance(str(result["npc_road_id"]), result["npc_lane_id"], result["npc_s"],
-                           -42.0)
+                           -46.0)
     assert (back.road_id, back.lane_id) == (str(result["ego_road_id"]), result["ego_lane_id"])
     assert back.s == pytest.approx(result["ego_s"], abs=1e-3)
     pose = network.lane_to_world(result["npc_road_id"], result["npc_lane_id"], result["npc_s"])
@@ -73,10 +74,50 @@ def test_assign_returns_a_new_dict_with_ego_and_npc_along_the_lane(matcher):
         (pose.x, pose.y, pose.h), abs=1e-3)
 
 
+def _off_lane_m(network, road_id, lane_id: int, s: float, x: float, y: float) -> float:
+    """Distance from (x, y) to the nearest point of the lane centre within 40 m of ``s``
+    (searched every 0.5 m, then every 5 mm around the nearest)."""
+    length = network.road(road_id).length
+
+    def nearest(centre: float, step: float, count: int) -> tuple[float, float]:
+        values = [min(max(centre + i * step, 0.0), length) for i in range(-count, count + 1)]
+        poses = [network.lane_to_world(road_id, lane_id, v) for v in values]
+        return min((math.hypot(p.x - x, p.y - y), v) for p, v in zip(poses, values, strict=True))
+
+    _, coarse = nearest(s, 0.5, 80)
+    return nearest(coarse, 0.005, 100)[0]
+
+
+def test_highway_npc_starts_on_its_lane_centre_on_a_curved_road(matcher):
+    """Road 45 curves: the lead, 10 m/s slower, starts 20 m further on than its gap at the
+    manoeuvre start. Moved along its lane it stays on the lane centre; a straight shift of
+    the pose at the recorded gap along its heading would leave the lane by metres."""
+    params = highway("BRAKE", npc_distance_m=40.0, npc_speed_ms=20.0)
+    candidates = matcher.find(params, top_n=len(matcher.entries))
+    # road 45 is an arc of radius 180 m up to s = 290 (the lane must bend from the ego to 60 m on)
+    on_45 = [i for i, c in enumerate(candidates)
+             if c.lane_point.road_id == "45" and c.lane_point.s <= 220.0]
+    assert on_45
+    network = matcher.network
+    for index in on_45[:3]:
+        result = matcher.assign(params, index, top_n=len(matcher.entries))
+        road, lane, s = str(result["npc_road_id"]), result["npc_lane_id"], result["npc_s"]
+        assert road == "45"
+        assert _off_lane_m(network, road, lane, s, result["npc_x"], result["npc_y"]) < 0.1
+        back = network.advance(road, lane, s, -60.0)
+        assert (back.road_id, back.s) == ("45", pytest.approx(result["ego_s"], abs=1e-3))
+        at_gap = network.advance(str(result["ego_road_id"]), result["ego_lane_id"],
+                                 result["ego_s"], 40.0)
+        pose = network.lane_to_world(*at_gap)
+        straight = (pose.x + 20.0 * math.cos(pose.h), pose.y + 20.0 * math.sin(pose.h))
+        assert _off_lane_m(network, road, lane, s, *straight) > 0.5
+
+
 @pytest.mark.parametrize(("code", "side"), [("CINF", "right"), ("CINB", "left")])
 def test_cut_in_npc_starts_in_the_adjacent_lane(matcher, code, side):
     distance = 20.0 if code == "CINF" else -15.0
     params = highway(code, npc_distance_m=distance, sides=(side,))
+    distance += 2.0 * 2.0  # 2 m/s slower for the 2 s before the cut-in: it starts further on
     for index in range(5):
         result = matcher.assign(params, index)
         ego = matcher.network.key_at(result["ego_road_id"], result["ego_lane_id"],
@@ -102,10 +143,12 @@ def test_lane_change_needs_a_lane_on_that_side(matcher):
 
 def test_free_ride_slots_stand_in_their_lanes(matcher):
     params = highway("FRF", npc_distance_m=None, sides=("right", "left"),
-                     center_present=True, center_distance_m=35.0,
-                     right_present=True, right_distance_m=20.0,
-                     left_present=True, left_distance_m=50.0, has_npc=True,
+                     center_present=True, center_distance_m=35.0, center_speed_ms=31.0,
+                     right_present=True, right_distance_m=20.0, right_speed_ms=25.0,
+                     left_present=True, left_distance_m=50.0, left_speed_ms=30.0, has_npc=True,
                      gap_ahead_m=50.0)
+    # t = 0: 1 m/s faster for 2 s starts 2 m nearer, 5 m/s slower 10 m further, as fast as is
+    starts = {"center": 33.0, "right": 30.0, "left": 50.0}
     result = matcher.assign(params, 2)
     assert "npc_x" not in result
     ego = matcher.network.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
@@ -113,7 +156,7 @@ def test_free_ride_slots_stand_in_their_lanes(matcher):
                        ("right", matcher.network.neighbour(ego, "right").lane_id),
                        ("left", matcher.network.neighbour(ego, "left").lane_id)):
         back = matcher.network.advance(result[f"{slot}_road_id"], result[f"{slot}_lane_id"],
-                                       result[f"{slot}_s"], -params[f"{slot}_distance_m"])
+                                       result[f"{slot}_s"], -starts[slot])
         assert back.lane_id == lane and back.s == pytest.approx(result["ego_s"], abs=1e-3)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from spawn_db import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
+from spawn_db.road_network import LanePoint
 from tests.spawn_db.synthetic_maps import two_road_chain, write
 
 
@@ -36,6 +37,16 @@ def test_advance_backwards_returns_to_the_start(chain):
     back = chain.advance(ahead.road_id, ahead.lane_id, ahead.s, -55.0)
     assert back.road_id == "1" and back.lane_id == -2
     assert back.s == pytest.approx(70.0, abs=1e-6)
+
+
+def test_distance_between_two_lane_positions_is_measured_along_the_lane(chain):
+    start, end = LanePoint("1", -1, 90.0), LanePoint("2", -1, 15.0)
+    polyline = (_polyline_length(chain, "1", -1, 90.0, 100.0)
+                + _polyline_length(chain, "2", -1, 0.0, 15.0))
+    assert chain.distance_between(start, end, 100.0) == pytest.approx(polyline, abs=1e-4)
+    assert chain.distance_between(end, start, 100.0) == pytest.approx(-polyline, abs=1e-4)
+    assert chain.distance_between(start, LanePoint("2", -2, 15.0), 100.0) is None
+    assert chain.distance_between(start, end, 5.0) is None  # beyond the cap
 
 
 def test_widening_lane_length_includes_the_lateral_drift(chain):

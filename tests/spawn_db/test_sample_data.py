@@ -13,6 +13,7 @@ import pytest
 from ingest import IngestReport, extract_params, iter_raw_records
 from ingest.samples import write_highway_samples, write_urban_samples
 from spawn_db import SpawnMatcher, traffic_lights_carla
+from spawn_db.road_network import LanePoint
 from spawn_db.signals import junction_approach
 
 PER_CLASS = 12
@@ -26,6 +27,13 @@ def _segments_within(network, road_id, lane_id, s, distance):
         yield segment, covered
         if covered >= distance:
             return
+
+
+def _start_gap(params: dict, actor: str) -> float:
+    """Where ``actor`` stands ahead of the ego at t = 0: its recorded gap at the manoeuvre
+    start, less what it gains on the ego (both at their start speeds) before then."""
+    gain = (params[f"{actor}_speed_ms"] - params["ego_speed_ms"]) * params["maneuver_start_s"]
+    return params[f"{actor}_distance_m"] - gain
 
 
 @pytest.fixture(scope="module")
@@ -70,12 +78,11 @@ def test_highway_spawns_fit_the_manoeuvre(assigned, town04):
             approach = junction_approach(town04, segment.key)
             assert to_end >= needed or approach is None or not approach.signalised, \
                 (params["scenario_id"], "traffic light inside the drive", segment.key)
-        for actor, distance_key in (("npc", "npc_distance_m"), ("center", "center_distance_m"),
-                                    ("right", "right_distance_m"), ("left", "left_distance_m")):
+        for actor in ("npc", "center", "right", "left"):
             if f"{actor}_s" not in result:
                 continue
             back = town04.advance(str(result[f"{actor}_road_id"]), result[f"{actor}_lane_id"],
-                                  result[f"{actor}_s"], -params[distance_key])
+                                  result[f"{actor}_s"], -_start_gap(params, actor))
             assert back.s == pytest.approx(ego[2], abs=1e-3), params["scenario_id"]
             assert back.road_id == ego[0]
 
@@ -87,7 +94,7 @@ def test_cut_ins_start_beside_the_ego_and_others_behind_or_ahead_of_it(assigned,
             continue
         ego = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
         back = town04.advance(result["npc_road_id"], result["npc_lane_id"], result["npc_s"],
-                              -params["npc_distance_m"])
+                              -_start_gap(params, "npc"))
         if params["maneuver_class"] in ("CINF", "CINB"):
             side = params["required_lane_sides"][0]
             assert back.lane_id == town04.neighbour(ego, side).lane_id
@@ -118,3 +125,28 @@ def test_urban_spawns_fit_the_manoeuvre(assigned, town04):
         needed = "right" if params["maneuver_tag"] == "turn_right_at_tfl_green" else "straight"
         assert needed in movements, params["scenario_id"]
         assert result["spawn_stop_line_distance_m"] > 0
+
+
+def test_right_turn_exit_is_in_the_lane_the_right_movement_leads_to(assigned, town04):
+    """U4_4: ``turn_exit_*`` lies 10 m into a successor of a connecting lane whose movement
+    out of the ego's approach is ``right``, and its pose is that lane's centre."""
+    turns = [(p, r) for p, r in assigned if p["maneuver_tag"] == "turn_right_at_tfl_green"]
+    assert turns
+    for params, result in turns:
+        key = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
+        sections = town04.road(key.road_id).sections
+        approach = junction_approach(town04, key._replace(
+            section=len(sections) - 1 if key.lane_id < 0 else 0))
+        exits = {successor for movement in approach.movements if movement.movement == "right"
+                 for successor in town04.successors(movement.connecting_lane)}
+        exit_point = (str(result["turn_exit_road_id"]), result["turn_exit_lane_id"],
+                      result["turn_exit_s"])
+        entries = [LanePoint(e.road_id, e.lane_id, town04.entry_s(e)) for e in exits]
+        into = [town04.distance_between(entry, LanePoint(*exit_point), 50.0) for entry in entries]
+        assert any(d is not None and d == pytest.approx(10.0, abs=1e-3) for d in into), \
+            (params["scenario_id"], exit_point, exits)
+        pose = town04.lane_to_world(*exit_point)
+        assert (result["turn_exit_x"], result["turn_exit_y"], result["turn_exit_h"]) == \
+            pytest.approx((pose.x, pose.y, pose.h), abs=1e-3)
+    other = next(r for p, r in assigned if p["maneuver_tag"] == "straight_tfl_green")
+    assert other["turn_exit_x"] is None and other["turn_exit_road_id"] is None

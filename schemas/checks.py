@@ -235,7 +235,7 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
                                     "maneuver_start_s")]
     if None in keys:
         return None
-    along = _lane_gap(doc)
+    along = doc.lane_gap("npc")
     if along is not None:
         return along
     gap = start_gap_m(*keys)
@@ -247,26 +247,6 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     moved = ((number(position, "x") or 0.0) - x) * math.cos(h) \
         + ((number(position, "y") or 0.0) - y) * math.sin(h)
     return gap + moved
-
-
-def _lane_gap(doc: ScenarioDoc) -> float | None:
-    """Metres along the NPC's lane from beside the ego to the NPC, both on LanePositions."""
-    hero, npc = doc.spawn_position("hero"), doc.spawn_position("npc")
-    if hero is None or npc is None or {hero.tag, npc.tag} != {"LanePosition"}:
-        return None
-    values = [number(hero, "s"), number(npc, "laneId"), number(npc, "s")]
-    if None in values:
-        return None
-    hero_s, lane, npc_s = values
-    try:  # imported here: the map loads once, and only for scenarios that need it
-        import spawn_db
-    except ImportError:
-        return None
-    try:
-        return spawn_db.distance_along_lane(hero.get("roadId"), int(lane), hero_s,
-                                            npc.get("roadId"), int(lane), npc_s)
-    except spawn_db.SpawnDbError:  # not a Town04 lane position
-        return None
 
 
 def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:

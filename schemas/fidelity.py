@@ -139,31 +139,52 @@ def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
 
 def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._Element) -> None:
     """A highway NPC stands at t = 0 where its recorded gap holds at ``maneuver_start_s``: the
-    recorded gap minus the lead-in drift (``start_gap_m``) ahead of the ego, along its lane.
-    Walking back that far along the NPC's lane (Town04) must reach the ego's ``s``."""
+    recorded gap minus the lead-in drift (``start_gap_m``) ahead of the ego, along its lane
+    (Town04). Measured from beside the ego (``ScenarioDoc.lane_gap``); where the NPC's lane
+    id is not found there, walking back that far along the NPC's lane must reach the ego's
+    ``s``."""
     params = check.params
     keys = [_value(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
-                                        "ego_speed_ms", "maneuver_start_s", "ego_s")]
-    ego_road, lane, s = params.get("ego_road_id"), number(position, "laneId"), \
-        number(position, "s")
-    if None in (*keys, ego_road, lane, s):
+                                        "ego_speed_ms", "maneuver_start_s")]
+    if None in keys:
         return
-    distance, speed, ego_speed, start, ego_s = keys
-    gap = start_gap_m(distance, speed, ego_speed, start)
-    try:  # imported here: the map loads once, and only for scenarios that need it
-        import spawn_db
-    except ImportError:
+    distance = keys[0]
+    gap = start_gap_m(*keys)
+    why = f"(the recorded {distance:g} m at maneuver_start_s minus the lead-in drift)"
+    along = check.doc.lane_gap(entity)
+    if along is not None:
+        if abs(along - gap) > POSITION_TOL_M:
+            check.found.append(Finding(
+                "FIDELITY_GAP", f"{entity} starts {along:.2f} m ahead of the ego along its "
+                f"lane, params say {gap:.2f} m at t = 0 {why}", "error", position.sourceline))
         return
-    try:
-        road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s, -gap)
-    except spawn_db.SpawnDbError:
-        return  # not a Town04 lane position: FIDELITY_GAP above compared it with params
+    walked = _walk_back(position, gap)
+    ego_road, ego_s = params.get("ego_road_id"), _value(params, "ego_s")
+    if walked is None or ego_road is None or ego_s is None:
+        return
+    road, back_s = walked
     if str(road) != str(ego_road) or abs(back_s - ego_s) > POSITION_TOL_M:
         check.found.append(Finding(
             "FIDELITY_GAP", f"{entity} is not {gap:.2f} m ahead of the ego along its lane at "
-            f"t = 0 (the recorded {distance:g} m at maneuver_start_s minus the lead-in drift): "
-            f"{gap:.2f} m back along its lane is road {road} s={back_s:.2f}, the ego starts at "
-            f"road {ego_road} s={ego_s:g}", "error", position.sourceline))
+            f"t = 0 {why}: {gap:.2f} m back along its lane is road {road} s={back_s:.2f}, the "
+            f"ego starts at road {ego_road} s={ego_s:g}", "error", position.sourceline))
+
+
+def _walk_back(position: etree._Element, metres: float) -> tuple[str, float] | None:
+    """(road, s) ``metres`` back along the lane of a Town04 LanePosition, None off the map."""
+    lane, s = number(position, "laneId"), number(position, "s")
+    if lane is None or s is None:
+        return None
+    try:  # imported here: the map loads once, and only for scenarios that need it
+        import spawn_db
+    except ImportError:
+        return None
+    try:
+        road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s,
+                                                      -metres)
+    except spawn_db.SpawnDbError:
+        return None
+    return str(road), back_s
 
 
 def _lane_position(check: _Check, code: str, entity: str, prefix: str,

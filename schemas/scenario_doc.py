@@ -28,6 +28,7 @@ class ScenarioDoc:
     def __init__(self, tree: etree._ElementTree):
         self.tree = tree
         self.root = tree.getroot()
+        self._lane_gaps: dict[str, float | None] = {}
 
     def first(self, path: str) -> etree._Element | None:
         found = self.root.find(path)
@@ -86,6 +87,37 @@ class ScenarioDoc:
             if duration is not None:
                 changes.append(SpeedProfile(v0, target, event.start_s, duration))
         return min(changes, key=lambda c: c.start_s) if changes else SpeedProfile(v0, v0, 0, 0)
+
+    def lane_gap(self, entity: str) -> float | None:
+        """Metres along ``entity``'s lane from beside the ego to ``entity`` at t = 0.
+
+        Both must stand on LanePositions of the bundled Town04 map, the entity's lane must exist
+        on the ego's road at the ego's ``s`` (beside it, or the ego's own lane) and lead to the
+        entity within 1 km; otherwise ``None``. Measured once per entity (the map walk is the
+        costly part of a check).
+        """
+        if entity not in self._lane_gaps:
+            self._lane_gaps[entity] = self._measure_lane_gap(entity)
+        return self._lane_gaps[entity]
+
+    def _measure_lane_gap(self, entity: str) -> float | None:
+        ego = self.spawn_position(self.ego_name) if self.ego_name else None
+        other = self.spawn_position(entity)
+        if ego is None or other is None or {ego.tag, other.tag} != {"LanePosition"}:
+            return None
+        values = [_number(ego, "s"), _number(other, "laneId"), _number(other, "s")]
+        if None in values:
+            return None
+        ego_s, lane, other_s = values
+        try:  # imported here: the map loads once, and only for scenarios that need it
+            import spawn_db
+        except ImportError:
+            return None
+        try:
+            return spawn_db.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
+                                                other.get("roadId"), int(lane), other_s)
+        except spawn_db.SpawnDbError:  # not a Town04 lane position
+            return None
 
     @cached_property
     def events(self) -> dict[str, Event]:

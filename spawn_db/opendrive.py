@@ -34,21 +34,23 @@ class Poly3Track:
         self.starts = np.asarray(starts, dtype=float)[order] if starts else np.zeros(1)
         self.coefficients = (np.asarray(coefficients, dtype=float)[order] if coefficients
                              else np.zeros((1, 4)))
+        #: per-coefficient columns (a, b, c, d); most tracks (constant widths) have one piece
+        self._columns = tuple(self.coefficients.T)
 
-    def _pieces(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _pieces(self, s: np.ndarray) -> tuple[tuple[np.ndarray | float, ...], np.ndarray]:
+        if len(self.starts) == 1:  # no lookup: this runs for every lane on every lane walk
+            return tuple(float(column[0]) for column in self._columns), s - self.starts[0]
         index = np.clip(np.searchsorted(self.starts, s, side="right") - 1, 0, len(self.starts) - 1)
-        return self.coefficients[index], s - self.starts[index]
+        return tuple(column[index] for column in self._columns), s - self.starts[index]
 
     def value(self, s: np.ndarray | float) -> np.ndarray:
         """The polynomial's value at ``s``."""
-        coeff, ds = self._pieces(np.asarray(s, dtype=float))
-        a, b, c, d = np.moveaxis(coeff, -1, 0)
+        (a, b, c, d), ds = self._pieces(np.asarray(s, dtype=float))
         return a + ds * (b + ds * (c + ds * d))
 
     def slope(self, s: np.ndarray | float) -> np.ndarray:
         """The derivative with respect to ``s``."""
-        coeff, ds = self._pieces(np.asarray(s, dtype=float))
-        _, b, c, d = np.moveaxis(coeff, -1, 0)
+        (_, b, c, d), ds = self._pieces(np.asarray(s, dtype=float))
         return b + ds * (2 * c + 3 * d * ds)
 
 

@@ -233,6 +233,14 @@ class RoadNetwork:
         Follows the walk of :meth:`walk` (straightest continuation) ahead, then behind, up to
         ``cap`` metres each way; ``None`` when ``end`` is not on that lane within reach.
         """
+        here = self.key_at(start.road_id, start.lane_id, start.s)
+        if (here.road_id, here.lane_id) == (str(end.road_id), end.lane_id) \
+                and self._in_section(here, end.s):  # the common case: one integration
+            ahead = (end.s >= start.s) == (driving_direction(start.lane_id) > 0)
+            length = self.segment_length(here, start.s, end.s)
+            if length > cap:
+                return None
+            return length if ahead or length == 0.0 else -length
         for forward in (True, False):
             travelled = 0.0
             for segment in self.walk(start.road_id, start.lane_id, start.s, forward):
@@ -246,6 +254,10 @@ class RoadNetwork:
                 if travelled > cap:
                     break
         return None
+
+    def _in_section(self, key: LaneKey, s: float) -> bool:
+        section = self.road(key.road_id).sections[key.section]
+        return section.s_start - 1e-6 <= s <= section.s_end + 1e-6
 
     def drivable_length(self, road_id: str | int, lane_id: int, s: float, forward: bool,
                         cap: float) -> float:

@@ -47,6 +47,11 @@ def test_distance_between_two_lane_positions_is_measured_along_the_lane(chain):
     assert chain.distance_between(end, start, 100.0) == pytest.approx(-polyline, abs=1e-4)
     assert chain.distance_between(start, LanePoint("2", -2, 15.0), 100.0) is None
     assert chain.distance_between(start, end, 5.0) is None  # beyond the cap
+    within = _polyline_length(chain, "1", -2, 20.0, 70.0)  # one lane section of one road
+    assert chain.distance_between(LanePoint("1", -2, 20.0), LanePoint("1", -2, 70.0),
+                                  100.0) == pytest.approx(within, abs=1e-4)
+    assert chain.distance_between(LanePoint("1", -2, 70.0), LanePoint("1", -2, 20.0),
+                                  100.0) == pytest.approx(-within, abs=1e-4)
 
 
 def test_widening_lane_length_includes_the_lateral_drift(chain):

@@ -1,9 +1,9 @@
 """Urban right turn at a green light (U4_4): the ego turns right at the signalised intersection.
 
 The ego approaches a signalised intersection at init_speed_ms while the traffic light is
-green and turns right into the crossing road: it is routed to a point past the junction on
-its right, its speed going to final_speed_ms over duration_s. A lead vehicle drives ahead
-when the record had one.
+green and turns right into the crossing road: it is routed to turn_exit, 10 m into the lane
+the junction's right movement leads to (found on the map by the spawn stage), its speed going
+to final_speed_ms over duration_s. A lead vehicle drives ahead when the record had one.
 """
 
 from pathlib import Path

@@ -159,12 +159,20 @@ def lane_distance(road: Road, section: LaneSection, lane_id: int, s_a: float,
 def s_after_distance(road: Road, section: LaneSection, lane_id: int, s_start: float,
                      distance: float, direction: int) -> float:
     """The ``s`` reached after driving ``distance`` (>= 0) along the lane in ``direction`` (±1)."""
-    s = s_start + direction * distance  # s and the lane distance differ by a few % at most
+    def clamp(value: float) -> float:
+        return min(max(value, section.s_start), section.s_end)
+
+    s = clamp(s_start + direction * distance)  # s and the lane distance differ by a few %
+    driven = lane_distance(road, section, lane_id, s_start, s)
     for _ in range(30):
-        s = min(max(s, section.s_start), section.s_end)
-        error = lane_distance(road, section, lane_id, s_start, s) - distance
-        step = error / float(lane_speed_factor(road, section, lane_id, np.array([s]))[0])
-        s -= direction * step
+        # Newton on the distance driven; each step integrates only the short stretch it
+        # moves over, not the whole way from s_start again
+        step = (driven - distance) / float(lane_speed_factor(road, section, lane_id,
+                                                             np.array([s]))[0])
+        s_next = clamp(s - direction * step)
+        moved = lane_distance(road, section, lane_id, s, s_next)
+        driven += moved if (s_next - s) * direction >= 0 else -moved
+        s = s_next
         if abs(step) < 1e-9:
             break
-    return min(max(s, section.s_start), section.s_end)
+    return s

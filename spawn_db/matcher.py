@@ -19,9 +19,11 @@ along its lane (on a curve a straight shift would leave the lane).
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections import Counter
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +49,9 @@ TURN_EXIT_INTO_M = 10.0
 TURN_SEARCH_M = 500.0
 TURN_EXIT_KEYS = tuple(f"turn_exit_{key}" for key in ("x", "y", "z", "h", "road_id", "lane_id",
                                                       "s"))
+#: most points ``_needs_score`` gives: the speed (limit) proximity, and for urban scenarios
+#: the light distance (or room before the next light) plus the stop line
+NEEDS_POINTS_MAX = {"highway": 20.0, "urban": 20.0 + 30.0 + 15.0}
 #: free-ride slots and the lane each stands in relative to the ego
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 CUT_IN_CLASSES = ("CINF", "CINB")
@@ -194,9 +199,12 @@ class SpawnMatcher:
         self.database = load_database(self.db_path)
         self.entries: list[dict[str, Any]] = self.database["spawn_points"]
         self.map_path = Path(map_path) if map_path else self._find_map()
-        self._by_context: dict[str, list[dict[str, Any]]] = {}
+        #: per context, ``(fixed score, entry)`` best first: ``find`` stops early down this list
+        self._by_context: dict[str, list[tuple[float, dict[str, Any]]]] = {}
         for entry in self.entries:
-            self._by_context.setdefault(entry["context"], []).append(entry)
+            self._by_context.setdefault(entry["context"], []).append((_fixed_score(entry), entry))
+        for ranked in self._by_context.values():
+            ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
         self._last_params: dict[str, Any] | None = None
 
     def _find_map(self) -> Path:
@@ -209,9 +217,9 @@ class SpawnMatcher:
         raise SpawnDatabaseError(f"{self.db_path}: its map {source} is neither in maps/ beside "
                                  "it nor bundled; pass map_path= to SpawnMatcher")
 
-    @property
+    @cached_property
     def network(self) -> RoadNetwork:
-        """The lane graph of the database's map (loaded on first use)."""
+        """The lane graph of the database's map (loaded on first use, then kept)."""
         return road_network(self.map_path)
 
     @property
@@ -241,10 +249,16 @@ class SpawnMatcher:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
         needs = Requirements.from_params(params)
         self._last_params = dict(params)
-        # only the first rejection matters here; assess() lists them all for debugging
-        accepted = [SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
-                    for entry in self._by_context.get(needs.domain, [])
-                    if next(_hard_filters(entry, needs), None) is None]
+        accepted, top_scores = [], []  # top_scores: a min-heap of the best top_n scores
+        for fixed, entry in self._by_context.get(needs.domain, []):
+            if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
+                break  # neither this spawn nor any after it can reach (or tie) the top N
+            # only the first rejection matters here; assess() lists them all for debugging
+            if next(_hard_filters(entry, needs), None) is not None:
+                continue
+            score = fixed + _needs_score(entry, needs)
+            accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
+            (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
         if not accepted:
             raise NoSpawnFits(_no_fit_message(params, self.db_path, self.assess(params)))
         return _spread_over_roads(accepted)[:top_n]
@@ -362,14 +376,26 @@ def _urban_filters(entry: dict[str, Any], needs: Requirements):
 
 
 def _score(entry: dict[str, Any], needs: Requirements) -> float:
+    """Table 5.3: the spawn's own points plus those its fit to the scenario earns."""
+    return _fixed_score(entry) + _needs_score(entry, needs)
+
+
+def _fixed_score(entry: dict[str, Any]) -> float:
+    """The Table 5.3 points a spawn earns whatever the scenario."""
     priority = 10.0 * entry["annotations"]["priority"]
-    limit = entry["surroundings"]["speed_limit_kmh"]
-    if needs.domain == "highway":
-        return (30.0 + max(0.0, 20.0 - 0.5 * abs(limit - needs.speed_kmh))
-                + 15.0 * entry["features"]["is_straight"]
+    if entry["context"] == "highway":
+        return (30.0 + 15.0 * entry["features"]["is_straight"]
                 + 10.0 * entry["surroundings"]["is_highway_layout"]
                 + 15.0 * (entry["drivable"]["ahead_m"] > 100.0) + priority)
-    score = 30.0 + priority + 10.0 * entry["annotations"]["manually_reviewed"]
+    return 30.0 + priority + 10.0 * entry["annotations"]["manually_reviewed"]
+
+
+def _needs_score(entry: dict[str, Any], needs: Requirements) -> float:
+    """The Table 5.3 points that depend on the scenario (at most ``NEEDS_POINTS_MAX``)."""
+    limit = entry["surroundings"]["speed_limit_kmh"]
+    if needs.domain == "highway":
+        return max(0.0, 20.0 - 0.5 * abs(limit - needs.speed_kmh))
+    score = 0.0
     if needs.speed_limit_kmh is not None:
         score += max(0.0, 20.0 - abs(limit - needs.speed_limit_kmh))
     stop_line = entry["surroundings"]["stop_line_distance_m"]

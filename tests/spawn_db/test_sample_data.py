@@ -150,3 +150,12 @@ def test_right_turn_exit_is_in_the_lane_the_right_movement_leads_to(assigned, to
             pytest.approx((pose.x, pose.y, pose.h), abs=1e-3)
     other = next(r for p, r in assigned if p["maneuver_tag"] == "straight_tfl_green")
     assert other["turn_exit_x"] is None and other["turn_exit_road_id"] is None
+
+
+def test_find_stops_early_yet_ranks_as_a_full_scan(assigned):
+    # find() stops walking the spawns once none left can reach the top N; a top_n larger than
+    # the database scores every spawn, so both must give the same first five
+    matcher = SpawnMatcher()
+    for params, _ in assigned:
+        full = [c.spawn_id for c in matcher.find(params, top_n=10_000)[:5]]
+        assert [c.spawn_id for c in matcher.find(params, top_n=5)] == full, params["scenario_id"]

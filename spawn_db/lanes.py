@@ -149,11 +149,40 @@ def lane_distance(road: Road, section: LaneSection, lane_id: int, s_a: float,
     low, high = min(s_a, s_b), max(s_a, s_b)
     if high - low <= 0.0:
         return 0.0
+    t = _constant_centre_offset(road, section, lane_id, low, high)
+    curvature = road.plan_view.constant_curvature_on(low, high)
+    if t is not None and curvature is not None:
+        # a lane at constant offset on a line or arc: the integrand is constant (exact)
+        return (high - low) * abs(1.0 - curvature * t)
+    return integrated_lane_distance(road, section, lane_id, low, high)
+
+
+def integrated_lane_distance(road: Road, section: LaneSection, lane_id: int, low: float,
+                             high: float) -> float:
+    """``lane_distance`` by Gauss-Legendre quadrature on pieces of at most ``_PIECE_M``."""
     points = _breakpoints(road, section, low, high)
     spans = np.diff(points)
     nodes = points[:-1, None] + spans[:, None] * GL_NODES
     factor = lane_speed_factor(road, section, lane_id, nodes.ravel()).reshape(nodes.shape)
     return float(spans @ (factor @ GL_WEIGHTS))
+
+
+def _constant_centre_offset(road: Road, section: LaneSection, lane_id: int, low: float,
+                            high: float) -> float | None:
+    """The lane centre's ``t`` if the lane offset and every width up to the lane are constant
+    on ``[low, high]`` (as ``lane_border_offsets`` evaluates them), else ``None``."""
+    sign = 1 if lane_id > 0 else -1
+    offset = road.lane_offset.constant_on(min(low, section.s_end), min(
+        high, float(np.nextafter(section.s_end, -np.inf))))
+    if offset is None:
+        return None
+    t = offset
+    for current in range(sign, lane_id + sign, sign):
+        width = _lane(section, current, road).width.constant_on(low, high)
+        if width is None:
+            return None
+        t += sign * (width / 2.0 if current == lane_id else width)
+    return t
 
 
 def s_after_distance(road: Road, section: LaneSection, lane_id: int, s_start: float,

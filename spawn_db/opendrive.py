@@ -43,6 +43,15 @@ class Poly3Track:
         index = np.clip(np.searchsorted(self.starts, s, side="right") - 1, 0, len(self.starts) - 1)
         return tuple(column[index] for column in self._columns), s - self.starts[index]
 
+    def constant_on(self, low: float, high: float) -> float | None:
+        """The track's value if it does not change anywhere on ``[low, high]``, else ``None``."""
+        first, last = np.clip(np.searchsorted(self.starts, [low, high], side="right") - 1,
+                              0, len(self.starts) - 1)
+        pieces = self.coefficients[first:last + 1]
+        if pieces[:, 1:].any() or (pieces[:, 0] != pieces[0, 0]).any():
+            return None
+        return float(pieces[0, 0])
+
     def value(self, s: np.ndarray | float) -> np.ndarray:
         """The polynomial's value at ``s``."""
         (a, b, c, d), ds = self._pieces(np.asarray(s, dtype=float))

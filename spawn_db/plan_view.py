@@ -197,6 +197,15 @@ class PlanView:
             curvature[mask] = local.curvature
         return ReferencePose(x, y, hdg, curvature)
 
+    def constant_curvature_on(self, low: float, high: float) -> float | None:
+        """The curvature if one line or arc covers ``[low, high]``, else ``None``."""
+        first, last = np.clip(np.searchsorted(self.starts, [low, high], side="right") - 1,
+                              0, len(self.starts) - 1)
+        geometry = self.geometries[first]
+        if first != last or type(geometry) not in (Line, Arc):
+            return None
+        return getattr(geometry, "curvature", 0.0)
+
     def breakpoints(self) -> list[float]:
         """The ``s`` where one geometry ends and the next starts (curvature may jump there)."""
         return [g.s for g in self.geometries]

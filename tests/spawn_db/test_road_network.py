@@ -109,3 +109,23 @@ def test_heading_of_a_widening_lane_follows_its_centre_line(chain):
     assert pose.h == pytest.approx(math.atan(-0.005), abs=1e-12)
     ahead = chain.lane_to_world("1", -2, 41.0)
     assert math.atan2(ahead.y - pose.y, ahead.x - pose.x) == pytest.approx(pose.h, abs=1e-9)
+
+
+def test_closed_form_lane_distance_equals_the_quadrature_on_town04(town04):
+    # where a lane keeps its offset on a line or arc, lane_distance takes a closed form; it
+    # must agree with the Gauss-Legendre integral it replaces (and be used somewhere)
+    from spawn_db.lanes import _constant_centre_offset, integrated_lane_distance, lane_distance
+
+    closed_form = 0
+    for key in list(town04.drivable_lanes())[::7]:
+        road = town04.road(key.road_id)
+        section = road.sections[key.section]
+        for low, high in ((section.s_start, section.s_end),
+                          (section.s_start + 0.3 * (section.s_end - section.s_start),
+                           section.s_start + 0.6 * (section.s_end - section.s_start))):
+            if _constant_centre_offset(road, section, key.lane_id, low, high) is not None \
+                    and road.plan_view.constant_curvature_on(low, high) is not None:
+                closed_form += 1
+            assert lane_distance(road, section, key.lane_id, low, high) == pytest.approx(
+                integrated_lane_distance(road, section, key.lane_id, low, high), abs=1e-9)
+    assert closed_form > 20

@@ -108,13 +108,20 @@ def test_an_unknown_backend_is_refused_by_name():
         agent_settings_for("gpt")
 
 
-def test_agent_benchmark_with_replayed_models(tmp_path):
+def replayed_bench(tmp_path, models: str, repair: str, classes: str, out, bench_id: str):
+    """``scenweave bench`` with every model answering "NO CHANGES" to the patch prompt."""
     replies = tmp_path / "replies.json"
     replies.write_text(json.dumps({"*": ["NO CHANGES"]}))
-    result = CliRunner().invoke(cli, ["bench", "--models", "model-a,model-b", "--llm", "replay",
-                                      "--replay-file", str(replies), "--repair", "patch",
-                                      "--classes", "BRAKE,LCF", "--per-class", "1",
-                                      "--out", str(tmp_path), "--bench-id", "replay"])
+    result = CliRunner().invoke(cli, ["bench", "--models", models, "--llm", "replay",
+                                      "--replay-file", str(replies), "--repair", repair,
+                                      "--classes", classes, "--per-class", "1",
+                                      "--out", str(out), "--bench-id", bench_id])
+    return result, replies
+
+
+def test_agent_benchmark_with_replayed_models(tmp_path):
+    result, replies = replayed_bench(tmp_path, "model-a,model-b", "patch", "BRAKE,LCF",
+                                     tmp_path, "replay")
     assert result.exit_code == 0, result.output
     assert "model-a: SR 100%, 1st 100%" in result.output
     assert "model-b: SR 100%, 1st 100%" in result.output
@@ -146,12 +153,7 @@ def assert_boxplots(root, aggregate: dict, models: list[str]) -> None:
 
 
 def test_an_unknown_repair_strategy_stops_the_benchmark_before_it_runs(tmp_path):
-    replies = tmp_path / "replies.json"
-    replies.write_text(json.dumps({"*": ["NO CHANGES"]}))
-    result = CliRunner().invoke(cli, ["bench", "--models", "model-a", "--llm", "replay",
-                                      "--replay-file", str(replies), "--repair", "typo",
-                                      "--classes", "BRAKE", "--per-class", "1",
-                                      "--out", str(tmp_path / "bench"), "--bench-id", "b"])
+    result, _ = replayed_bench(tmp_path, "model-a", "typo", "BRAKE", tmp_path / "bench", "b")
     assert result.exit_code == 1
     [line] = result.output.splitlines()
     assert "--repair 'typo'" in line

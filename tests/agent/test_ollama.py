@@ -3,6 +3,7 @@ live test when an Ollama server is reachable."""
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import time
@@ -142,7 +143,7 @@ def live_models(host: str) -> list[str] | None:
     return [m.model for m in listing.models if m.model]
 
 
-def test_live_ollama():
+def test_live_ollama(tmp_path, sandbox_settings):
     host = os.environ.get("OLLAMA_HOST") or "http://localhost:11434"
     models = live_models(host)
     if models is None:
@@ -153,6 +154,19 @@ def test_live_ollama():
     reply = ollama(host, model=model, max_tokens=16).complete(
         Prompt("Answer with one word.", "Say hello.", "live", "generate"))
     assert reply.text.strip() and reply.tokens_in > 0 and reply.tokens_out > 0
+
+    # the whole agent on one record: whatever the model writes, the run ends with a valid
+    # scenario (first try, repaired or the fallback) and every attempt is in the trace
+    from agent import run_scenario
+    from tests.corpus.params_examples import example_params
+
+    settings = AgentSettings(llm="ollama", ollama_host=host, model=model,
+                             sandbox=sandbox_settings)
+    outcome = run_scenario(example_params("BRAKE"), tmp_path, settings)
+    assert outcome.status in ("ok", "repaired", "fallback")
+    assert (tmp_path / "scenario.xosc").is_file()
+    events = [json.loads(line) for line in (tmp_path / "trace.jsonl").read_text().splitlines()]
+    assert sum(e["node"] == "execute" for e in events) == outcome.attempts
 
 
 def test_the_agent_runs_on_ollama(server, tmp_path, sandbox_settings):

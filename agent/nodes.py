@@ -81,16 +81,20 @@ def execute(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 
 @node
 def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
-    """Check the attempt's file: XSD, Table 5.8, semantics, parameter fidelity, CARLA lint."""
+    """Check the attempt's file: XSD, Table 5.8, semantics, parameter fidelity, CARLA lint,
+    and (with replay settings) what it does when played; a replay failure is repairable."""
     from schemas import validate_xosc
 
     attempt = dict(state["attempts"][-1])
     out_dir = Path(state["out_dir"])
     produced = out_dir / ATTEMPTS_DIR / str(attempt["number"]) / XOSC_NAME
-    verdict = _validation_summary(validate_xosc(produced, state["params"]).to_dict())
+    result = validate_xosc(produced, state["params"], replay=ctx.settings.replay)
+    _write_playback(result, produced.parent)
+    verdict = _validation_summary(result.to_dict())
     attempt["validation"] = verdict
     update: dict[str, Any] = {}
     if verdict["valid"]:
+        _write_playback(result, out_dir)
         shutil.copyfile(produced, out_dir / XOSC_NAME)
         (out_dir / CODE_NAME).write_text(attempt["code"], encoding="utf-8")
         status = "ok" if attempt["number"] == 1 else "repaired"
@@ -118,10 +122,13 @@ def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
                  "error": f"{type(err).__name__}: {err}"}
         return {"final": final}, {"script": reference.get("name"), **final}
     (out_dir / CODE_NAME).write_text(reference.get("source", ""), encoding="utf-8")
-    verdict = _validation_summary(validate_xosc(xosc, state["params"]).to_dict())
+    result = validate_xosc(xosc, state["params"], replay=ctx.settings.replay)
+    _write_playback(result, out_dir)
+    verdict = _validation_summary(result.to_dict())
     final = {"status": "fallback" if verdict["valid"] else "failed", "attempt": None,
              "validation": verdict,
-             "error": None if verdict["valid"] else _errors_text(verdict["errors"])}
+             "error": None if verdict["valid"] else _errors_text(verdict["errors"]),
+             "taxonomy": None if verdict["valid"] else failure_category(verdict["errors"])}
     return {"final": final}, {"script": reference.get("name"), **final}
 
 
@@ -192,7 +199,14 @@ def _replace_last(state: AgentState, attempt: dict) -> list:
 def _validation_summary(result: dict) -> dict:
     errors = [e for e in result["errors"] if e.get("severity") == "error"]
     return {"valid": result["valid"], "fixes_applied": result.get("fixes_applied", []),
-            "errors": errors[:20], "domain": result.get("domain")}
+            "errors": errors[:20], "domain": result.get("domain"), "replay": result.get("replay")}
+
+
+def _write_playback(result: Any, folder: Path) -> None:
+    if result.playback is not None:
+        from player import REPLAY_NAME
+
+        result.playback.write(folder / REPLAY_NAME)
 
 
 def _errors_text(errors: list[dict]) -> str:

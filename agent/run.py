@@ -49,6 +49,7 @@ class AgentOutcome:
     repair: str
     node_latency_s: dict[str, float] = field(default_factory=dict)
     corrections: list[str] = field(default_factory=list)
+    replay: dict | None = None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -93,7 +94,8 @@ def outcome_of(state: dict, settings: AgentSettings) -> AgentOutcome:
         fallback=final["status"] in ("fallback", "failed") and final.get("attempt") is None,
         tokens_in=sum(a.get("tokens_in", 0) for a in attempts),
         tokens_out=sum(a.get("tokens_out", 0) for a in attempts),
-        error_taxonomy=[a["taxonomy"] for a in failed if a.get("taxonomy")],
+        error_taxonomy=[a["taxonomy"] for a in failed if a.get("taxonomy")]
+        + ([final["taxonomy"]] if final.get("taxonomy") else []),
         error=error,
         validation=final.get("validation"),
         retrieval=(state.get("reference") or {}).get("method"),
@@ -101,6 +103,7 @@ def outcome_of(state: dict, settings: AgentSettings) -> AgentOutcome:
         repair=settings.repair,
         node_latency_s=state.get("node_latency_s") or {},
         corrections=sorted(Counter(c for a in attempts for c in a.get("corrections", []))),
+        replay=(final.get("validation") or {}).get("replay"),
     )
 
 

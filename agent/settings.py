@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from sandbox import SandboxSettings
 
@@ -48,6 +48,8 @@ class AgentSettings:
     on_llm_error: Literal["raise", "fallback"] = "raise"
     """When the LLM is unavailable: stop (the worker retries later) or use the fallback."""
     sandbox: SandboxSettings = field(default_factory=SandboxSettings)
+    replay: Any = None
+    """``player.ReplaySettings``: validation plays each attempt in esmini (None: no replay)."""
 
     def __post_init__(self) -> None:
         if self.llm not in LLM_CHOICES:

@@ -225,8 +225,13 @@ def _vehicle(actor: Actor) -> xosc.Vehicle:
 # --- actions and events ----------------------------------------------------------------------
 
 def at_time(name: str, time_s: float, point: str = "start") -> xosc.ValueTrigger:
-    """A start (or ``point="stop"``) trigger firing once the simulation time exceeds ``time_s``."""
-    return xosc.ValueTrigger(name, 0, xosc.ConditionEdge.rising,
+    """A start (or ``point="stop"``) trigger firing once the simulation time exceeds ``time_s``.
+
+    Edge ``none``: a time condition that is already true when first evaluated (``time_s`` = 0)
+    has no rising edge, and esmini never fires it ("simulationTime = 0 condition used with
+    edge rising which could be missed"); each event runs once, so ``none`` fires it once.
+    """
+    return xosc.ValueTrigger(name, 0, xosc.ConditionEdge.none,
                              xosc.SimulationTimeCondition(time_s, xosc.Rule.greaterThan), point)
 
 

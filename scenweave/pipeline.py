@@ -31,6 +31,8 @@ class PipelineSettings:
     no_llm: bool = True
     top_n: int = 5
     agent: Any = None  # agent.AgentSettings when no_llm is False
+    #: player.ReplaySettings: play every scenario in esmini and judge it (None: no replay)
+    replay: Any = None
 
 
 def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,
@@ -47,7 +49,7 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
         trace.event("spawn", spawn_id=placed.get("spawn_id"), index=index)
         (out_dir / PARAMS_NAME).write_text(json.dumps(placed, indent=1), encoding="utf-8")
         if settings.no_llm:
-            outcome.update(_reference_scenario(placed, out_dir, timings, trace))
+            outcome.update(_reference_scenario(placed, out_dir, settings, timings, trace))
         else:
             outcome.update(_agent_scenario(placed, out_dir, settings, timings, trace))
     except Exception as err:  # noqa: BLE001 - a scenario's failure is a value, not a crash
@@ -90,11 +92,20 @@ def base_outcome(params: dict) -> dict:
         "domain": params["domain"], "status": "failed", "attempts": 0,
         "first_attempt_success": False, "fallback": False, "spawn_id": None,
         "tokens_in": 0, "tokens_out": 0, "error_taxonomy": [], "error": None,
-        "validation": None,
+        "validation": None, "replay": None,
     }
 
 
-def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace) -> dict:
+def write_playback(result: Any, out_dir: Path) -> None:
+    """Write the validation's playback (if the scenario was played) as ``replay.json``."""
+    if getattr(result, "playback", None) is not None:
+        from player import REPLAY_NAME
+
+        result.playback.write(out_dir / REPLAY_NAME)
+
+
+def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
+                        timings: dict, trace: Trace) -> dict:
     import corpus
     from schemas import failure_category, validate_xosc
 
@@ -103,9 +114,12 @@ def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace
     (out_dir / CODE_NAME).write_text(retrieval.source, encoding="utf-8")
     xosc = out_dir / XOSC_NAME
     _timed(timings, "generate", lambda: corpus.generate(params, xosc))
-    result = _timed(timings, "validate", lambda: validate_xosc(xosc, params))
+    result = _timed(timings, "validate",
+                    lambda: validate_xosc(xosc, params, replay=settings.replay))
+    write_playback(result, out_dir)
     validation = result.to_dict()
-    trace.event("validate", valid=validation["valid"], errors=validation["errors"])
+    trace.event("validate", valid=validation["valid"], errors=validation["errors"],
+                replay=validation["replay"])
     errors = [e for e in validation["errors"] if e.get("severity") == "error"]
     return {
         "status": "ok" if validation["valid"] else "failed",
@@ -114,6 +128,7 @@ def _reference_scenario(params: dict, out_dir: Path, timings: dict, trace: Trace
         "retrieval": retrieval.method,
         "validation": {"valid": validation["valid"], "fixes_applied": validation["fixes_applied"],
                        "errors": errors[:20], "domain": validation.get("domain")},
+        "replay": validation["replay"],
         "error_taxonomy": [] if validation["valid"] else [failure_category(errors)],
         "error": None if validation["valid"] else "; ".join(e["code"] for e in errors[:5]),
     }

@@ -36,8 +36,12 @@ class RunResult:
         parts = ", ".join(f"{counts[s]} {s}" for s in STATUSES)
         resumed = f" ({self.skipped} already done)" if self.skipped else ""
         issues = f", {len(self.input_issues)} input issues" if self.input_issues else ""
+        replay = self.summary.get("replay") or {}
+        played = (f"; replay: {replay['passed']}/{replay['played']} played as recorded"
+                  if replay.get("played") else "")
         return (f"run {self.folder.run_id}: {self.summary['total']} scenarios: {parts}{resumed}"
-                f"{issues} -> {self.folder.root} (open {self.folder.root / 'report.html'})")
+                f"{issues}{played} -> {self.folder.root} "
+                f"(open {self.folder.root / 'report.html'})")
 
 
 def default_matcher() -> Any:
@@ -102,9 +106,25 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
         "first_attempt_success": sum(bool(o.get("first_attempt_success")) for o in outcomes),
         "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
         "node_latency_s": node_latency(outcomes),
+        "replay": replay_summary(outcomes),
         "input_issues": input_issues,
         "scenarios": outcomes,
     }
+
+
+def replay_summary(outcomes: list[dict]) -> dict:
+    """How many scenarios were played in esmini and replayed as recorded, in all and per class,
+    and how often each REPLAY_* code came up."""
+    played = [o for o in outcomes if o.get("replay")]
+    by_class: dict[str, Counter] = {}
+    for o in played:
+        counts = by_class.setdefault(o["maneuver_class"], Counter())
+        counts["played"] += 1
+        counts["passed"] += bool(o["replay"].get("passed"))
+    codes = Counter(c for o in played for c in o["replay"].get("codes", []))
+    return {"played": len(played), "passed": sum(bool(o["replay"].get("passed")) for o in played),
+            "by_class": {k: dict(v) for k, v in sorted(by_class.items())},
+            "codes": dict(sorted(codes.items()))}
 
 
 def node_latency(outcomes: list[dict]) -> dict[str, dict[str, float]]:

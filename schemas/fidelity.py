@@ -95,7 +95,7 @@ def _weather(check: _Check) -> None:
                                        f"{seen[what]!r}, weather_key {weather!r} says {value!r}"))
 
 
-def _placed_actors(params: dict) -> list[tuple[str, str]]:
+def placed_actors(params: dict) -> list[tuple[str, str]]:
     """(entity, params prefix) of every actor the scenario must place, ego first."""
     actors = [("hero", "ego")]
     if params.get("domain") == "highway":
@@ -109,7 +109,7 @@ def _placed_actors(params: dict) -> list[tuple[str, str]]:
 
 def _spawns(check: _Check) -> None:
     params = check.params
-    for entity, prefix in _placed_actors(params):
+    for entity, prefix in placed_actors(params):
         position = check.doc.spawn_position(entity)
         code = "FIDELITY_SPAWN" if entity == "hero" else "FIDELITY_GAP"
         if position is None:
@@ -232,7 +232,7 @@ def _world_position(check: _Check, code: str, entity: str, want: tuple[float, ..
 
 
 def _init_speeds(check: _Check) -> None:
-    for entity, prefix in _placed_actors(check.params):
+    for entity, prefix in placed_actors(check.params):
         if check.doc.spawn_position(entity) is None:
             continue
         check.close("FIDELITY_SPEED", f"{entity} initial speed", check.doc.init_speed(entity),
@@ -243,7 +243,7 @@ def _init_speeds(check: _Check) -> None:
 SpeedChange = tuple[str, float | None, float | None, float | None]
 
 
-def _expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
+def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
     """(action name, end speed, duration, start) of every speed change the class must contain."""
     code = params.get("maneuver_class")
     duration, start = params.get("duration_s"), params.get("maneuver_start_s")
@@ -288,7 +288,7 @@ def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
 
 def _events(check: _Check) -> None:
     params, events = check.params, check.doc.events
-    for name, end_speed, duration, start in _expected_speed_changes(check.doc, params):
+    for name, end_speed, duration, start in expected_speed_changes(check.doc, params):
         event = events.get(name)
         if event is None:
             check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))

@@ -18,6 +18,7 @@ from schemas.carla_lint import carla_lint
 from schemas.checks import detect_domain, semantics, structural
 from schemas.fidelity import fidelity
 from schemas.findings import Finding, ValidationResult
+from schemas.replay import judge_replay
 from schemas.scenario_doc import ScenarioDoc
 from schemas.xsd import xsd_findings
 
@@ -25,11 +26,16 @@ DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
 
 
 def validate_xosc(path: Path | str, params: dict | None = None, *,
-                  fix: bool = True) -> ValidationResult:
+                  fix: bool = True, replay=None, map_path: Path | None = None
+                  ) -> ValidationResult:
     """Validate one ``.xosc`` (fixing it in place first unless ``fix=False``).
 
     With ``params`` the scenario's values are checked against them (parameter fidelity) and
     the manoeuvre class and domain come from them; without, they are read from the file.
+    With ``replay`` (``player.ReplaySettings``) and params, a file that passes every static
+    check is also played headless on ``map_path`` (default: the bundled Town04) and judged
+    against the params (``REPLAY_*``, ``schemas.replay``); ``result.playback`` holds what
+    happened.
     """
     path = Path(path)
     try:
@@ -46,7 +52,26 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
                                                  etree.XMLParser(remove_blank_text=False)))
     except etree.XMLSyntaxError as err:
         return _invalid(Finding("XML_SYNTAX", str(err), "error", err.lineno), fixes)
-    return validate_tree(tree, params, fixes)
+    result = validate_tree(tree, params, fixes)
+    if replay is not None and params and result.valid:
+        _replay_and_judge(result, path, tree, params, replay, map_path)
+    return result
+
+
+def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._ElementTree,
+                      params: dict, settings, map_path: Path | None) -> None:
+    import player
+    import spawn_db
+
+    map_path = map_path or spawn_db.DEFAULT_MAP_PATH
+    playback = player.replay_file(path, map_path, settings)
+    findings = judge_replay(playback, params, ScenarioDoc(tree), map_path)
+    result.errors += findings
+    result.valid = not any(f.severity == "error" for f in result.errors)
+    result.playback = playback
+    result.replay = {"played": not playback.engine_error, "passed": not findings,
+                     "codes": sorted({f.code for f in findings}),
+                     "timings_s": playback.timings_s}
 
 
 def validate_tree(tree: etree._ElementTree, params: dict | None = None,

@@ -314,6 +314,10 @@ class RoadNetwork:
                         RoadLink("road", connection.connecting_road, connection.contact_point),
                         to_lane)
 
+    def is_drivable(self, road_id: str | int, lane_id: int, s: float) -> bool:
+        """Whether ``lane_id`` of the road at ``s`` is a lane cars drive on."""
+        return self._drivable(self.key_at(road_id, lane_id, s))
+
     def _drivable(self, key: LaneKey) -> bool:
         road = self.map.roads.get(key.road_id)
         if road is None or not 0 <= key.section < len(road.sections):

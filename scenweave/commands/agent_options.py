@@ -18,7 +18,8 @@ LLM_CHOICES = ("embedded", "ollama", "replay", "none")
 SANDBOX_CHOICES = ("auto", "docker", "bwrap")
 #: names of the options below, for commands that forward them
 AGENT_OPTION_NAMES = ("llm", "model", "repair", "max_attempts", "sandbox", "ollama_host",
-                      "llm_timeout", "num_ctx", "max_tokens", "replay_file", "on_llm_error")
+                      "llm_timeout", "num_ctx", "max_tokens", "replay_file", "on_llm_error",
+                      "replay")
 
 def _option(decls: list[str], **attrs: Any) -> tuple[list[str], dict]:
     return decls, attrs
@@ -47,6 +48,9 @@ AGENT_OPTIONS = [
                  help="Output tokens per call [default: 4096 Ollama, 512 embedded]."),
     _option(["--replay-file"], type=click.Path(exists=True, dir_okay=False, path_type=Path),
                  help="For --llm replay: a replies JSON or a scenario's trace.jsonl."),
+    _option(["--replay/--no-replay"], default=None,
+                 help="Play every scenario headless in esmini and judge it against the record "
+                      "[default: on when esmini is found, see scenweave doctor]."),
     _option(["--on-llm-error"], type=click.Choice(["raise", "fallback"]), default="raise",
                  show_default=True,
                  help="LLM unreachable or too slow: stop the run, or use the fallback."),
@@ -65,10 +69,12 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                       sandbox: str = "auto", ollama_host: str | None = None,
                       llm_timeout: float = 300.0, num_ctx: int = 8192,
                       max_tokens: int | None = None, replay_file: Path | None = None,
-                      on_llm_error: str = "raise") -> PipelineSettings:
+                      on_llm_error: str = "raise", replay: bool | None = None
+                      ) -> PipelineSettings:
     """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts."""
+    replay_settings = replay_settings_for(replay)
     if no_llm or llm == "none":
-        return PipelineSettings(no_llm=True, top_n=top_n)
+        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings)
     from agent import AgentSettings
     from agent.repair import get_strategy
     from sandbox import SandboxSettings
@@ -83,5 +89,21 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           max_attempts=max_attempts, timeout_s=llm_timeout, num_ctx=num_ctx,
                           max_tokens=max_tokens, ollama_host=ollama_host,
                           replay_file=replay_file, on_llm_error=on_llm_error,
-                          sandbox=SandboxSettings(backend=sandbox))
-    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent)
+                          sandbox=SandboxSettings(backend=sandbox), replay=replay_settings)
+    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings)
+
+
+def replay_settings_for(wanted: bool | None) -> Any:
+    """``ReplaySettings`` when scenarios are to be played: asked for (``--replay``: esmini must
+    be there), or by default when esmini is found; None for ``--no-replay``."""
+    if wanted is False:
+        return None
+    from player import PlayerUnavailable, ReplaySettings, find_esmini
+
+    try:
+        find_esmini()
+    except PlayerUnavailable as err:
+        if wanted:
+            raise click.UsageError(f"--replay: {err}") from err
+        return None
+    return ReplaySettings()

@@ -13,7 +13,7 @@ import click
 
 from ingest import ingest_directory
 from ingest.samples import write_highway_samples, write_urban_samples
-from scenweave.commands.agent_options import pipeline_settings
+from scenweave.commands.agent_options import pipeline_settings, replay_settings_for
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.runner import run_batch
@@ -43,7 +43,8 @@ def demo(out_dir: Path, seed: int, per_class: int, llm: str, agent_classes: str,
     click.echo(f"demo: sample data in {raw}; {report.records_written} canonical records in "
                f"{records} ({len(report.errors)} input errors)")
     result = run_batch(records, out_dir / "runs", InputSelection(),
-                       PipelineSettings(no_llm=True), run_id="no-llm")
+                       PipelineSettings(no_llm=True, replay=replay_settings_for(None)),
+                       run_id="no-llm")
     click.echo(result.line())
     if llm == "none":
         return

@@ -1,0 +1,415 @@
+"""What the replay must show: a played scenario (``player.Playback``) against its params.
+
+The XML read-back (``schemas.fidelity``) proves the numbers are in the file; this proves a
+real OpenSCENARIO engine does with them what the record did. Every check is a ``REPLAY_*``
+finding whose message says what happened, when, and what the record says; the conventions
+it rests on (where a gap is measured, which time counts) are in docs/scenario-conventions.md
+under "Replay".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from corpus.kinematics import STOP_LINE_MARGIN_M
+from schemas.fidelity import LANE_CHANGE_ACTOR, expected_speed_changes, placed_actors
+from schemas.findings import Finding
+from schemas.scenario_doc import ScenarioDoc
+
+#: a speed of the replay may differ this much from the record (m/s)
+SPEED_TOL_MS = 0.5
+#: a gap of the replay may differ this much from the record (m)
+GAP_TOL_M = 1.0
+#: a change may start this much later than scripted (s): events fire on the first step past
+#: their time, and a speed change is seen once it has moved the speed by ONSET_MS
+ONSET_TOL_S = 0.3
+ONSET_MS = 0.2
+#: a lane change may take this much longer or shorter than recorded (s, and relative)
+LANE_CHANGE_TOL_S = 0.5
+LANE_CHANGE_TOL_REL = 0.2
+#: a vehicle further than this from its lane's centre at t = 0 is off its lane (m)
+OFF_LANE_M = 1.0
+#: a vehicle whose heading differs more from its lane's traffic is facing the wrong way (rad)
+WRONG_WAY_RAD = math.radians(45)
+#: the ego counts as stopped below this speed (m/s)
+STOPPED_MS = 0.1
+#: the right turn turns at least this much (rad, clockwise)
+RIGHT_TURN_MIN_RAD = math.radians(45)
+#: the turning ego passes this close to the spawn stage's exit point (m)
+TURN_EXIT_REACH_M = 3.0
+#: classes whose NPC's gap is recorded ``duration_s`` after the manoeuvre start as well
+GAP_AT_END_CLASSES = {"FLF", "FLB"}
+#: cut-ins end with the NPC in the ego's lane, cut-outs out of it
+ENDS_IN_EGO_LANE = {"CINF": True, "CINB": True, "COUTF": False, "COUTB": False}
+
+
+@dataclass
+class _Judge:
+    playback: object  # player.Playback (duck-typed: schemas does not import the player)
+    params: dict
+    doc: ScenarioDoc
+    map_path: object
+    found: list[Finding]
+
+    def fail(self, code: str, message: str, time_s: float | None = None) -> None:
+        when = "" if time_s is None else f"at {time_s:.2f} s: "
+        self.found.append(Finding(code, when + message))
+
+    def speed(self, entity: str, time_s: float) -> float:
+        return self.playback.value(entity, "speed", time_s)
+
+
+def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> list[Finding]:
+    """REPLAY_* findings of one playback against the params the scenario was made from."""
+    judge = _Judge(playback, params, doc, map_path, [])
+    if playback.engine_error:
+        judge.fail("REPLAY_ENGINE", f"esmini could not play the scenario: {playback.engine_error}")
+        return judge.found
+    if not playback.times:
+        judge.fail("REPLAY_ENGINE", "esmini recorded no step")
+        return judge.found
+    if playback.quit_by_engine:
+        judge.fail("REPLAY_ENGINE", "esmini ended the scenario before its stop time",
+                   playback.duration_s)
+    for check in (_start_poses, _start_speeds, _speed_changes, _gaps, _lane_changes,
+                  _events_fired, _lights, _stop_or_pass, _right_turn, _collisions):
+        check(judge)
+    return judge.found
+
+
+# --- the checks ------------------------------------------------------------------------------
+
+def _start_poses(judge: _Judge) -> None:
+    """Every vehicle starts on a driving lane, facing its lane's direction of traffic."""
+    import spawn_db
+
+    network = spawn_db.road_network(judge.map_path)
+    for entity in judge.playback.entities:
+        track = judge.playback.tracks[entity]
+        if abs(track["lane_offset"][0]) > OFF_LANE_M:
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts {abs(track['lane_offset'][0]):.1f} m "
+                       f"from the centre of the nearest lane (road {track['road'][0]}, lane "
+                       f"{track['lane'][0]})", 0.0)
+            continue
+        try:
+            lane_h = network.lane_to_world(track["road"][0], track["lane"][0], track["s"][0]).h
+            drivable = network.is_drivable(track["road"][0], track["lane"][0], track["s"][0])
+        except spawn_db.SpawnDbError:
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {track['road'][0]} lane "
+                       f"{track['lane'][0]}, which is not a lane of the map", 0.0)
+            continue
+        if not drivable:
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {track['road'][0]} lane "
+                       f"{track['lane'][0]}, which is not a driving lane", 0.0)
+        elif abs(math.remainder(track["h"][0] - lane_h, math.tau)) > WRONG_WAY_RAD:
+            judge.fail("REPLAY_WRONG_WAY", f"{entity} starts facing "
+                       f"{math.degrees(math.remainder(track['h'][0] - lane_h, math.tau)):.0f} deg "
+                       f"off its lane's direction of traffic (road {track['road'][0]}, lane "
+                       f"{track['lane'][0]})", 0.0)
+
+
+def _start_speeds(judge: _Judge) -> None:
+    for entity, prefix in placed_actors(judge.params):
+        want = _number(judge.params, f"{prefix}_speed_ms")
+        if want is None or entity not in judge.playback.tracks:
+            continue
+        got = judge.playback.tracks[entity]["speed"][0]
+        if abs(got - want) > SPEED_TOL_MS:
+            judge.fail("REPLAY_START_SPEED", f"{entity} starts at {got:.2f} m/s, the record "
+                       f"says {want:.2f} m/s", 0.0)
+
+
+def _speed_changes(judge: _Judge) -> None:
+    """Each scripted speed change starts on time and reaches its target in its duration."""
+    for name, target, duration, start in expected_speed_changes(judge.doc, judge.params):
+        entity = name.removesuffix("_speed_change")
+        if None in (target, duration, start) or entity not in judge.playback.tracks:
+            continue
+        ends = start + duration
+        if ends + 0.2 > judge.playback.duration_s:
+            continue  # the scenario stops before the change is over: nothing to compare
+        v0 = judge.speed(entity, start)
+        got = judge.speed(entity, ends + 0.2)
+        if abs(got - target) > SPEED_TOL_MS:
+            judge.fail("REPLAY_SPEED", f"{entity} drives {got:.2f} m/s after its speed change "
+                       f"({name}), the record says {target:.2f} m/s", ends + 0.2)
+        if abs(target - v0) <= 2 * ONSET_MS:
+            continue
+        # a linear change moves the speed by ONSET_MS this long after it starts
+        seen_after = duration * ONSET_MS / abs(target - v0) if duration > 0 else 0.0
+        onset = _first_time(judge.playback, entity, start - 0.5,
+                            lambda v, v0=v0: abs(v - v0) > ONSET_MS)
+        if onset is None or not start - 0.1 <= onset - seen_after <= start + ONSET_TOL_S:
+            judge.fail("REPLAY_SPEED_ONSET", f"{entity}'s speed change ({name}) "
+                       + ("never starts" if onset is None else
+                          f"starts at {onset - seen_after:.2f} s")
+                       + f", scripted for {start:.2f} s", onset)
+
+
+def _gaps(judge: _Judge) -> None:
+    """The recorded gap holds at the manoeuvre start (and, for FL, ``duration_s`` later)."""
+    params = judge.params
+    code = params.get("maneuver_class")
+    start = _number(params, "maneuver_start_s")
+    wanted = [(entity, _number(params, f"{prefix}_distance_m"), start)
+              for entity, prefix in placed_actors(params) if entity != "hero"]
+    if code in GAP_AT_END_CLASSES and start is not None:
+        wanted.append(("npc", _number(params, "npc_distance_end_m"),
+                       start + (_number(params, "duration_s") or 0.0)))
+    for entity, gap, at_s in wanted:
+        if gap is None or at_s is None or entity not in judge.playback.tracks \
+                or params.get("domain") != "highway" or at_s > judge.playback.duration_s:
+            continue
+        got = gap_along_lane(judge.playback, entity, at_s, judge.map_path)
+        if got is None:
+            judge.fail("REPLAY_GAP", f"{entity}'s gap to the ego could not be measured along its "
+                       "lane (not on the ego's road or a neighbour lane)", at_s)
+        elif abs(got - gap) > GAP_TOL_M:
+            judge.fail("REPLAY_GAP", f"{entity} is {got:.2f} m from the ego along its lane, the "
+                       f"record says {gap:.2f} m", at_s)
+
+
+def _lane_changes(judge: _Judge) -> None:
+    params = judge.params
+    code = params.get("maneuver_class")
+    actor = LANE_CHANGE_ACTOR.get(code)
+    start, duration = _number(params, "maneuver_start_s"), _number(params, "duration_s")
+    if actor is None or actor not in judge.playback.tracks or None in (start, duration):
+        return
+    changes = lane_changes(judge.playback, actor)
+    direction = params.get("lane_change_direction")
+    if len(changes) != 1:
+        judge.fail("REPLAY_LANE_CHANGE", f"{actor} changes lanes {len(changes)} times "
+                   f"({', '.join(f'{side} at {t:.2f} s' for t, side in changes) or 'never'}), the "
+                   f"record has one change to the {direction}")
+        return
+    crossed_s, side = changes[0]
+    if side != direction:
+        judge.fail("REPLAY_LANE_CHANGE", f"{actor} changes lanes to the {side}, the record "
+                   f"says {direction}", crossed_s)
+    took = lane_change_duration(judge.playback, actor, crossed_s)
+    if took is not None and abs(took - duration) > max(LANE_CHANGE_TOL_S,
+                                                       LANE_CHANGE_TOL_REL * duration):
+        judge.fail("REPLAY_LANE_CHANGE", f"{actor}'s lane change takes {took:.2f} s, the record "
+                   f"says {duration:.2f} s", crossed_s)
+    if code in ENDS_IN_EGO_LANE:
+        end = judge.playback.duration_s
+        same = _same_lane(judge.playback, "npc", "hero", end)
+        if same is not None and same != ENDS_IN_EGO_LANE[code]:
+            judge.fail("REPLAY_LANE_CHANGE", "the NPC ends " + ("in" if same else "out of")
+                       + " the ego's lane; a " + ("cut-in" if ENDS_IN_EGO_LANE[code] else
+                                                  "cut-out") + " ends " +
+                       ("in it" if ENDS_IN_EGO_LANE[code] else "out of it"), end)
+
+
+def _events_fired(judge: _Judge) -> None:
+    fired = judge.playback.fired("action")
+    for name, event in judge.doc.events.items():
+        if event.start_s is None or event.start_s >= judge.playback.duration_s:
+            continue
+        if name not in fired:
+            judge.fail("REPLAY_EVENT", f"action {name!r} (scripted for {event.start_s:.2f} s) "
+                       "never started")
+        elif fired[name] > event.start_s + ONSET_TOL_S:
+            judge.fail("REPLAY_EVENT", f"action {name!r} started at {fired[name]:.2f} s, "
+                       f"scripted for {event.start_s:.2f} s", fired[name])
+
+
+def _lights(judge: _Judge) -> None:
+    """The light shows what the class needs when the ego reaches the stop line (or stops)."""
+    params = judge.params
+    if not judge.playback.lights or _number(params, "spawn_stop_line_distance_m") is None:
+        return
+    code = params.get("maneuver_class")
+    stop_line = _number(params, "spawn_stop_line_distance_m")
+    reached = _time_travelled(judge.playback, "hero", stop_line)
+    if code == "U4_1":
+        stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
+        colour = light_state(judge.playback, stopped if stopped is not None else
+                             judge.playback.duration_s)
+        if colour not in ("yellow", "red"):
+            judge.fail("REPLAY_LIGHT", f"the light is {colour} when the ego stops; a stop at "
+                       "red happens on yellow or red", stopped)
+        early = _first_time(judge.playback, "hero", 0.0,
+                            lambda v: v < _number(params, "ego_speed_ms") - ONSET_MS)
+        if early is not None and light_state(judge.playback, early) == "green":
+            judge.fail("REPLAY_LIGHT", "the ego brakes while its light is green", early)
+    elif reached is not None:
+        colour = light_state(judge.playback, reached)
+        allowed = {"green", "yellow"} if params.get("tfl_state") == "orange" else {"green"}
+        if colour not in allowed:
+            judge.fail("REPLAY_LIGHT", f"the light is {colour} when the ego reaches the stop "
+                       f"line; the record passes on {params.get('tfl_state') or 'green'}",
+                       reached)
+
+
+def _stop_or_pass(judge: _Judge) -> None:
+    params = judge.params
+    code, stop_line = params.get("maneuver_class"), _number(params, "spawn_stop_line_distance_m")
+    if params.get("domain") != "urban" or code == "U1_1" or stop_line is None:
+        return
+    if code == "U4_1":
+        stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
+        if stopped is None:
+            judge.fail("REPLAY_NO_STOP", f"the ego never stops (record: it stops before the "
+                       f"stop line {stop_line:.1f} m ahead)")
+            return
+        driven = travelled(judge.playback, "hero", judge.playback.duration_s)
+        if driven > stop_line + 0.05:
+            judge.fail("REPLAY_STOP_PAST_LINE", f"the ego comes to rest {driven:.2f} m from its "
+                       f"start, past the stop line at {stop_line:.2f} m", stopped)
+        elif driven < stop_line - STOP_LINE_MARGIN_M - 5.0:
+            judge.fail("REPLAY_STOP_PAST_LINE", f"the ego stops {stop_line - driven:.1f} m before "
+                       "the stop line; the record stops at it", stopped)
+    elif _time_travelled(judge.playback, "hero", stop_line) is None:
+        driven = travelled(judge.playback, "hero", judge.playback.duration_s)
+        judge.fail("REPLAY_NO_PASS", f"the ego never crosses the stop line {stop_line:.1f} m "
+                   f"ahead (drove {driven:.1f} m); the record passes")
+
+
+def _right_turn(judge: _Judge) -> None:
+    params = judge.params
+    if params.get("maneuver_class") != "U4_4":
+        return
+    turned = heading_change(judge.playback, "hero")
+    if turned > -RIGHT_TURN_MIN_RAD:
+        judge.fail("REPLAY_TURN", f"the ego turns {math.degrees(turned):+.0f} deg (right turns "
+                   f"are negative); the record turns right")
+    exit_xy = (_number(params, "turn_exit_x"), _number(params, "turn_exit_y"))
+    if None not in exit_xy:
+        track = judge.playback.tracks["hero"]
+        closest = min(math.dist(exit_xy, p) for p in zip(track["x"], track["y"], strict=True))
+        if closest > TURN_EXIT_REACH_M:
+            judge.fail("REPLAY_TURN", f"the ego passes {closest:.1f} m from the right turn's exit "
+                       "lane at its nearest")
+
+
+def _collisions(judge: _Judge) -> None:
+    seen: set[tuple[str, str]] = set()
+    for time_s, a, b in judge.playback.collisions:
+        if (a, b) not in seen:
+            seen.add((a, b))
+            judge.fail("REPLAY_COLLISION", f"{a} and {b} collide; the record has no collision",
+                       time_s)
+
+
+# --- measurements on a playback (shared with the pictures) -----------------------------------
+
+def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
+                   ego: str = "hero") -> float | None:
+    """Metres from the ego's reference point to ``entity``'s, along ``entity``'s lane, at
+    ``time_s`` (positive ahead). The ego's position is carried sideways onto that lane at its
+    own ``s`` (the two share a road), or, on another road, the lane id beside it."""
+    import spawn_db
+
+    i = playback.index_at(time_s)
+    ta, tb = playback.tracks[ego], playback.tracks[entity]
+    lane_b = tb["lane"][i]
+    starts = [(ta["road"][i], lane_b, playback.value(ego, "s", time_s))]
+    if ta["road"][i] != tb["road"][i]:
+        offset = lane_b - tb["lane"][0] if tb["road"][0] == ta["road"][0] else 0
+        starts.append((ta["road"][i], ta["lane"][i] + offset, playback.value(ego, "s", time_s)))
+    end = (tb["road"][i], lane_b, playback.value(entity, "s", time_s))
+    for road, lane, s in starts:
+        if lane == 0:
+            continue
+        try:
+            along = spawn_db.distance_along_lane(road, lane, s, *end, map_path=map_path)
+        except spawn_db.SpawnDbError:
+            along = None
+        if along is not None:
+            return along
+    return None
+
+
+def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
+    """``(time, 'left'|'right')`` each time ``entity``'s lane id changes on one road.
+
+    In right-hand traffic, cars in negative lanes drive along ``s``: left is toward larger
+    ids; in positive lanes they drive against it: left is toward smaller ids.
+    """
+    track, found = playback.tracks[entity], []
+    for i in range(1, len(playback.times)):
+        if track["road"][i] != track["road"][i - 1] or track["lane"][i] == track["lane"][i - 1]:
+            continue
+        step = track["lane"][i] - track["lane"][i - 1]
+        left = step > 0 if track["lane"][i - 1] < 0 else step < 0
+        found.append((playback.times[i], "left" if left else "right"))
+    return found
+
+
+def lane_change_duration(playback, entity: str, crossed_s: float) -> float | None:
+    """How long the change around ``crossed_s`` took: from leaving the old lane's centre
+    (lateral offset above 0.1 m) to settling in the new one's."""
+    track, i = playback.tracks[entity], playback.index_at(crossed_s)
+    begin = i - 1
+    while begin > 0 and abs(track["lane_offset"][begin]) > 0.1:
+        begin -= 1
+    end = i
+    while end < len(playback.times) - 1 and abs(track["lane_offset"][end]) > 0.1:
+        end += 1
+    if end == len(playback.times) - 1:
+        return None
+    return playback.times[end] - playback.times[begin]
+
+
+def travelled(playback, entity: str, time_s: float) -> float:
+    """Metres ``entity`` drove from t = 0 to ``time_s`` (trapezoid over its speed)."""
+    speeds, total = playback.tracks[entity]["speed"], 0.0
+    for i in range(1, len(playback.times)):
+        if playback.times[i] > time_s + 1e-9:
+            break
+        total += (speeds[i] + speeds[i - 1]) / 2 * (playback.times[i] - playback.times[i - 1])
+    return total
+
+
+def heading_change(playback, entity: str) -> float:
+    """Total turn of ``entity`` over the replay (rad, counter-clockwise positive)."""
+    headings = playback.tracks[entity]["h"]
+    return sum(math.remainder(b - a, math.tau) for a, b in zip(headings, headings[1:],
+                                                                strict=False))
+
+
+def light_state(playback, time_s: float) -> str | None:
+    """The colour of the scenario's light at ``time_s``: the last light action started."""
+    started = playback.fired("action")
+    shown = [(t, playback.lights[name]) for name, t in started.items() if name in playback.lights]
+    shown = [c for c in sorted(shown) if c[0] <= time_s + 1e-9]
+    return shown[-1][1] if shown else None
+
+
+def _time_travelled(playback, entity: str, metres: float) -> float | None:
+    speeds, total = playback.tracks[entity]["speed"], 0.0
+    for i in range(1, len(playback.times)):
+        total += (speeds[i] + speeds[i - 1]) / 2 * (playback.times[i] - playback.times[i - 1])
+        if total >= metres:
+            return playback.times[i]
+    return None
+
+
+def _first_time(playback, entity: str, from_s: float, test) -> float | None:
+    speeds = playback.tracks[entity]["speed"]
+    for t, v in zip(playback.times, speeds, strict=True):
+        if t >= from_s - 1e-9 and test(v):
+            return t
+    return None
+
+
+def _same_lane(playback, a: str, b: str, time_s: float) -> bool | None:
+    i = playback.index_at(time_s)
+    ta, tb = playback.tracks[a], playback.tracks[b]
+    if ta["road"][i] != tb["road"][i]:
+        return None
+    return ta["lane"][i] == tb["lane"][i]
+
+
+def _number(params: dict, key: str) -> float | None:
+    value = params.get(key)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    return float(value) if ok else None
+
+
+def replay_codes(findings: Iterable[Finding]) -> list[str]:
+    return [f.code for f in findings if f.code.startswith("REPLAY")]

@@ -25,11 +25,13 @@ from typing import Any
 from scenariogeneration import xosc
 
 from corpus.kinematics import (
+    MAX_PLAYABLE_DECELERATION_MS2,
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
     lane_change_length_m,
     lead_reaction,
+    lead_stays_ahead,
     orange_light_yellow_s,
     red_light_timing,
     start_gap_m,
@@ -209,6 +211,29 @@ def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
                 number(params, "lead_speed_ms"), params.get("lead_vehicle_type"))]
 
 
+def lead_keeps_ahead(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """The urban lead's ``lead_speed_change`` when the ego, driving as recorded, would catch
+    it up before ``timeout_s`` (``corpus.kinematics.lead_stays_ahead``); none otherwise."""
+    if not params.get("lead_present"):
+        return []
+    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[known_type(params.get("lead_vehicle_type"))])
+    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    profile = lead_stays_ahead(number(params, "lead_speed_ms"), urban_hero_profile(params),
+                               number(params, "lead_distance_m"), number(params, "timeout_s"),
+                               clearance)
+    return [] if profile is None else [_profile_change("lead", profile)]
+
+
+def urban_hero_profile(params: Mapping[str, Any]) -> SpeedProfile:
+    """How the urban ego drives: the stop at the line (U4_1) or its recorded speed change."""
+    if params.get("maneuver_class") == "U4_1":
+        return stop_at_line(number(params, "ego_speed_ms"), number(params, "brake_time_s"),
+                            stop_line_m(params))
+    duration, start = manoeuvre_timing(params)
+    return SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
+                        start, duration)
+
+
 def _vehicle(actor: Actor) -> xosc.Vehicle:
     model = VEHICLE_MODELS[actor.vehicle_type]
     box = xosc.BoundingBox(model.width_m, model.length_m, model.height_m,
@@ -216,7 +241,8 @@ def _vehicle(actor: Actor) -> xosc.Vehicle:
     front = xosc.Axle(0.5, 0.7, model.width_m * 0.85, model.length_m * 0.6, 0.35)
     rear = xosc.Axle(0.0, 0.7, model.width_m * 0.85, 0.0, 0.35)
     vehicle = xosc.Vehicle(model.blueprint, model.category, box, front, rear,
-                           model.max_speed_ms, 10, 10)
+                           model.max_speed_ms, MAX_PLAYABLE_DECELERATION_MS2,
+                           MAX_PLAYABLE_DECELERATION_MS2)
     if actor.name == HERO:
         vehicle.add_property("type", "ego_vehicle")
     return vehicle

@@ -11,6 +11,7 @@ from pathlib import Path
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
+    lead_keeps_ahead,
     make_scenario,
     urban_lead,
     world_position,
@@ -24,5 +25,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the urban in-lane driving scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params)]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+                             events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

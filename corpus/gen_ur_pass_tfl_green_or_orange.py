@@ -12,6 +12,7 @@ from pathlib import Path
 from corpus.corpus_utils import (
     hero,
     hero_speed_profile,
+    lead_keeps_ahead,
     make_scenario,
     orange_light_for_pass,
     traffic_light,
@@ -29,5 +30,6 @@ def generate(params: dict, out_path: str) -> Path:
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
     if params["tfl_state"] == "orange":
         events += orange_light_for_pass(params)
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+                             events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

@@ -13,6 +13,7 @@ from pathlib import Path
 from corpus.corpus_utils import (
     hero,
     hero_stops_at_line,
+    lead_keeps_ahead,
     make_scenario,
     red_light_for_stop,
     urban_lead,
@@ -27,5 +28,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the stop-at-red-light scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_stops_at_line(params), *red_light_for_stop(params)]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+                             events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

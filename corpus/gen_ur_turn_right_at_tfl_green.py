@@ -13,6 +13,7 @@ from corpus.corpus_utils import (
     drive_to,
     hero,
     hero_speed_profile,
+    lead_keeps_ahead,
     make_scenario,
     right_turn_target,
     traffic_light,
@@ -27,10 +28,13 @@ TAG = "turn_right_at_tfl_green"
 def generate(params: dict, out_path: str) -> Path:
     """Build the right-turn-on-green scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
+    # the route first: players such as esmini count AcquirePositionAction as a longitudinal
+    # action, so one started after the speed change in the same step would end it
     events = [
-        hero_speed_profile(params),
         drive_to(HERO, "hero_turn_right", right_turn_target(params), params["maneuver_start_s"]),
+        hero_speed_profile(params),
         traffic_light(params, "initial", "green", 0.0),
     ]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)], events=events)
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+                             events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

@@ -27,6 +27,9 @@ YELLOW_BEFORE_STOP_LINE_M = 5.0
 FIRST_LIGHT_CHANGE_S = 0.5
 #: the hardest braking the ego is given when it must stop or react in time (m/s^2)
 MAX_DECELERATION_MS2 = 8.0
+#: the hardest braking and acceleration a scenario's vehicles are capable of (m/s^2): their
+#: OpenSCENARIO Performance; a record that needs more cannot be played back
+MAX_PLAYABLE_DECELERATION_MS2 = 10.0
 #: free space kept between the ego and a braking lead, bumper to bumper (m)
 SAFETY_GAP_M = 2.0
 
@@ -174,6 +177,31 @@ def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s:
         return SpeedProfile(ego_speed_ms, target, start, longest)
     return SpeedProfile(ego_speed_ms, target, start,
                         _latest(lambda d: safe(start, d), shortest, longest))
+
+
+def lead_stays_ahead(lead_speed_ms: float, ego: SpeedProfile, gap_m: float, until_s: float,
+                     clearance_m: float) -> SpeedProfile | None:
+    """The lead's speed when an ego faster than it would otherwise catch up before ``until_s``.
+
+    A record gives the lead one speed and the ego its own profile; held past the recorded
+    window, a slower lead is run into. The lead then speeds up from t = 0 to the ego's top
+    speed, as gently as keeps ``clearance_m`` (centre to centre); ``None`` when its recorded
+    speed already keeps it.
+    """
+    top = max(ego.v0, ego.end_speed)
+
+    def safe(duration: float) -> bool:
+        lead = SpeedProfile(lead_speed_ms, top, 0.0, duration)
+        return min_gap_m(lead, ego, gap_m, until_s) >= clearance_m
+
+    steady = SpeedProfile(lead_speed_ms, lead_speed_ms, 0.0, 0.0)
+    if lead_speed_ms >= top or min_gap_m(steady, ego, gap_m, until_s) >= clearance_m:
+        return None
+    if not safe(0.0):
+        return SpeedProfile(lead_speed_ms, top, 0.0, 0.0)
+    if safe(until_s):
+        return SpeedProfile(lead_speed_ms, top, 0.0, round(until_s, 3))
+    return SpeedProfile(lead_speed_ms, top, 0.0, _latest(safe, 0.0, until_s))
 
 
 def _latest(ok: Callable[[float], bool], low: float, high: float) -> float:

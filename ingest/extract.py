@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
 from ingest.layouts import FAMILY_OF_CLASS, default_layouts
@@ -74,6 +75,14 @@ def record_conventions(record: dict) -> dict:
 
 
 def _brake(raw: dict, code: str, conventions: dict) -> dict:
+    lead_ms, delta_ms = raw["lead_vel_kmh"] / KMH, raw["delta_vel_kmh"] / KMH
+    slowed = min(max(-delta_ms, 0.0), max(lead_ms, 0.0))
+    if raw["duration_s"] > 0 and slowed / raw["duration_s"] > MAX_PLAYABLE_DECELERATION_MS2:
+        raise RecordIssue(
+            f"the lead slows by {slowed:.1f} m/s within {raw['duration_s']:g} s "
+            f"({slowed / raw['duration_s']:.1f} m/s^2): harder than any car brakes "
+            f"(scenarios allow {MAX_PLAYABLE_DECELERATION_MS2:g} m/s^2), no replay can show it",
+            field="delta_vel_kmh")
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": raw["lead_vel_kmh"] / KMH,

@@ -29,6 +29,8 @@ ONSET_MS = 0.2
 #: a lane change may take this much longer or shorter than recorded (s, and relative)
 LANE_CHANGE_TOL_S = 0.5
 LANE_CHANGE_TOL_REL = 0.2
+#: the offset from the lane centre jumps at least this much when a car crosses a lane line (m)
+LANE_JUMP_M = 1.0
 #: a vehicle further than this from its lane's centre at t = 0 is off its lane (m)
 OFF_LANE_M = 1.0
 #: a vehicle whose heading differs more from its lane's traffic is facing the wrong way (rad)
@@ -76,6 +78,16 @@ def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> lis
     for check in (_start_poses, _start_speeds, _speed_changes, _gaps, _lane_changes,
                   _events_fired, _lights, _stop_or_pass, _right_turn, _collisions):
         check(judge)
+    return judge.found
+
+
+def judge_collisions_only(playback) -> list[Finding]:
+    """What can be judged without the record: the engine played it, and nothing collided."""
+    judge = _Judge(playback, {}, None, None, [])
+    if playback.engine_error:
+        judge.fail("REPLAY_ENGINE", f"esmini could not play the scenario: {playback.engine_error}")
+    else:
+        _collisions(judge)
     return judge.found
 
 
@@ -325,17 +337,20 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
 
 
 def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
-    """``(time, 'left'|'right')`` each time ``entity``'s lane id changes on one road.
+    """``(time, 'left'|'right')`` each time ``entity`` crosses into another lane.
 
-    In right-hand traffic, cars in negative lanes drive along ``s``: left is toward larger
-    ids; in positive lanes they drive against it: left is toward smaller ids.
+    A crossing is a step where the lane id changes and the offset from the lane centre jumps
+    by more than ``LANE_JUMP_M`` (it flips from one edge of the old lane to the other side of
+    the new one; entering the next road keeps it continuous). Offsets are along OpenDRIVE's
+    ``t`` (left of the road's direction): cars in negative lanes drive along ``s``, so a jump
+    toward negative ``t`` is a change to the left; in positive lanes they drive against ``s``.
     """
     track, found = playback.tracks[entity], []
     for i in range(1, len(playback.times)):
-        if track["road"][i] != track["road"][i - 1] or track["lane"][i] == track["lane"][i - 1]:
+        jump = track["lane_offset"][i] - track["lane_offset"][i - 1]
+        if track["lane"][i] == track["lane"][i - 1] or abs(jump) < LANE_JUMP_M:
             continue
-        step = track["lane"][i] - track["lane"][i - 1]
-        left = step > 0 if track["lane"][i - 1] < 0 else step < 0
+        left = jump < 0 if track["lane"][i - 1] < 0 else jump > 0
         found.append((playback.times[i], "left" if left else "right"))
     return found
 

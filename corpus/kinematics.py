@@ -204,6 +204,26 @@ def lead_stays_ahead(lead_speed_ms: float, ego: SpeedProfile, gap_m: float, unti
     return SpeedProfile(lead_speed_ms, top, 0.0, _latest(safe, 0.0, until_s))
 
 
+def follower_settles(follower_ms: float, leader_ms: float, gap_m: float, within_s: float,
+                     clearance_m: float) -> float | None:
+    """How long a follower may take to slow to its leader's speed, starting now, so that the
+    two stay ``clearance_m`` apart (centre to centre) for ``within_s``; ``None`` when holding
+    its speed already keeps the distance. 0.0 (at once) is the best left when nothing keeps it.
+    """
+    leader = SpeedProfile(leader_ms, leader_ms, 0.0, 0.0)
+
+    def safe(duration: float) -> bool:
+        follower = SpeedProfile(follower_ms, leader_ms, 0.0, duration)
+        return min_gap_m(leader, follower, gap_m, within_s) >= clearance_m
+
+    holding = SpeedProfile(follower_ms, follower_ms, 0.0, 0.0)
+    if follower_ms <= leader_ms or min_gap_m(leader, holding, gap_m, within_s) >= clearance_m:
+        return None
+    if not safe(0.0):
+        return 0.0
+    return within_s if safe(within_s) else _latest(safe, 0.0, within_s)
+
+
 def _latest(ok: Callable[[float], bool], low: float, high: float) -> float:
     """Largest x in [low, high] with ``ok(x)``, given ``ok(low)`` and not ``ok(high)``,
     rounded down to the millisecond so it stays on the safe side."""

@@ -26,8 +26,14 @@ from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, 
 
 REPORT_FILE = "report.html"
 TEMPLATE = Path(__file__).parent / "templates" / "report.html"
-SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE)
+REPLAY_JSON, REPLAY_PNG = "replay.json", "replay.png"
+SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE,
+                  REPLAY_JSON, REPLAY_PNG)
 HOUR_S = 3600.0
+#: replay figures embedded in a run's report: every failed replay, up to this many passing
+#: ones per class, at most this many in all
+REPLAY_PASSING_PER_CLASS = 2
+REPLAY_FIGURES_MAX = 40
 
 
 # --- metrics -------------------------------------------------------------------------------
@@ -334,14 +340,18 @@ def render_run_report(run_dir: Path) -> str:
         + "</p>",
         count_boxes(m["counts"], len(outcomes)),
         "<h2>Per class</h2>",
-        table(METRICS_HEADER, [metrics_row(code, metrics(g)) for code, g in grouped.items()]
-              + [metrics_row("all", m)]),
+        _per_class_table(grouped, m, outcomes),
         "<h2>Error taxonomy</h2>",
         table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()])
         if m["error_taxonomy"] else "<p>No errors.</p>",
     ]
+    replayed = [o for o in outcomes if o.get("replay")]
+    if replayed:
+        parts += ["<h2>Replay in esmini</h2>", _replay_overview(replayed)]
     if outcomes:
         parts += ["<h2>Figures</h2>", *_run_figures(run_dir, outcomes)]
+    if replayed:
+        parts += ["<h2>Replay figures</h2>", *_replay_figures(run_dir, replayed)]
     parts += ["<h2>Scenarios</h2>", _scenario_table(run_dir, outcomes)]
     issues = summary.get("input_issues") or []
     if issues:
@@ -350,6 +360,98 @@ def render_run_report(run_dir: Path) -> str:
                         [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
                          for i in issues], text_columns=4)]
     return page(f"ScenWeave run {summary.get('run_id', run_dir.name)}", "\n".join(parts))
+
+
+def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> str:
+    """The metrics per class and in all; with a ``replay`` column (passed/played) when any
+    scenario of the run was played in esmini."""
+    rows = [metrics_row(code, metrics(g)) for code, g in grouped.items()] + [metrics_row("all", m)]
+    if not any(o.get("replay") for o in outcomes):
+        return table(METRICS_HEADER, rows)
+    groups = [*grouped.values(), outcomes]
+    return table([*METRICS_HEADER, "replay"],
+                 [[*row, replay_rate(group)] for row, group in zip(rows, groups, strict=True)])
+
+
+def replay_counts(outcomes: Iterable[dict]) -> tuple[int, int]:
+    """(passed, played) of the outcomes whose scenario was played in esmini."""
+    played = [o["replay"] for o in outcomes if o.get("replay")]
+    return sum(bool(r.get("passed")) for r in played), len(played)
+
+
+def replay_rate(outcomes: Iterable[dict]) -> str:
+    """``passed/played (pct)``, ``–`` when none was played."""
+    passed, played = replay_counts(outcomes)
+    return f"{passed}/{played} ({pct(_rate(passed, played))})" if played else "–"
+
+
+def _replay_overview(replayed: list[dict]) -> str:
+    passed, played = replay_counts(replayed)
+    codes = Counter(c for o in replayed for c in o["replay"].get("codes") or [])
+    engine = sum(not o["replay"].get("played", True) for o in replayed)
+    lines = [f"<p>{played} scenarios played headless in esmini, {passed} as recorded "
+             f"({pct(_rate(passed, played))})"
+             + (f"; esmini could not play {engine}" if engine else "") + ".</p>"]
+    lines.append(table(["replay finding", "scenarios"], [[k, v] for k, v in sorted(codes.items())])
+                 if codes else "<p>No replay finding.</p>")
+    return "\n".join(lines)
+
+
+def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PASSING_PER_CLASS,
+                        limit: int = REPLAY_FIGURES_MAX) -> list[dict]:
+    """The outcomes whose replay figure the report shows: every failed replay (taken class by
+    class in turn when there are more than ``limit``), then up to ``passing_per_class``
+    passing ones per class while there is room."""
+    failed = by_class(o for o in replayed if not o["replay"].get("passed"))
+    passing = by_class(o for o in replayed if o["replay"].get("passed"))
+    picks: list[dict] = []
+    queues = [list(group) for group in failed.values()]
+    while queues and len(picks) < limit:
+        picks += [queue.pop(0) for queue in queues][:limit - len(picks)]
+        queues = [queue for queue in queues if queue]
+    for group in passing.values():
+        picks += group[:max(0, min(passing_per_class, limit - len(picks)))]
+    order = {id(o): i for i, o in enumerate(replayed)}
+    return sorted(picks, key=lambda o: (o["replay"].get("passed", False), order[id(o)]))
+
+
+def _replay_figures(run_dir: Path, replayed: list[dict]) -> list[str]:
+    """The picked replays' figures inline; a missing or stale ``replay.png`` is drawn first."""
+    picks = replay_figure_picks(replayed)
+    failed = sum(not o["replay"].get("passed") for o in replayed)
+    shown_failed = sum(not o["replay"].get("passed") for o in picks)
+    parts = [f"<p>Every failed replay ({shown_failed} of {failed} shown) and up to "
+             f"{REPLAY_PASSING_PER_CLASS} passing ones per class: speeds and gaps over time "
+             "against the record's values (diamonds, with the judge's tolerance), the paths on "
+             "the map. The figure of any scenario is its folder's replay.png.</p>"]
+    for o in picks:
+        png = _replay_png(run_dir / safe_name(o["scenario_id"]))
+        verdict = ("replay passed" if o["replay"].get("passed") else "replay failed: "
+                   + (", ".join(o["replay"].get("codes") or []) or "?"))
+        caption = f"{o['scenario_id']} ({o.get('maneuver_class', '?')}): {verdict}"
+        if isinstance(png, bytes):
+            parts.append(figure(png, caption, f"replay of {o['scenario_id']}"))
+        elif png:
+            parts.append(f'<p class="error">{_esc(caption)}: no figure ({_esc(png)})</p>')
+    return parts
+
+
+def _replay_png(folder: Path) -> bytes | str | None:
+    """The folder's ``replay.png`` (drawn when missing or older than ``replay.json`` or the
+    verdict in ``status.json``); the reason as text when it cannot be drawn; None without a
+    replay."""
+    source, picture = folder / REPLAY_JSON, folder / REPLAY_PNG
+    if not source.exists():
+        return None
+    try:
+        sources = [p.stat().st_mtime_ns for p in (source, folder / STATUS_FILE) if p.exists()]
+        if not picture.exists() or picture.stat().st_mtime_ns < max(sources):
+            from scenweave.replay_figures import draw_replay_figure
+
+            draw_replay_figure(folder)
+        return picture.read_bytes()
+    except Exception as err:  # noqa: BLE001 - one broken picture must not cost the report
+        return f"{type(err).__name__}: {err}"
 
 
 def _run_figures(run_dir: Path, outcomes: list[dict]) -> list[str]:

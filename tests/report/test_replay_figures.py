@@ -1,0 +1,205 @@
+"""Replay pictures (``scenweave.replay_figures``) and the replay part of a run's ``report.html``.
+
+A tiny ``--no-llm`` run is played in the real esmini; one of its scenarios is then made a
+failed replay by hand (a collision written into its ``replay.json`` and ``status.json``), as
+if esmini had seen one, so the report must count it and show its picture whatever the sample
+scenarios do in esmini.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import shutil
+from pathlib import Path
+
+import lxml.html
+import numpy as np
+import pytest
+from matplotlib import image as mpimg
+
+from player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
+from scenweave.inputs import InputSelection
+from scenweave.pipeline import PipelineSettings
+from scenweave.replay_figures import FIGURE_NAME, FIGURE_PX, draw_replay_figure
+from scenweave.report import (
+    REPORT_FILE,
+    pct,
+    replay_figure_picks,
+    replay_rate,
+    write_run_report,
+)
+from scenweave.run_folder import SUMMARY_FILE, RunFolder
+from scenweave.runner import run_batch, summarize
+
+CLASSES = ("FLF", "LCF", "U4_2")
+#: the scenario made to fail (one with an NPC to collide with) and a clean one to compare
+CRASHED_CLASS = "FLF"
+#: FAIL_COLOUR of the figures, as RGB
+RED = np.array([0xCF, 0x22, 0x2E])
+
+
+@pytest.fixture(scope="module")
+def run(sample_raw, tmp_path_factory) -> Path:
+    try:
+        find_esmini()
+    except PlayerUnavailable as err:
+        pytest.skip(f"REPLAY FIGURES NOT TESTED: no esmini here ({err})")
+    out = tmp_path_factory.mktemp("replay-runs")
+    result = run_batch(sample_raw, out, InputSelection(classes=CLASSES, per_class=1),
+                       PipelineSettings(no_llm=True, replay=ReplaySettings()), run_id="replayed")
+    assert result.summary["replay"]["played"] == len(CLASSES)
+    return result.folder.root
+
+
+@pytest.fixture(scope="module")
+def crashed(run) -> Path:
+    """The LCF scenario, its replay now ending in a collision of the ego and the NPC at 3 s;
+    the summary and the report rewritten from the folders (as ``scenweave report`` would)."""
+    [folder] = [p for p in run.iterdir() if p.name.startswith(CRASHED_CLASS)]
+    playback = Playback.read(folder / "replay.json")
+    playback.collisions = [(3.0, "hero", "npc"), (3.05, "hero", "npc")]
+    playback.write(folder / "replay.json")
+    status = json.loads((folder / "status.json").read_text())
+    status["replay"] = {**status["replay"], "passed": False, "codes": ["REPLAY_COLLISION"]}
+    status["validation"]["errors"] = [{"code": "REPLAY_COLLISION", "severity": "error",
+                                       "message": "at 3.00 s: hero and npc collide; the record "
+                                                  "has no collision", "line": None}]
+    status["status"], status["error"] = "failed", "REPLAY_COLLISION"
+    (folder / "status.json").write_text(json.dumps(status))
+    (folder / FIGURE_NAME).unlink(missing_ok=True)
+    run_folder = RunFolder(run)
+    run_folder.write(SUMMARY_FILE, summarize(run_folder, []))
+    write_run_report(run)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def page(crashed):
+    return lxml.html.parse(str(crashed.parent / REPORT_FILE)).getroot()
+
+
+def _outcomes(run: Path) -> list[dict]:
+    return [json.loads((p / "status.json").read_text()) for p in sorted(run.iterdir())
+            if (p / "status.json").exists()]
+
+
+def _decoded(png: bytes) -> np.ndarray:
+    return mpimg.imread(io.BytesIO(png), format="png")
+
+
+def _red_pixels(pixels: np.ndarray) -> int:
+    rgb = (pixels[..., :3] * 255).astype(int)
+    return int((np.abs(rgb - RED).max(axis=-1) < 40).sum())
+
+
+def _map_area(pixels: np.ndarray) -> np.ndarray:
+    """The bird's-eye view: right of the time plots, below the title, above the caption."""
+    height, width = pixels.shape[:2]
+    return pixels[int(0.1 * height):int(0.8 * height), int(0.6 * width):]
+
+
+def test_every_played_scenario_gets_a_figure_of_the_stated_size(run, crashed):
+    for folder in sorted(p for p in run.iterdir() if (p / "replay.json").exists()):
+        path = draw_replay_figure(folder)
+        assert path == folder / FIGURE_NAME
+        pixels = _decoded(path.read_bytes())
+        assert pixels.shape[:2] == (FIGURE_PX[1], FIGURE_PX[0]), folder.name
+        assert pixels[..., :3].std() > 0.05, f"{folder.name}: a blank picture"
+        assert path.stat().st_size < 150_000
+
+
+def test_the_collision_is_marked_on_the_map_in_red(run, crashed):
+    pixels = _decoded(draw_replay_figure(crashed).read_bytes())
+    assert _red_pixels(_map_area(pixels)) > 40  # the X (and its time label)
+    [other] = [p for p in run.iterdir() if p.name.startswith("LCF")]
+    playback = Playback.read(other / "replay.json")
+    assert not playback.collisions  # a clean replay: its map has nothing red
+    assert _red_pixels(_map_area(_decoded(draw_replay_figure(other).read_bytes()))) == 0
+
+
+def test_no_replay_no_figure_and_an_engine_error_gets_one(tmp_path):
+    assert draw_replay_figure(tmp_path) is None
+    assert not (tmp_path / FIGURE_NAME).exists()
+    Playback(engine_error="esmini aborted (signal 11)", log=["loading", "Segfault"]).write(
+        tmp_path / "replay.json")
+    (tmp_path / "status.json").write_text(json.dumps(
+        {"scenario_id": "X", "maneuver_class": "BRAKE",
+         "replay": {"played": False, "passed": False, "codes": ["REPLAY_ENGINE"]}}))
+    pixels = _decoded(draw_replay_figure(tmp_path).read_bytes())
+    assert pixels.shape[:2] == (FIGURE_PX[1], FIGURE_PX[0])
+    assert _red_pixels(pixels) > 100  # the failed verdict and esmini's error, in red
+
+
+def test_the_per_class_table_has_the_replay_pass_rate(crashed, page):
+    outcomes = _outcomes(crashed.parent)
+    per_class = page.xpath("//table")[0]
+    header = [th.text_content().strip() for th in per_class.xpath(".//thead//th")]
+    assert header[-1] == "replay"
+    rows = {tr[0].text_content(): tr[-1].text_content() for tr in per_class.xpath(".//tbody/tr")}
+    assert set(rows) == {*CLASSES, "all"}
+    for code in CLASSES:
+        replays = [o["replay"] for o in outcomes if o["maneuver_class"] == code]
+        passed = sum(r["passed"] for r in replays)
+        assert rows[code] == f"{passed}/1 ({pct(float(passed))})"
+    assert rows[CRASHED_CLASS] == "0/1 (0%)"
+    passed = sum(o["replay"]["passed"] for o in outcomes)
+    assert rows["all"] == f"{passed}/3 ({pct(passed / 3)})" == replay_rate(outcomes)
+
+
+def test_the_replay_codes_are_counted(crashed, page):
+    outcomes = _outcomes(crashed.parent)
+    [codes] = [t for t in page.xpath("//table")
+               if t.xpath(".//th")[0].text_content() == "replay finding"]
+    counted = {tr[0].text_content(): int(tr[1].text_content()) for tr in codes.xpath(".//tbody/tr")}
+    expected: dict[str, int] = {}
+    for o in outcomes:
+        for code in o["replay"]["codes"]:
+            expected[code] = expected.get(code, 0) + 1
+    assert counted == expected and counted["REPLAY_COLLISION"] >= 1
+
+
+def test_the_failed_replay_s_figure_is_drawn_and_embedded(crashed, page):
+    assert (crashed / FIGURE_NAME).exists()  # drawn by the report: the fixture deleted it
+    captions = {f.xpath("./figcaption")[0].text_content(): f.xpath("./img")[0].get("src")
+                for f in page.xpath("//figure")}
+    [src] = [src for caption, src in captions.items()
+             if caption.startswith(crashed.name) and "REPLAY_COLLISION" in caption]
+    png = base64.b64decode(src.removeprefix("data:image/png;base64,"))
+    assert png == (crashed / FIGURE_NAME).read_bytes()
+    # every replay of this tiny run is shown: the failed one and the passing ones (<= 2 a class)
+    replay_captions = [c for c in captions if ": replay " in c]
+    assert len(replay_captions) == len(CLASSES)
+    assert replay_captions[0].startswith(crashed.name)  # failures first
+
+
+def test_the_scenario_links_include_the_replay_files(crashed, page):
+    links = {a.get("href") for a in page.xpath("//a")}
+    assert {f"{crashed.name}/replay.json", f"{crashed.name}/replay.png"} <= links
+
+
+def test_the_report_draws_the_missing_pictures_of_the_replays_it_shows(crashed, tmp_path):
+    copy = tmp_path / "run"
+    shutil.copytree(crashed.parent, copy)
+    for png in copy.glob(f"*/{FIGURE_NAME}"):
+        png.unlink()
+    write_run_report(copy)
+    drawn = {p.parent.name for p in copy.glob(f"*/{FIGURE_NAME}")}
+    shown = {o["scenario_id"] for o in replay_figure_picks(_outcomes(copy))}
+    assert drawn == shown == {p.name for p in copy.iterdir() if (p / "replay.json").exists()}
+
+
+def test_the_picks_are_every_failure_and_two_passing_per_class_within_the_cap():
+    def outcome(i: int, code: str, passed: bool) -> dict:
+        return {"scenario_id": f"{code}_{i}", "maneuver_class": code,
+                "replay": {"played": True, "passed": passed, "codes": [] if passed else ["X"]}}
+
+    replayed = [outcome(i, code, i % 3 == 0) for code in ("A", "B") for i in range(9)]
+    picks = replay_figure_picks(replayed)
+    assert [o["replay"]["passed"] for o in picks] == [False] * 12 + [True] * 4
+    assert {o["scenario_id"] for o in picks if o["replay"]["passed"]} == {
+        "A_0", "A_3", "B_0", "B_3"}
+    capped = replay_figure_picks(replayed, limit=5)
+    assert len(capped) == 5 and not any(o["replay"]["passed"] for o in capped)
+    assert {o["maneuver_class"] for o in capped} == {"A", "B"}  # classes take turns

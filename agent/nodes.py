@@ -21,6 +21,9 @@ from agent.trace import CODE_NAME, XOSC_NAME
 from schemas.findings import failure_category
 
 ATTEMPTS_DIR = "attempts"
+#: how a replay failure is put to the LLM: what the engine showed against what the record says
+REPLAY_LEAD = ("The file is valid, but played in the esmini OpenSCENARIO engine it does not do "
+               "what the record did (each line: when, what happened, what the record says): ")
 NodeBody = Callable[[AgentState, AgentContext], tuple[dict, dict]]
 
 
@@ -100,8 +103,10 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
         status = "ok" if attempt["number"] == 1 else "repaired"
         update["final"] = {"status": status, "attempt": attempt["number"], "validation": verdict}
     else:
-        _fail(attempt, {"type": "ValidationError", "message": _errors_text(verdict["errors"])},
-              failure_category(verdict["errors"]))
+        category = failure_category(verdict["errors"])
+        _fail(attempt, {"type": "ReplayError" if category == "replay" else "ValidationError",
+                        "message": REPLAY_LEAD * (category == "replay")
+                        + _errors_text(verdict["errors"])}, category)
     update["attempts"] = _replace_last(state, attempt)
     return update, {"attempt": attempt["number"], **verdict, "taxonomy": attempt.get("taxonomy")}
 

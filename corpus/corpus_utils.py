@@ -157,14 +157,6 @@ def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:
     return xosc.WorldPosition(*(number(params, f"{actor}_{axis}") for axis in "xyzh"))
 
 
-def position_from_ego(params: Mapping[str, Any], ahead_m: float) -> xosc.WorldPosition:
-    """A point ``ahead_m`` along the ego's heading (the urban lead)."""
-    heading = number(params, "ego_h")
-    return xosc.WorldPosition(number(params, "ego_x") + ahead_m * math.cos(heading),
-                              number(params, "ego_y") + ahead_m * math.sin(heading),
-                              number(params, "ego_z"), heading)
-
-
 # --- actors ----------------------------------------------------------------------------------
 
 def hero(position: Any, speed_ms: float) -> Actor:
@@ -207,11 +199,12 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
 
 
 def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
-    """The urban lead vehicle ``lead_distance_m`` ahead of the ego, when the record had one."""
+    """The urban lead vehicle, when the record had one: ``lead_distance_m`` ahead of the ego
+    along its lane, where the spawn stage put it (``lead_*`` spawn keys)."""
     if not params.get("lead_present"):
         return []
-    return [npc("lead", position_from_ego(params, number(params, "lead_distance_m")),
-                number(params, "lead_speed_ms"), params.get("lead_vehicle_type"))]
+    return [npc("lead", world_position(params, "lead"), number(params, "lead_speed_ms"),
+                params.get("lead_vehicle_type"))]
 
 
 def keep_distance_after_record(params: Mapping[str, Any], entity: str = "npc",

@@ -204,14 +204,8 @@ def _lane_position(check: _Check, code: str, entity: str, prefix: str,
 
 
 def _expected_world(params: dict, prefix: str) -> tuple[float, ...] | None:
-    keys = [params.get(f"ego_{axis}") for axis in "xyzh"]
-    if any(k is None for k in keys):
-        return None
-    x, y, z, h = keys
-    if prefix == "lead":  # straight ahead of the hero (docs/scenario-conventions.md)
-        d = params.get("lead_distance_m", 0.0)
-        return x + d * math.cos(h), y + d * math.sin(h), z, h
-    return x, y, z, h
+    """Where the spawn stage put ``prefix`` (the urban lead: on the ego's lane, ahead)."""
+    return _pose(params, prefix)
 
 
 def _world_position(check: _Check, code: str, entity: str, want: tuple[float, ...] | None,

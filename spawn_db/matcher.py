@@ -435,7 +435,13 @@ def _spread_over_roads(candidates: list[SpawnCandidate]) -> list[SpawnCandidate]
 
 def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]]:
     """``(actor, adjacent side or None, signed distance along the lane at t = 0)`` of every
-    highway NPC: the recorded gap holds at ``maneuver_start_s``."""
+    NPC: a highway NPC where its recorded gap holds at ``maneuver_start_s``, the urban lead
+    ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic)."""
+    if params.get("domain") == "urban":
+        if not params.get("lead_present"):
+            return []
+        number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+        return [("lead", None, number("lead_distance_m", 0.0))]
     if params.get("domain") != "highway":
         return []
     placed = []

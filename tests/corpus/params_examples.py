@@ -120,8 +120,9 @@ def _urban(code: str) -> dict:
         "v_noise_std": 0.3, "dl_noise_std": 0.1, "t_noise_std": 0.05,
         "weather_key": "Night_Rain" if code == "U4_2" else "Day_Cloudy",
     }
-    if params["lead_present"]:
-        params |= {"lead_distance_m": 17.5, "lead_speed_ms": 10.4, "lead_vehicle_type": "car"}
+    if params["lead_present"]:  # 17.5 m along the ego's (straight, northbound) lane
+        params |= {"lead_distance_m": 17.5, "lead_speed_ms": 10.4, "lead_vehicle_type": "car",
+                   "lead_x": 313.2, "lead_y": 189.3, "lead_z": 0.3, "lead_h": 1.5708}
     if code != "U1_1":
         params |= {"tfl_x_carla": 315.0, "tfl_y_carla": -140.2, "spawn_tfl_distance_m": 31.7,
                    "spawn_stop_line_distance_m": 24.4}

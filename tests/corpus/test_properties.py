@@ -7,6 +7,7 @@ read back to the same numbers (docs/scenario-conventions.md).
 
 from __future__ import annotations
 
+import math
 import tempfile
 from pathlib import Path
 
@@ -49,9 +50,13 @@ def params_of_any_class(draw) -> dict:
             params |= {"ego_speed_ms": draw(st.floats(1.0, 25.0)),
                        "ego_end_speed_ms": draw(st.floats(1.0, 25.0))}
         if draw(st.booleans()):
-            params |= {"lead_present": True, "lead_distance_m": draw(st.floats(3.0, 60.0)),
+            ahead = draw(st.floats(3.0, 60.0))
+            params |= {"lead_present": True, "lead_distance_m": ahead,
                        "lead_speed_ms": draw(speed), "lead_vehicle_type": draw(
-                           st.sampled_from(["car", "truck", "van", "motorcycle", "bus"]))}
+                           st.sampled_from(["car", "truck", "van", "motorcycle", "bus"])),
+                       "lead_x": params["ego_x"] + ahead * math.cos(params["ego_h"]),
+                       "lead_y": params["ego_y"] + ahead * math.sin(params["ego_h"]),
+                       "lead_z": params["ego_z"], "lead_h": params["ego_h"]}
     return params
 
 

@@ -32,6 +32,9 @@ def _place(params: dict) -> dict:
                    "spawn_stop_line_distance_m": 24.4, "turn_exit_x": 326.4,
                    "turn_exit_y": 208.9, "turn_exit_z": 0.3, "turn_exit_h": 0.0,
                    "turn_exit_road_id": 8, "turn_exit_lane_id": -1, "turn_exit_s": 10.0}
+        if params.get("lead_present"):  # straight north along the ego's lane
+            placed |= {"lead_x": 313.2, "lead_y": 171.8 + params["lead_distance_m"],
+                       "lead_z": 0.3, "lead_h": 1.5708}
         return placed
     for actor, lane in LANE_OF.items():
         distance = 0.0

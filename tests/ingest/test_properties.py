@@ -6,7 +6,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest import IngestReport, check_record, extract_params, iter_raw_records
+from ingest.issues import RecordIssue
 from ingest.layouts import load_layouts
 from tests.ingest.builders import write_npy
 
@@ -37,12 +39,23 @@ def _params(tmp_path, code, rows):
     return [extract_params(i.record) for i in items], report
 
 
+def _lead_deceleration(row) -> float:
+    lead, delta, duration = float(row[1]) / 3.6, float(row[3]) / 3.6, float(row[2])
+    slowed = min(max(-delta, 0.0), max(lead, 0.0))
+    return slowed / duration if duration > 0 else 0.0
+
+
 @settings_
 @given(rows=st.lists(brake_row, min_size=1, max_size=8))
 def test_brake_rules_hold_on_any_valid_row(tmp_path, rows):
-    params, report = _params(tmp_path, "BRAKE", rows)
-    assert report.issues == [] and len(params) == len(rows)
-    for p, row in zip(params, rows, strict=True):
+    playable = [row for row in rows if _lead_deceleration(row) <= MAX_PLAYABLE_DECELERATION_MS2]
+    if len(playable) < len(rows):  # braking no car can: a clear issue naming the field
+        with pytest.raises(RecordIssue) as raised:
+            _params(tmp_path, "BRAKE", rows)
+        assert raised.value.field == "delta_vel_kmh" and "m/s^2" in raised.value.message
+    params, report = _params(tmp_path, "BRAKE", playable) if playable else ([], None)
+    assert report is None or (report.issues == [] and len(params) == len(playable))
+    for p, row in zip(params, playable, strict=True):
         assert p["npc_end_speed_ms"] == pytest.approx(
             max(float(row[1]) / 3.6 + float(row[3]) / 3.6, 0.0))
         assert p["npc_end_speed_ms"] >= 0

@@ -65,16 +65,22 @@ class VehicleModel:
     max_speed_ms: float
 
 
+#: the Performance maxSpeed of every model (m/s, 250 km/h): players cap an actor at it, and a
+#: record may show any vehicle (a truck at 130 km/h included) faster than its model's real top
+#: speed; the scenario must play what was recorded
+PERFORMANCE_MAX_SPEED_MS = 69.0
+
 VEHICLE_MODELS: dict[str, VehicleModel] = {
-    "ego": VehicleModel("vehicle.tesla.model3", xosc.VehicleCategory.car, 4.8, 2.1, 1.5, 69.0),
-    "car": VehicleModel("vehicle.audi.a2", xosc.VehicleCategory.car, 3.7, 1.8, 1.6, 55.0),
-    "truck": VehicleModel(
-        "vehicle.carlamotors.carlacola", xosc.VehicleCategory.truck, 5.2, 2.6, 2.5, 35.0
-    ),
-    "van": VehicleModel("vehicle.mercedes.sprinter", xosc.VehicleCategory.van, 5.9, 2.0, 2.6, 40.0),
-    "motorcycle": VehicleModel(
-        "vehicle.yamaha.yzf", xosc.VehicleCategory.motorbike, 2.2, 0.9, 1.5, 60.0
-    ),
+    "ego": VehicleModel("vehicle.tesla.model3", xosc.VehicleCategory.car, 4.8, 2.1, 1.5,
+                        PERFORMANCE_MAX_SPEED_MS),
+    "car": VehicleModel("vehicle.audi.a2", xosc.VehicleCategory.car, 3.7, 1.8, 1.6,
+                        PERFORMANCE_MAX_SPEED_MS),
+    "truck": VehicleModel("vehicle.carlamotors.carlacola", xosc.VehicleCategory.truck, 5.2, 2.6,
+                          2.5, PERFORMANCE_MAX_SPEED_MS),
+    "van": VehicleModel("vehicle.mercedes.sprinter", xosc.VehicleCategory.van, 5.9, 2.0, 2.6,
+                        PERFORMANCE_MAX_SPEED_MS),
+    "motorcycle": VehicleModel("vehicle.yamaha.yzf", xosc.VehicleCategory.motorbike, 2.2, 0.9,
+                               1.5, PERFORMANCE_MAX_SPEED_MS),
 }
 
 

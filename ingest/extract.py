@@ -12,6 +12,7 @@ from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
 from ingest.layouts import FAMILY_OF_CLASS, default_layouts
+from schemas.replay import GAP_TOL_M
 
 KMH = 3.6
 HIGHWAY_MANEUVER_START_S = 2.0
@@ -119,6 +120,7 @@ def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
 
 def _follow(raw: dict, code: str, conventions: dict) -> dict:
     sign = -1.0 if code == "FLB" else 1.0
+    _gaps_follow_from_speeds(raw, sign)
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
@@ -130,6 +132,19 @@ def _follow(raw: dict, code: str, conventions: dict) -> dict:
         "behavior_type": raw["behavior_type"],
         "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
     }
+
+
+def _gaps_follow_from_speeds(raw: dict, sign: float) -> None:
+    """A following record's end gap must be what its speeds make of its start gap (both cars
+    change speed linearly, as a scenario plays them); otherwise no replay can show both."""
+    drift = ((raw["lead_vel_begin_kmh"] + raw["lead_vel_end_kmh"])
+             - (raw["ego_vel_begin_kmh"] + raw["ego_vel_end_kmh"])) / 2 / KMH * raw["duration_s"]
+    begin, end = sign * abs(raw["npc_distance_begin_m"]), sign * abs(raw["npc_distance_end_m"])
+    if abs(begin + drift - end) > GAP_TOL_M:
+        raise RecordIssue(
+            f"the gap goes from {begin:g} m to {end:g} m, but the speeds make it "
+            f"{begin + drift:.1f} m after {raw['duration_s']:g} s (they differ by more than "
+            f"{GAP_TOL_M:g} m): no replay can show both", field="npc_distance_end_m")
 
 
 def _free_ride(raw: dict, code: str, conventions: dict) -> dict:

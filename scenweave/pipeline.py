@@ -68,7 +68,8 @@ def is_infrastructure_error(err: BaseException) -> bool:
     """True when ``err`` is a failure of the machine or a service, not of the scenario.
 
     OS errors (disk full, connection refused — the ollama client raises ConnectionError when
-    the LLM server cannot be reached), memory, the sandbox's and Redis's own errors, and an
+    the LLM server cannot be reached), memory, the sandbox's, the player's (no esmini) and
+    Redis's own errors, and an
     HTTP transport error of the LLM client. Modules are looked up only if already imported,
     so this never pulls a heavy package in.
     """
@@ -77,7 +78,8 @@ def is_infrastructure_error(err: BaseException) -> bool:
 
 def _loaded_infrastructure_types() -> tuple[type[BaseException], ...]:
     found = []
-    for module, name in (("sandbox", "SandboxError"), ("redis.exceptions", "RedisError"),
+    for module, name in (("sandbox", "SandboxError"), ("player", "PlayerError"),
+                         ("redis.exceptions", "RedisError"),
                          ("httpx", "TransportError"), ("agent", "LLMUnavailable")):
         err_type = getattr(sys.modules.get(module), name, None)
         if isinstance(err_type, type) and issubclass(err_type, BaseException):

@@ -7,8 +7,10 @@ assigns the same spawns as an uninterrupted one.
 
 from __future__ import annotations
 
+import multiprocessing
 from collections import Counter
 from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -53,27 +55,68 @@ def default_matcher() -> Any:
 
 def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: PipelineSettings,
               run_id: str | None = None, retry_failed: bool = False,
-              matcher: Any = None) -> RunResult:
-    """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists."""
+              matcher: Any = None, jobs: int = 1) -> RunResult:
+    """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists.
+
+    ``jobs`` > 1 makes the scenarios in that many processes (forked from this one, so they
+    share the loaded map and spawn database); this process commits each scenario folder.
+    """
     loaded = load_input(Path(data), selection)
     folder = RunFolder.open(out_root, run_id)
     folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
     matcher = matcher or default_matcher()
-    skipped = 0
-    for index, params in progress(round_robin(loaded.params), desc="scenarios",
-                                  total=len(loaded.params)):
+    todo = []
+    for index, params in round_robin(loaded.params):
         done = folder.outcome(params["scenario_id"])
-        if done and not (retry_failed and done.get("status") == "failed"):
-            skipped += 1
-            continue
-        staging = folder.staging(params["scenario_id"])
-        outcome = process_scenario(params, index, staging, settings, matcher)
+        if not done or (retry_failed and done.get("status") == "failed"):
+            todo.append((index, params))
+    skipped = len(loaded.params) - len(todo)
+    work = (_in_processes(todo, folder, settings, matcher, jobs) if jobs > 1 else
+            _in_this_process(todo, folder, settings, matcher))
+    for params, staging, outcome in progress(work, desc="scenarios", total=len(todo)):
         folder.commit(params["scenario_id"], staging, outcome)
     issues = [i.to_dict() for i in loaded.report.issues]
     summary = summarize(folder, issues)
     folder.write(SUMMARY_FILE, summary)
     write_run_report(folder.root)
     return RunResult(folder, summary, skipped, issues)
+
+
+def _in_this_process(todo: list[tuple[int, dict]], folder: RunFolder,
+                     settings: PipelineSettings, matcher: Any
+                     ) -> Iterator[tuple[dict, Path, dict]]:
+    for index, params in todo:
+        staging = folder.staging(params["scenario_id"])
+        yield params, staging, process_scenario(params, index, staging, settings, matcher)
+
+
+_worker_matcher: Any = None
+
+
+def _remember_matcher(matcher: Any) -> None:
+    global _worker_matcher
+    _worker_matcher = matcher
+
+
+def _process_in_worker(params: dict, index: int, staging: Path,
+                       settings: PipelineSettings) -> dict:
+    return process_scenario(params, index, staging, settings, _worker_matcher)
+
+
+def _in_processes(todo: list[tuple[int, dict]], folder: RunFolder, settings: PipelineSettings,
+                  matcher: Any, jobs: int) -> Iterator[tuple[dict, Path, dict]]:
+    """Each scenario made in one of ``jobs`` forked processes, yielded as it finishes."""
+    context = multiprocessing.get_context("fork")
+    with ProcessPoolExecutor(jobs, mp_context=context, initializer=_remember_matcher,
+                             initargs=(matcher,)) as pool:
+        pending = {}
+        for index, params in todo:
+            staging = folder.staging(params["scenario_id"])
+            future = pool.submit(_process_in_worker, params, index, staging, settings)
+            pending[future] = (params, staging)
+        for future in as_completed(pending):
+            params, staging = pending[future]
+            yield params, staging, future.result()
 
 
 def round_robin(params_list: list[dict]) -> Iterator[tuple[int, dict]]:

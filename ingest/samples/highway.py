@@ -124,9 +124,13 @@ def _follow(rng: np.random.Generator, n: int, code: str) -> Columns:
                     np.clip(ego0 / 3.6 * rng.uniform(0.8, 2.0, n), 8, 49))
     mean_rel_ms = ((ego0 + ego1) - (lead0 + lead1)) / 2 / 3.6
     # an ego faster than the other car closes in on it ahead (FLF) and draws away from it
-    # behind (FLB): the end gap must follow from the speeds, or no replay can show both
+    # behind (FLB): the end gap follows from the speeds, or no replay can show both; where
+    # the drawn speeds would bring the cars closer than 5 m, the other car's end speed gives way
     closes_in = 1.0 if code == "FLF" else -1.0
-    gap1 = np.clip(gap0 - closes_in * mean_rel_ms * duration, 3, None)
+    shrinking_ms = np.minimum(closes_in * mean_rel_ms, (gap0 - 5.0) / duration)
+    mean_rel_ms = closes_in * shrinking_ms
+    lead1 = (ego0 + ego1) - mean_rel_ms * 3.6 * 2 - lead0
+    gap1 = gap0 - closes_in * mean_rel_ms * duration
     travelled = (lead0 + lead1) / 2 / 3.6 * duration
     return {"ego_vel_begin_kmh": np.round(ego0, 1), "ego_vel_end_kmh": np.round(ego1, 1),
             "lead_vel_begin_kmh": np.round(lead0, 1), "lead_vel_end_kmh": np.round(lead1, 1),
@@ -152,7 +156,7 @@ def _free_ride(rng: np.random.Generator, n: int, code: str) -> Columns:
         "other_dir_traffic": _yes_no(rng, n),
     }
     for slot, p_present in (("center", 0.7), ("right", 0.5), ("left", 0.5)):
-        columns.update(_slot(rng, n, slot, p_present, ego0, duration, behind))
+        columns.update(_slot(rng, n, slot, p_present, (ego0 + ego1) / 2, duration, behind))
     if n >= 1:  # edge row: nobody around, every slot a sentinel (position -1, speed -3.6)
         for slot in ("center", "right", "left"):
             for key, value in (("posx_begin_m", -1.0), ("posx_end_m", -1.0),
@@ -162,15 +166,20 @@ def _free_ride(rng: np.random.Generator, n: int, code: str) -> Columns:
     return columns
 
 
-def _slot(rng: np.random.Generator, n: int, slot: str, p_present: float, ego_kmh: np.ndarray,
-          duration: np.ndarray, behind: bool) -> Columns:
+def _slot(rng: np.random.Generator, n: int, slot: str, p_present: float,
+          ego_mean_kmh: np.ndarray, duration: np.ndarray, behind: bool) -> Columns:
     present = rng.random(n) < p_present
-    speed0 = np.clip(ego_kmh / 3.6 + rng.normal(0, 2.5, n), 5, None)
-    speed1 = np.clip(speed0 + rng.normal(0, 1.0, n), 5, None)
-    gap0 = rng.uniform(15, 90, n)
-    gap1 = np.clip(gap0 + (speed1 - ego_kmh / 3.6) * duration * (-1 if behind else 1) * 0.3, 5,
-                   None)
     sign = -1 if behind else 1
+    ego_ms = ego_mean_kmh / 3.6
+    speed0 = np.clip(ego_ms + rng.normal(0, 2.5, n), 5, None)
+    gap0 = rng.uniform(15, 90, n)
+    # the end gap follows from the speeds (linear changes), and the slot's car does not come
+    # closer than 10 m: no overtaking through the ego's car
+    closing_limit = (gap0 - 10.0) / duration
+    relative = np.clip(speed0 + rng.normal(0, 1.0, n) / 2 - ego_ms, None, closing_limit) \
+        if behind else np.clip(speed0 + rng.normal(0, 1.0, n) / 2 - ego_ms, -closing_limit, None)
+    speed1 = np.clip(2 * (ego_ms + relative) - speed0, 5, None)
+    gap1 = gap0 + sign * ((speed0 + speed1) / 2 - ego_ms) * duration
     absent_speed = rng.choice([-3.6, -1.0], n)
     return {
         f"{slot}_posx_begin_m": np.where(present, np.round(sign * gap0, 1), -1.0),

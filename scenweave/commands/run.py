@@ -29,11 +29,13 @@ from scenweave.runner import run_batch
 @click.option("--top-n", default=5, show_default=True, type=click.IntRange(1),
               help="Spawn candidates shared round robin per class.")
 @click.option("--retry-failed", is_flag=True, help="On resume, run failed scenarios again.")
+@click.option("--jobs", default=1, show_default=True, type=click.IntRange(1),
+              help="Make scenarios in N processes (e.g. one per core).")
 @click.option("--json", "as_json", is_flag=True, help="Print summary.json instead of a line.")
 @agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: str | None,
         per_class: int | None, limit: int | None, variants: int, seed: int,
-        layout: Path | None, top_n: int, retry_failed: bool, as_json: bool,
+        layout: Path | None, top_n: int, retry_failed: bool, jobs: int, as_json: bool,
         **agent: object) -> None:
     """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios.
 
@@ -45,7 +47,7 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: s
         classes=tuple(c.strip() for c in classes.split(",")) if classes else (),
         per_class=per_class, limit=limit, variants=variants, seed=seed, layout=layout)
     result = run_batch(data, out_root, selection, settings, run_id=run_id,
-                       retry_failed=retry_failed)
+                       retry_failed=retry_failed, jobs=jobs)
     if as_json:
         click.echo(json.dumps(result.summary, indent=1))
     else:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from ingest import IngestReport, extract_params, iter_raw_records
+from ingest.issues import RecordIssue
 from tests.ingest.builders import write_npy
 
 KMH = 3.6
@@ -31,8 +32,11 @@ LC_EXPECTED = [
     dict(ego_speed_ms=28.0, ego_end_speed_ms=27.0, lane_change_direction="right",
          required_lane_sides=["right"], timeout_s=12.5),
 ]
-FL_ROWS = [["72", "54", "90", "90", "20", "45", "200", "8", "No", "B1", "Car"],
-           ["108", "108", "100.8", "100.8", "60", "55", "112", "4", "Yes", "B4", "Truck"]]
+# the end gaps follow from the speeds (linear changes): a record where they do not is an issue
+FL_ROWS = [["72", "54", "90", "90", "20", "80", "200", "8", "No", "B1", "Car"],
+           ["108", "108", "100.8", "100.8", "60", "52", "112", "4", "Yes", "B4", "Truck"]]
+FLB_ROWS = [["90", "90", "72", "54", "20", "80", "140", "8", "No", "B1", "Car"],
+            ["108", "108", "100.8", "100.8", "60", "68", "112", "4", "Yes", "B4", "Truck"]]
 ABSENT = ["-1", "-1", "-3.6", "-3.6"]
 FRF_ROWS = [
     ["108", "115.2", "310", "0.2", "40", "35", "30.0", "29.0", *ABSENT, "20", "60", "33.0",
@@ -80,15 +84,16 @@ CASES = {
     "LCB": (LC_ROWS, LC_EXPECTED),
     "FLF": (FL_ROWS,
             [dict(ego_speed_ms=20.0, ego_end_speed_ms=15.0, npc_speed_ms=25.0,
-                  npc_end_speed_ms=25.0, npc_distance_m=20.0, npc_distance_end_m=45.0,
+                  npc_end_speed_ms=25.0, npc_distance_m=20.0, npc_distance_end_m=80.0,
                   npc_dist_traveled_m=200.0, behavior_type="B1", timeout_s=25.0,
                   max_speed_ms=25.0, gap_ahead_m=20.0, npc_position="front"),
              dict(ego_speed_ms=30.0, npc_speed_ms=28.0, npc_distance_m=60.0,
-                  npc_distance_end_m=55.0, behavior_type="B4", npc_vehicle_type="truck")]),
-    "FLB": (FL_ROWS,
-            [dict(npc_distance_m=-20.0, npc_distance_end_m=-45.0, gap_behind_m=20.0,
-                  gap_ahead_m=0.0, npc_position="behind"),
-             dict(npc_distance_m=-60.0, npc_distance_end_m=-55.0, behavior_type="B4")]),
+                  npc_distance_end_m=52.0, behavior_type="B4", npc_vehicle_type="truck")]),
+    "FLB": (FLB_ROWS,
+            [dict(npc_distance_m=-20.0, npc_distance_end_m=-80.0, gap_behind_m=20.0,
+                  gap_ahead_m=0.0, npc_position="behind", ego_speed_ms=25.0,
+                  npc_speed_ms=20.0, npc_end_speed_ms=15.0),
+             dict(npc_distance_m=-60.0, npc_distance_end_m=-68.0, behavior_type="B4")]),
     "FRF": (FRF_ROWS,
             [dict(ego_speed_ms=30.0, ego_end_speed_ms=32.0, center_present=True,
                   center_distance_m=40.0, center_end_distance_m=35.0, center_speed_ms=30.0,
@@ -116,6 +121,17 @@ def _params_of(tmp_path, code: str, rows: list[list[str]]) -> list[dict]:
     params = [extract_params(item.record) for item in iter_raw_records(tmp_path, report)]
     assert report.issues == []
     return params
+
+
+def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path):
+    inconsistent = [["72", "54", "90", "90", "20", "45", "200", "8", "No", "B1", "Car"]]
+    write_npy(tmp_path, "FLF", inconsistent)
+    report = IngestReport()
+    (item,) = iter_raw_records(tmp_path, report)
+    with pytest.raises(RecordIssue) as raised:
+        extract_params(item.record)
+    assert raised.value.field == "npc_distance_end_m"
+    assert "20 m to 45 m" in raised.value.message and "80.0 m" in raised.value.message
 
 
 @pytest.mark.parametrize("code", sorted(CASES))

@@ -8,6 +8,7 @@ import shutil
 import pytest
 from click.testing import CliRunner
 
+from player import ReplaySettings
 from scenweave.cli import cli
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
@@ -23,10 +24,36 @@ def matcher():
 
 @pytest.fixture(scope="module")
 def first_run(sample_raw, tmp_path_factory, matcher):
+    """The sample data through every stage, the replay in esmini included."""
     out = tmp_path_factory.mktemp("runs")
-    result = run_batch(sample_raw, out, InputSelection(), PipelineSettings(no_llm=True),
+    result = run_batch(sample_raw, out, InputSelection(),
+                       PipelineSettings(no_llm=True, replay=ReplaySettings()),
                        run_id="r1", matcher=matcher)
     return result, out
+
+
+def test_every_sample_scenario_replays_as_recorded(first_run):
+    result, out = first_run
+    replay = result.summary["replay"]
+    assert replay["played"] == result.summary["total"] == replay["passed"], replay["codes"]
+    assert all((out / "r1" / o["scenario_id"] / "replay.json").is_file()
+               for o in result.summary["scenarios"])
+    assert f"replay: {replay['passed']}/{replay['played']} played as recorded" in result.line()
+
+
+def test_jobs_make_the_same_scenarios_in_several_processes(first_run, sample_raw, tmp_path,
+                                                           matcher):
+    result, out = first_run
+    parallel = run_batch(sample_raw, tmp_path, InputSelection(),
+                         PipelineSettings(no_llm=True, replay=ReplaySettings()),
+                         run_id="r2", matcher=matcher, jobs=2)
+    statuses = {o["scenario_id"]: (o["status"], o["spawn_id"], o["replay"]["passed"])
+                for o in parallel.summary["scenarios"]}
+    assert statuses == {o["scenario_id"]: (o["status"], o["spawn_id"], o["replay"]["passed"])
+                        for o in result.summary["scenarios"]}
+    for scenario_id in statuses:
+        assert ((tmp_path / "r2" / scenario_id / "scenario.xosc").read_bytes()
+                == (out / "r1" / scenario_id / "scenario.xosc").read_bytes()), scenario_id
 
 
 def test_every_sample_record_becomes_a_valid_scenario(first_run):

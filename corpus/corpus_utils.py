@@ -176,6 +176,13 @@ def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> 
                  finite(f"the start speed of {name}", speed_ms))
 
 
+def clearance_m(other_type: str | None) -> float:
+    """The distance the ego and a vehicle of ``other_type`` keep, reference point to reference
+    point in one lane: half of both lengths plus ``SAFETY_GAP_M``."""
+    lengths = VEHICLE_MODELS["ego"].length_m + VEHICLE_MODELS[known_type(other_type)].length_m
+    return lengths / 2 + SAFETY_GAP_M
+
+
 def known_type(vehicle_type: str | None) -> str:
     """``vehicle_type`` when it has a CARLA model here, else ``car``."""
     return vehicle_type if vehicle_type in VEHICLE_MODELS else "car"
@@ -230,9 +237,7 @@ def keep_distance_after_record(params: Mapping[str, Any], entity: str = "npc",
                          number(params, f"{prefix}_end_speed_ms"), start, duration)
     gap = (number(params, f"{prefix}_distance_m") + other.distance(end) - other.distance(start)
            - ego.distance(end) + ego.distance(start))
-    models = (VEHICLE_MODELS["ego"],
-              VEHICLE_MODELS[known_type(params.get(f"{prefix}_vehicle_type"))])
-    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    clearance = clearance_m(params.get(f"{prefix}_vehicle_type"))
     follower, leader = ((entity, ego) if gap < 0 else (HERO, other))
     follower_speed = (other if follower == entity else ego).end_speed
     settle = follower_settles(follower_speed, leader.end_speed, abs(gap),
@@ -242,13 +247,24 @@ def keep_distance_after_record(params: Mapping[str, Any], entity: str = "npc",
     return [speed_change(follower, leader.end_speed, round(settle, 3), end, "keeps_distance")]
 
 
+def urban_traffic(params: Mapping[str, Any]) -> list[Actor]:
+    """The record's other vehicles in town: the lead ahead in the ego's lane and the oncoming
+    car in the other direction's lane, where the spawn stage put them (``lead_*``,
+    ``oncoming_*``), each at its recorded speed."""
+    traffic = urban_lead(params)
+    if params.get("oncoming_present"):
+        traffic.append(npc("oncoming", world_position(params, "oncoming"),
+                           number(params, "oncoming_speed_ms"),
+                           params.get("oncoming_vehicle_type")))
+    return traffic
+
+
 def lead_keeps_ahead(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The urban lead's ``lead_speed_change`` when the ego, driving as recorded, would catch
     it up before ``timeout_s`` (``corpus.kinematics.lead_stays_ahead``); none otherwise."""
     if not params.get("lead_present"):
         return []
-    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[known_type(params.get("lead_vehicle_type"))])
-    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    clearance = clearance_m(params.get("lead_vehicle_type"))
     profile = lead_stays_ahead(number(params, "lead_speed_ms"), urban_hero_profile(params),
                                number(params, "lead_distance_m"), number(params, "timeout_s"),
                                clearance)
@@ -400,8 +416,7 @@ def _hero_reacts_to_npc(params: Mapping[str, Any], cut_in: bool) -> StoryEvent:
     ego_speed, lead_speed = number(params, "ego_speed_ms"), number(params, "npc_speed_ms")
     lead = SpeedProfile(lead_speed, number(params, "npc_end_speed_ms"), start, duration)
     gap = start_gap_m(number(params, "npc_distance_m"), lead_speed, ego_speed, start)
-    models = (VEHICLE_MODELS["ego"], VEHICLE_MODELS[known_type(params.get("npc_vehicle_type"))])
-    clearance = sum(model.length_m for model in models) / 2 + SAFETY_GAP_M
+    clearance = clearance_m(params.get("npc_vehicle_type"))
     reaction = lead_reaction(ego_speed, number(params, "ego_end_speed_ms"), lead, gap,
                              number(params, "timeout_s"), clearance, cut_in)
     return hero_speed_profile(params) if reaction is None else _profile_change(HERO, reaction)

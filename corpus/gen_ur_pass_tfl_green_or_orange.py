@@ -4,7 +4,8 @@ The ego approaches a signalised intersection at init_speed_ms and crosses it, it
 going to final_speed_ms over duration_s. The light is green; when the record saw it orange
 (amber, tfl_state), it turns yellow as the ego is 5 m before the stop line
 (spawn_stop_line_distance_m ahead of its start), so the ego passes on orange, and red a few
-seconds later. A lead vehicle drives ahead when the record had one.
+seconds later. A lead vehicle drives ahead and an oncoming car comes
+the other way when the record had them.
 """
 
 from pathlib import Path
@@ -16,7 +17,7 @@ from corpus.corpus_utils import (
     make_scenario,
     orange_light_for_pass,
     traffic_light,
-    urban_lead,
+    urban_traffic,
     world_position,
     write_scenario,
 )
@@ -30,6 +31,6 @@ def generate(params: dict, out_path: str) -> Path:
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
     if params["tfl_state"] == "orange":
         events += orange_light_for_pass(params)
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_traffic(params)],
                              events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

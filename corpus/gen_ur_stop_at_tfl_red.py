@@ -5,7 +5,7 @@ green (yellow already when the ego must brake at once). The light turns yellow, 
 brakes a moment later and comes to rest just before the stop line
 (spawn_stop_line_distance_m ahead of its start), its speed falling to 0 within
 brake_time_s; the light is red a few seconds after it turned yellow. A lead vehicle drives
-ahead when the record had one.
+ahead and an oncoming car comes the other way when the record had them.
 """
 
 from pathlib import Path
@@ -16,7 +16,7 @@ from corpus.corpus_utils import (
     lead_keeps_ahead,
     make_scenario,
     red_light_for_stop,
-    urban_lead,
+    urban_traffic,
     world_position,
     write_scenario,
 )
@@ -28,6 +28,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the stop-at-red-light scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_stops_at_line(params), *red_light_for_stop(params)]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_traffic(params)],
                              events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

@@ -2,7 +2,8 @@
 
 The ego approaches a signalised intersection at init_speed_ms while the traffic light is
 green and goes straight on through the crossing, its speed going to final_speed_ms over
-duration_s. A lead vehicle drives ahead when the record had one.
+duration_s. A lead vehicle drives ahead and an oncoming car comes
+the other way when the record had them.
 """
 
 from pathlib import Path
@@ -13,7 +14,7 @@ from corpus.corpus_utils import (
     lead_keeps_ahead,
     make_scenario,
     traffic_light,
-    urban_lead,
+    urban_traffic,
     world_position,
     write_scenario,
 )
@@ -25,6 +26,6 @@ def generate(params: dict, out_path: str) -> Path:
     """Build the straight-on-green scenario and write it to ``out_path``."""
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_speed_profile(params), traffic_light(params, "initial", "green", 0.0)]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_traffic(params)],
                              events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

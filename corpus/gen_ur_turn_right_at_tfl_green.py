@@ -3,7 +3,8 @@
 The ego approaches a signalised intersection at init_speed_ms while the traffic light is
 green and turns right into the crossing road: it is routed to turn_exit, 10 m into the lane
 the junction's right movement leads to (found on the map by the spawn stage), its speed going
-to final_speed_ms over duration_s. A lead vehicle drives ahead when the record had one.
+to final_speed_ms over duration_s. A lead vehicle drives ahead and an oncoming car comes
+the other way when the record had them.
 """
 
 from pathlib import Path
@@ -17,7 +18,7 @@ from corpus.corpus_utils import (
     make_scenario,
     right_turn_target,
     traffic_light,
-    urban_lead,
+    urban_traffic,
     world_position,
     write_scenario,
 )
@@ -35,6 +36,6 @@ def generate(params: dict, out_path: str) -> Path:
         hero_speed_profile(params),
         traffic_light(params, "initial", "green", 0.0),
     ]
-    scenario = make_scenario(params, TAG, actors=[ego, *urban_lead(params)],
+    scenario = make_scenario(params, TAG, actors=[ego, *urban_traffic(params)],
                              events=[*events, *lead_keeps_ahead(params)])
     return write_scenario(scenario, out_path)

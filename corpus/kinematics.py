@@ -30,6 +30,8 @@ MAX_DECELERATION_MS2 = 8.0
 #: the hardest braking and acceleration a scenario's vehicles are capable of (m/s^2): their
 #: OpenSCENARIO Performance; a record that needs more cannot be played back
 MAX_PLAYABLE_DECELERATION_MS2 = 10.0
+#: a speed this small is standing still (m/s)
+STANDING_MS = 1e-6
 #: free space kept between the ego and a braking lead, bumper to bumper (m)
 SAFETY_GAP_M = 2.0
 
@@ -248,7 +250,7 @@ def stop_at_line(ego_speed_ms: float, brake_time_s: float,
     It brakes over the recorded ``brake_time_s`` (shorter, when the stop line is too close
     for that) and starts braking so it stops ``STOP_LINE_MARGIN_M`` before the line.
     """
-    if ego_speed_ms <= 0:
+    if ego_speed_ms <= STANDING_MS:  # (a denormal speed would put the braking at infinity)
         return SpeedProfile(ego_speed_ms, 0.0, 0.0, brake_time_s)
     room = max(stop_line_m - STOP_LINE_MARGIN_M, 0.0)
     duration = min(brake_time_s, 2 * room / ego_speed_ms)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from corpus.corpus_utils import clearance_m
 from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
@@ -100,6 +101,8 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
     except KeyError as err:
         raise RecordIssue("the layout gives no relative_speed_sign for this class",
                           field="conventions.relative_speed_sign") from err
+    if code == "CINB":
+        _merges_behind(raw, max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0))
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
@@ -108,6 +111,21 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
         "lane_change_direction": raw["direction"].lower(),
         "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
     }
+
+
+def _merges_behind(raw: dict, npc_kmh: float) -> None:
+    """A cut-in behind ends with the car behind the ego (the ego keeps its speed): a record
+    whose speeds bring it level with the ego first describes no cut-in a replay can show."""
+    npc_end_kmh = max(npc_kmh + raw["delta_vel_kmh"], 0.0)
+    closing = ((npc_kmh + npc_end_kmh) / 2 - raw["ego_vel_kmh"]) / KMH * raw["duration_s"]
+    end_gap = raw["npc_distance_m"] + closing
+    room = clearance_m(str(raw["lead_vehicle_type"]).lower())
+    if end_gap > -room:
+        raise RecordIssue(
+            f"the car merging behind starts {raw['npc_distance_m']:g} m behind the ego and "
+            f"gains {closing:.1f} m in {raw['duration_s']:g} s: it would end {end_gap:.1f} m from "
+            f"the ego, not behind it ({room:.1f} m between the cars' reference points)",
+            field="npc_distance_m")
 
 
 def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
@@ -177,6 +195,8 @@ def _extract_urban(record: dict) -> dict:
     tfl_ds = light["position_m"] if light else None
     lead = next((a for a in record["initial_state"]["actors"] if a["role"] == "lead_vehicle"),
                 None)
+    oncoming = next((a for a in record["initial_state"]["actors"] if a["role"] == "oncoming"),
+                    None)
     roles = {a["role"] for a in record["initial_state"]["actors"]}
     params = {
         "scenario_id": record["scenario_id"],
@@ -204,7 +224,10 @@ def _extract_urban(record: dict) -> dict:
         "lead_distance_m": lead["pos_x_m"] if lead else 0.0,
         "lead_speed_ms": lead["speed_ms"] if lead else 0.0,
         "lead_vehicle_type": lead["classification"].lower() if lead else None,
-        "oncoming_present": "oncoming" in roles,
+        "oncoming_present": oncoming is not None,
+        "oncoming_distance_m": oncoming["pos_x_m"] if oncoming else 0.0,
+        "oncoming_speed_ms": abs(oncoming["speed_ms"]) if oncoming else 0.0,
+        "oncoming_vehicle_type": oncoming["classification"].lower() if oncoming else None,
         "pedestrian_present": "pedestrian" in roles,
         "min_ttc_s": record["semantics"]["criticality_metric"]["min_ttc_s"],
         **record["perturbation"],

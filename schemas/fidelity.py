@@ -102,8 +102,8 @@ def placed_actors(params: dict) -> list[tuple[str, str]]:
         if params.get("has_npc") and params.get("maneuver_class") not in ("FRF", "FRB"):
             actors.append(("npc", "npc"))
         actors += [(f"npc_{slot}", slot) for slot in SLOTS if params.get(f"{slot}_present")]
-    elif params.get("lead_present"):
-        actors.append(("lead", "lead"))
+    else:
+        actors += [(role, role) for role in ("lead", "oncoming") if params.get(f"{role}_present")]
     return actors
 
 

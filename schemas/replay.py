@@ -62,6 +62,11 @@ class _Judge:
     def speed(self, entity: str, time_s: float) -> float:
         return self.playback.value(entity, "speed", time_s)
 
+    @property
+    def time_step_s(self) -> float:
+        times = self.playback.times
+        return times[1] - times[0] if len(times) > 1 else 0.0
+
 
 def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> list[Finding]:
     """REPLAY_* findings of one playback against the params the scenario was made from."""
@@ -75,8 +80,8 @@ def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> lis
     if playback.quit_by_engine:
         judge.fail("REPLAY_ENGINE", "esmini ended the scenario before its stop time",
                    playback.duration_s)
-    for check in (_start_poses, _start_speeds, _speed_changes, _gaps, _lane_changes,
-                  _events_fired, _lights, _stop_or_pass, _right_turn, _collisions):
+    for check in (_actors_present, _start_poses, _start_speeds, _speed_changes, _gaps,
+                  _lane_changes, _events_fired, _lights, _stop_or_pass, _right_turn, _collisions):
         check(judge)
     return judge.found
 
@@ -122,6 +127,13 @@ def _start_poses(judge: _Judge) -> None:
                        f"{track['lane'][0]})", 0.0)
 
 
+def _actors_present(judge: _Judge) -> None:
+    """Every vehicle the record had is in the replay."""
+    for entity, _ in placed_actors(judge.params):
+        if entity not in judge.playback.tracks:
+            judge.fail("REPLAY_ACTOR_MISSING", f"{entity} of the record is not in the scenario")
+
+
 def _start_speeds(judge: _Judge) -> None:
     for entity, prefix in placed_actors(judge.params):
         want = _number(judge.params, f"{prefix}_speed_ms")
@@ -139,14 +151,16 @@ def _speed_changes(judge: _Judge) -> None:
         entity = name.removesuffix("_speed_change")
         if None in (target, duration, start) or entity not in judge.playback.tracks:
             continue
-        ends = start + duration
-        if ends + 0.2 > judge.playback.duration_s:
+        # events fire on the first step past their time: the change ends one step late, and
+        # the next one (keeping the distance after the record) may start right then
+        ends = start + duration + judge.time_step_s
+        if ends > judge.playback.duration_s:
             continue  # the scenario stops before the change is over: nothing to compare
         v0 = judge.speed(entity, start)
-        got = judge.speed(entity, ends + 0.2)
+        got = judge.speed(entity, ends)
         if abs(got - target) > SPEED_TOL_MS:
-            judge.fail("REPLAY_SPEED", f"{entity} drives {got:.2f} m/s after its speed change "
-                       f"({name}), the record says {target:.2f} m/s", ends + 0.2)
+            judge.fail("REPLAY_SPEED", f"{entity} drives {got:.2f} m/s at the end of its speed "
+                       f"change ({name}), the record says {target:.2f} m/s", ends)
         if abs(target - v0) <= 2 * ONSET_MS:
             continue
         # a linear change moves the speed by ONSET_MS this long after it starts

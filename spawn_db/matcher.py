@@ -30,7 +30,7 @@ from typing import Any
 from corpus.kinematics import start_gap_m
 from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from spawn_db.database import load_database
-from spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError
+from spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
 from spawn_db.road_network import LanePoint, RoadNetwork
 from spawn_db.signals import junction_approach
 
@@ -149,7 +149,8 @@ class Requirements:
             raise ParamsError(f"{scenario_id}: required_lane_sides must hold 'left'/'right', "
                               f"got {list(sides)!r}")
         max_speed = number("max_speed_ms")
-        starts = [distance for _, _, distance in _placed_actors(params)]
+        # the oncoming car is placed wherever the other direction's lane is, not on the route
+        starts = [distance for _, side, distance in _placed_actors(params) if side != ONCOMING]
         gap_ahead = max(number("gap_ahead_m"), *starts, 0.0)
         gap_behind = max(number("gap_behind_m"), *(-d for d in starts), 0.0)
         manoeuvre_end = number("maneuver_start_s", 0.0) + number("duration_s", 0.0)
@@ -321,6 +322,8 @@ class SpawnMatcher:
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
                params: dict[str, Any]) -> LanePoint:
+        if side == ONCOMING:
+            return self._place_oncoming(ego, distance, params)
         key = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
         if side is not None:
             neighbour = self.network.neighbour(key, side)
@@ -329,6 +332,28 @@ class SpawnMatcher:
                                   f"lane {ego.lane_id} has no lane on the {side}")
             key = neighbour
         return self.network.advance(key.road_id, key.lane_id, ego.s, distance)
+
+    def _place_oncoming(self, ego: LanePoint, distance: float,
+                        params: dict[str, Any]) -> LanePoint:
+        """In the nearest lane of the other direction, ``distance`` ahead along the ego's lane
+        (or, where the road there has none, as far ahead as one is, in 5 m steps)."""
+        ahead = distance
+        while ahead >= 0.0:
+            try:
+                point = self.network.advance(ego.road_id, ego.lane_id, ego.s, ahead)
+            except LaneEndsError:
+                point = None
+            found = None if point is None else _oncoming_lane_point(self.network, point)
+            if found is not None:
+                return found
+            ahead -= ONCOMING_SEARCH_STEP_M
+        raise NoSpawnFits(f"{params.get('scenario_id')}: no lane of the other direction within "
+                          f"{distance:.0f} m ahead of the spawn for the recorded oncoming car")
+
+
+def _oncoming_lane_point(network: Any, point: LanePoint) -> LanePoint | None:
+    lane = network.oncoming_lane(network.key_at(point.road_id, point.lane_id, point.s))
+    return None if lane is None else LanePoint(point.road_id, lane.lane_id, point.s)
 
 
 def _hard_filters(entry: dict[str, Any], needs: Requirements):
@@ -433,15 +458,25 @@ def _spread_over_roads(candidates: list[SpawnCandidate]) -> list[SpawnCandidate]
     return sorted(ordered, key=lambda c: (-c.score, rank[c.spawn_id], c.spawn_id))
 
 
+#: the "side" of an actor placed in the nearest lane of the other direction
+ONCOMING = "oncoming"
+#: where the road ahead has no lane of the other direction, look this much nearer (m)
+ONCOMING_SEARCH_STEP_M = 5.0
+
+
 def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]]:
     """``(actor, adjacent side or None, signed distance along the lane at t = 0)`` of every
     NPC: a highway NPC where its recorded gap holds at ``maneuver_start_s``, the urban lead
-    ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic)."""
+    ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic), the
+    oncoming car ``oncoming_distance_m`` ahead in the nearest lane of the other direction."""
     if params.get("domain") == "urban":
-        if not params.get("lead_present"):
-            return []
         number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
-        return [("lead", None, number("lead_distance_m", 0.0))]
+        placed = []
+        if params.get("lead_present"):
+            placed.append(("lead", None, number("lead_distance_m", 0.0)))
+        if params.get("oncoming_present"):
+            placed.append(("oncoming", ONCOMING, number("oncoming_distance_m", 0.0)))
+        return placed
     if params.get("domain") != "highway":
         return []
     placed = []

@@ -187,6 +187,15 @@ class RoadNetwork:
             return None
         return LaneKey(key.road_id, key.section, lane_id)
 
+    def oncoming_lane(self, key: LaneKey) -> LaneKey | None:
+        """The drivable lane nearest the centre line whose traffic comes the other way."""
+        section = self.road(key.road_id).sections[key.section]
+        sign = 1 if key.lane_id < 0 else -1
+        for lane_id in sorted((i for i in section.lanes if i * sign > 0), key=abs):
+            if section.lanes[lane_id].drivable:
+                return LaneKey(key.road_id, key.section, lane_id)
+        return None
+
     # --- walks --------------------------------------------------------------------------------
     def walk(self, road_id: str | int, lane_id: int, s: float,
              forward: bool = True) -> Iterator[Segment]:

@@ -91,6 +91,12 @@ def _cut(rng: np.random.Generator, n: int, code: str) -> Columns:
     gap = np.round(rng.uniform(6, 45, n), 1)
     distance = -gap if behind else gap
     duration = np.round(rng.uniform(2.0, 6.0, n), 1)
+    if code == "CINB":  # the merging car ends behind the ego: it gains at most gap - 9 m
+        gap = np.maximum(gap, 12.0)
+        distance = -gap
+        gained_kmh = np.maximum(rel + delta / 2, 0.0)
+        most_kmh = np.maximum((gap - 9.0) / duration * 3.6, 0.0)
+        rel = np.where(gained_kmh > most_kmh, np.round(most_kmh - delta / 2 - 0.1, 1), rel)
     if n >= 1:  # edge row: the cutter at exactly the ego speed
         rel[0], delta[0] = 0.0, 0.0
     return {"ego_vel_kmh": ego, "cutter_vel_kmh": rel, "delta_vel_kmh": delta,

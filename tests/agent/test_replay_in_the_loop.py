@@ -74,17 +74,17 @@ def test_a_fallback_that_fails_the_replay_ends_failed_with_taxonomy_replay(
     import corpus
     import corpus.corpus_utils
 
-    # a reference whose slow lead never gets out of the way: valid and faithful, and the ego
-    # runs into it when played
+    # the fallback (the reference, run in this process) with a slow lead that never gets out
+    # of the way: valid and faithful, and the ego runs into it when played
     monkeypatch.setattr(corpus.corpus_utils, "lead_stays_ahead", lambda *args: None)
     params = SpawnMatcher().assign({
         **stop_at_red_record, "maneuver_class": "U1_1", "maneuver_tag": "in_lane_driving",
         "lead_present": True, "lead_distance_m": 15.0, "lead_speed_ms": 1.0,
         "lead_vehicle_type": "car"}, 0)
-    reference = corpus.retrieve(params).source
-    settings = replay([fenced(reference)], max_attempts=1, replay=ReplaySettings())
+    failing = "def generate(params, out_path):\n    raise ValueError('no scenario')\n"
+    settings = replay([fenced(failing)], max_attempts=1, replay=ReplaySettings())
     outcome, out = _run(params, settings, tmp_path)
     assert outcome.status == "failed" and outcome.fallback
-    assert outcome.error_taxonomy == ["replay", "replay"]
+    assert outcome.error_taxonomy == ["runtime", "replay"]
     assert "REPLAY_COLLISION" in outcome.error
     assert outcome.replay["codes"] == ["REPLAY_COLLISION"]

@@ -28,7 +28,7 @@ def start_time(doc: etree._ElementTree, key: str) -> float:
 def stop_at_line(p: dict) -> tuple[float, float]:
     """U4_1: (start, duration) of the braking that ends 1 m before the spawn's stop line."""
     v0, room = p["ego_speed_ms"], p["spawn_stop_line_distance_m"] - 1.0
-    if v0 <= 0:
+    if v0 <= 1e-6:  # standing still
         return 0.0, p["brake_time_s"]
     duration = min(p["brake_time_s"], 2 * room / v0)
     return round((room - v0 * duration / 2) / v0, 3), round(duration, 3)
@@ -191,8 +191,9 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
     for slot in ("center", "right", "left"):
         if p.get(f"{slot}_present"):
             expected[f"npc_{slot}"] = (slot, p[f"{slot}_speed_ms"])
-    if p.get("lead_present"):
-        expected["lead"] = (None, p["lead_speed_ms"])
+    for role in ("lead", "oncoming"):
+        if p.get(f"{role}_present"):
+            expected[role] = (role, p[f"{role}_speed_ms"])
     assert names == list(expected)
     for name, (actor, speed) in expected.items():
         private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
@@ -206,9 +207,9 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
         elif name == "hero":
             assert position.tag == "WorldPosition"
             assert [float(position.get(k)) for k in "xyzh"] == [p[f"ego_{k}"] for k in "xyzh"]
-        else:  # the urban lead, where the spawn stage put it along the ego's lane
+        else:  # the urban lead and oncoming car, where the spawn stage put them
             assert position.tag == "WorldPosition"
-            assert [float(position.get(k)) for k in "xyzh"] == [p[f"lead_{k}"] for k in "xyzh"]
+            assert [float(position.get(k)) for k in "xyzh"] == [p[f"{actor}_{k}"] for k in "xyzh"]
         if actor in ("npc", "center", "right", "left"):
             vehicle_type = p[f"{actor}_vehicle_type"]
             blueprint = doc.find(f"Entities/ScenarioObject[@name='{name}']/Vehicle").get("name")

@@ -35,6 +35,9 @@ def _place(params: dict) -> dict:
         if params.get("lead_present"):  # straight north along the ego's lane
             placed |= {"lead_x": 313.2, "lead_y": 171.8 + params["lead_distance_m"],
                        "lead_z": 0.3, "lead_h": 1.5708}
+        if params.get("oncoming_present"):  # southbound in the lane beside it
+            placed |= {"oncoming_x": 309.7, "oncoming_y": 171.8 + params["oncoming_distance_m"],
+                       "oncoming_z": 0.3, "oncoming_h": -1.5708}
         return placed
     for actor, lane in LANE_OF.items():
         distance = 0.0

@@ -61,11 +61,11 @@ CASES = {
                    required_lane_sides=["right"], timeout_s=15.0, ego_end_speed_ms=28.0),
               dict(ego_speed_ms=25.0, npc_speed_ms=30.0, npc_end_speed_ms=28.0,
                    required_lane_sides=["left"], timeout_s=12.5, npc_vehicle_type="van")]),
-    "CINB": ([["108", "7.2", "0", "5", "-15", "No", "Right", "Car"],
+    "CINB": ([["108", "7.2", "0", "5", "-25", "No", "Right", "Car"],
               ["72", "-3.6", "3.6", "2", "-40", "No", "Left", "Truck"]],
              [dict(ego_speed_ms=30.0, npc_speed_ms=32.0, npc_end_speed_ms=32.0,
-                   npc_distance_m=-15.0, npc_position="behind", required_lane_sides=["left"],
-                   gap_behind_m=15.0, gap_ahead_m=0.0, timeout_s=17.5),
+                   npc_distance_m=-25.0, npc_position="behind", required_lane_sides=["left"],
+                   gap_behind_m=25.0, gap_ahead_m=0.0, timeout_s=17.5),
               dict(npc_speed_ms=19.0, npc_end_speed_ms=20.0, required_lane_sides=["right"],
                    gap_behind_m=40.0, timeout_s=10.0)]),
     "COUTF": ([["126", "0.36", "0.72", "3", "25", "No", "Left", "Car"],
@@ -132,6 +132,15 @@ def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path)
         extract_params(item.record)
     assert raised.value.field == "npc_distance_end_m"
     assert "20 m to 45 m" in raised.value.message and "80.0 m" in raised.value.message
+
+
+def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):
+    # 15 m behind, 2 m/s faster for 5 s: 5 m behind at the end, closer than two cars can be
+    write_npy(tmp_path, "CINB", [["108", "7.2", "0", "5", "-15", "No", "Right", "Car"]])
+    (item,) = iter_raw_records(tmp_path, IngestReport())
+    with pytest.raises(RecordIssue) as raised:
+        extract_params(item.record)
+    assert raised.value.field == "npc_distance_m" and "-5.0 m from the ego" in raised.value.message
 
 
 @pytest.mark.parametrize("code", sorted(CASES))

@@ -6,6 +6,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from corpus.corpus_utils import clearance_m
 from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest import IngestReport, check_record, extract_params, iter_raw_records
 from ingest.issues import RecordIssue
@@ -64,10 +65,36 @@ def test_brake_rules_hold_on_any_valid_row(tmp_path, rows):
         assert p["gap_ahead_m"] == pytest.approx(float(row[4]))
 
 
+def _merges_level_with_the_ego(row) -> bool:
+    """CINB: npc = ego + REL, end = npc + DELTA; it gains on the constant-speed ego."""
+    ego, rel, delta, duration, distance = (float(v) for v in row[:5])
+    npc = max(ego + rel, 0.0)
+    gained = ((npc + max(npc + delta, 0.0)) / 2 - ego) / 3.6 * duration
+    return distance + gained > -clearance_m(str(row[7]).lower())
+
+
+@settings_
+@given(rows=st.lists(cut_row, min_size=1, max_size=8))
+def test_a_cut_in_behind_ends_behind_the_ego_or_is_an_issue(tmp_path, rows):
+    behind = [r for r in rows if float(r[4]) < 0]
+    for row in behind:
+        if _merges_level_with_the_ego(row):
+            with pytest.raises(RecordIssue) as raised:
+                _params(tmp_path, "CINB", [row])
+            assert raised.value.field == "npc_distance_m"
+        else:
+            (params,), _ = _params(tmp_path, "CINB", [row])
+            assert params["npc_distance_m"] == float(row[4])
+
+
 @settings_
 @given(rows=st.lists(cut_row, min_size=1, max_size=8), code=st.sampled_from(
     ["CINF", "CINB", "COUTF", "COUTB"]))
 def test_cut_rows_are_kept_or_rejected_by_the_side_of_the_npc(tmp_path, rows, code):
+    if code == "CINB":  # a car merging behind must end behind (tested on its own below)
+        rows = [r for r in rows if float(r[4]) > 0 or not _merges_level_with_the_ego(r)]
+    if not rows:
+        return
     params, report = _params(tmp_path, code, rows)
     behind = code.endswith("B")
     wrong_side = [i for i, r in enumerate(rows) if (float(r[4]) > 0) == behind]
@@ -110,6 +137,10 @@ def test_npc_speed_is_ego_plus_or_minus_rel_per_class(tmp_path, data, code):
     side = gap_behind if code.endswith("B") else gap_ahead
     rows = data.draw(st.lists(st.tuples(speed, signed, signed, duration, side, yes_no,
                                         left_right, vehicle), min_size=1, max_size=6))
+    if code == "CINB":  # rows that merge level with the ego are issues (tested above)
+        rows = [r for r in rows if not _merges_level_with_the_ego(r)]
+        if not rows:
+            return
     params, report = _params(tmp_path, code, rows)
     assert report.issues == []
     for p, (ego, rel, delta, *_rest) in zip(params, rows, strict=True):
@@ -189,6 +220,16 @@ def test_free_ride_sentinels_make_slots_absent_and_nothing_else(tmp_path, data, 
 fl_number = st.one_of(speed, st.just("-1"), st.just("-3.6"))
 
 
+def _end_gap_from_speeds(row: tuple, sign: float) -> tuple | None:
+    """The row with the end gap its speeds make (a record where they differ is an issue,
+    test_highway_params); None when the other car would end on the ego's other side."""
+    ego0, ego1, lead0, lead1, gap0 = (float(c) for c in row[:5])
+    end = sign * gap0 + ((lead0 + lead1) - (ego0 + ego1)) / 2 / 3.6 * float(row[7])
+    if sign * end <= 0.01:
+        return None
+    return (*row[:5], f"{abs(end):.4f}", *row[6:])
+
+
 @settings_
 @given(rows=st.lists(st.tuples(fl_number, fl_number, fl_number, fl_number, fl_number,
                                fl_number, fl_number, duration, yes_no,
@@ -198,11 +239,16 @@ fl_number = st.one_of(speed, st.just("-1"), st.just("-3.6"))
 def test_follow_classes_have_no_sentinels_a_negative_cell_is_an_error(tmp_path, rows, code):
     # FL files carry no 'absent' markers: -1 or -3.6 is a bad value (its row is reported),
     # never a missing lead; a good row always has its lead, ahead (FLF) or behind (FLB)
+    sign = 1.0 if code == "FLF" else -1.0
+    rows = [r if any(float(c) < 0 for c in r[:7]) else _end_gap_from_speeds(r, sign)
+            for r in rows]
+    rows = [r for r in rows if r is not None]
+    if not rows:
+        return
     params, report = _params(tmp_path, code, rows)
     bad = {i for i, r in enumerate(rows) if any(float(c) < 0 for c in r[:7])}
     assert {i.row for i in report.issues} == bad
     good = [r for i, r in enumerate(rows) if i not in bad]
-    sign = 1.0 if code == "FLF" else -1.0
     for p, r in zip(params, good, strict=True):
         assert p["has_npc"] is True
         assert p["npc_position"] == ("front" if code == "FLF" else "behind")

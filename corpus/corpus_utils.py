@@ -70,6 +70,10 @@ class VehicleModel:
 #: speed; the scenario must play what was recorded
 PERFORMANCE_MAX_SPEED_MS = 69.0
 
+#: the bounding box's centre lies this share of the length ahead of the reference point (the
+#: rear axle, where TeleportAction puts a vehicle)
+BOX_CENTRE_AHEAD = 0.3
+
 VEHICLE_MODELS: dict[str, VehicleModel] = {
     "ego": VehicleModel("vehicle.tesla.model3", xosc.VehicleCategory.car, 4.8, 2.1, 1.5,
                         PERFORMANCE_MAX_SPEED_MS),
@@ -174,6 +178,26 @@ def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> 
     """A scripted vehicle; unknown types become a car."""
     return Actor(name, known_type(vehicle_type), position,
                  finite(f"the start speed of {name}", speed_ms))
+
+
+def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
+    """The distance between the ego's and another vehicle's reference points when the free
+    space between their facing bumpers is ``bumper_gap_m`` (positive: the other ahead, its rear
+    facing the ego's front; negative: behind, its front facing the ego's rear)."""
+    ego, other = VEHICLE_MODELS["ego"].length_m, VEHICLE_MODELS[known_type(other_type)].length_m
+    if bumper_gap_m >= 0:
+        return bumper_gap_m + _front_of(ego) + _rear_of(other)
+    return bumper_gap_m - _rear_of(ego) - _front_of(other)
+
+
+def _front_of(length_m: float) -> float:
+    """How far the front bumper lies ahead of the reference point (the box centre is
+    ``BOX_CENTRE_AHEAD`` x length ahead of it)."""
+    return length_m * (BOX_CENTRE_AHEAD + 0.5)
+
+
+def _rear_of(length_m: float) -> float:
+    return length_m * (0.5 - BOX_CENTRE_AHEAD)
 
 
 def clearance_m(other_type: str | None) -> float:
@@ -284,7 +308,7 @@ def urban_hero_profile(params: Mapping[str, Any]) -> SpeedProfile:
 def _vehicle(actor: Actor) -> xosc.Vehicle:
     model = VEHICLE_MODELS[actor.vehicle_type]
     box = xosc.BoundingBox(model.width_m, model.length_m, model.height_m,
-                           model.length_m * 0.3, 0, model.height_m / 2)
+                           model.length_m * BOX_CENTRE_AHEAD, 0, model.height_m / 2)
     front = xosc.Axle(0.5, 0.7, model.width_m * 0.85, model.length_m * 0.6, 0.35)
     rear = xosc.Axle(0.0, 0.7, model.width_m * 0.85, 0.0, 0.35)
     vehicle = xosc.Vehicle(model.blueprint, model.category, box, front, rear,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from corpus.corpus_utils import clearance_m
+from corpus.corpus_utils import clearance_m, reference_gap_m
 from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
@@ -62,13 +62,28 @@ def _extract_highway(record: dict) -> dict:
         base.update(HIGHWAY_EXTRACTORS[family](raw, code, conventions))
     except KeyError as err:
         raise RecordIssue("missing in params", field=f"params.{err.args[0]}") from err
+    if conventions.get("gaps_between", "reference_points") == "bumpers":
+        _gaps_to_reference_points(base)
     base.update(dict.fromkeys(SPAWN_KEYS))
     return finish(base)
 
 
+def _gaps_to_reference_points(params: dict) -> None:
+    """Bumper gaps of the file -> the reference-point gaps params hold (docs/params.md)."""
+    for prefix in ("npc", *SLOTS):
+        kind = params.get(f"{prefix}_vehicle_type")
+        for key in (f"{prefix}_distance_m", f"{prefix}_end_distance_m",
+                    f"{prefix}_distance_end_m"):
+            present = prefix == "npc" or params.get(f"{prefix}_present")
+            if present and isinstance(params.get(key), float | int):
+                params[key] = reference_gap_m(params[key], kind)
+
+
 def record_conventions(record: dict) -> dict:
-    """The layout conventions the record was read with (sign, sentinels); records written
-    without them (older ingests, other tools) get the bundled layout's."""
+    """The layout conventions the record was read with (sign, gap convention, sentinels);
+    records written without them (other tools) get the bundled layout's. Records of older
+    ingests carry conventions without ``gaps_between``: their gaps were taken as reference
+    points then, and still are."""
     conventions = record.get("conventions")
     if isinstance(conventions, dict):
         return conventions
@@ -102,7 +117,8 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
         raise RecordIssue("the layout gives no relative_speed_sign for this class",
                           field="conventions.relative_speed_sign") from err
     if code == "CINB":
-        _merges_behind(raw, max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0))
+        _merges_behind(raw, max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0),
+                       conventions)
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
@@ -113,18 +129,22 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
     }
 
 
-def _merges_behind(raw: dict, npc_kmh: float) -> None:
+def _merges_behind(raw: dict, npc_kmh: float, conventions: dict) -> None:
     """A cut-in behind ends with the car behind the ego (the ego keeps its speed): a record
     whose speeds bring it level with the ego first describes no cut-in a replay can show."""
     npc_end_kmh = max(npc_kmh + raw["delta_vel_kmh"], 0.0)
     closing = ((npc_kmh + npc_end_kmh) / 2 - raw["ego_vel_kmh"]) / KMH * raw["duration_s"]
-    end_gap = raw["npc_distance_m"] + closing
-    room = clearance_m(str(raw["lead_vehicle_type"]).lower())
+    kind = str(raw["lead_vehicle_type"]).lower()
+    start = raw["npc_distance_m"]
+    if conventions.get("gaps_between", "reference_points") == "bumpers":
+        start = reference_gap_m(start, kind)
+    end_gap = start + closing
+    room = clearance_m(kind)
     if end_gap > -room:
         raise RecordIssue(
             f"the car merging behind starts {raw['npc_distance_m']:g} m behind the ego and "
             f"gains {closing:.1f} m in {raw['duration_s']:g} s: it would end {end_gap:.1f} m from "
-            f"the ego, not behind it ({room:.1f} m between the cars' reference points)",
+            f"the ego's reference point, not behind it (at least {room:.1f} m)",
             field="npc_distance_m")
 
 

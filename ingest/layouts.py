@@ -62,6 +62,7 @@ class ClassLayout:
     npc_position: str | None
     columns: tuple[Column, ...]
     relative_speed_sign: int | None = None
+    gaps_between: str | None = None
 
     @property
     def family(self) -> str:
@@ -79,14 +80,22 @@ class ClassLayout:
     def conventions(self) -> dict:
         """What extraction must know of this layout beyond the column names; copied into
         every canonical record (``conventions``) so params follow the layout the file was
-        read with: the relative-speed sign (cut classes) and each column's sentinels."""
+        read with: the relative-speed sign (cut classes), where its gaps are measured
+        (``gaps_between``) and each column's sentinels."""
         found: dict = {}
         if self.family == "CUT":
             found["relative_speed_sign"] = self.relative_speed_sign
+        if self.gaps_between is not None:
+            found["gaps_between"] = self.gaps_between
         sentinels = {c.name: list(c.sentinels) for c in self.columns if c.sentinels}
         if sentinels:
             found["sentinels"] = sentinels
         return found
+
+
+#: how a layout's gap columns are measured: between the facing bumpers (what a radar on the
+#: recording car measures) or between the vehicles' reference points (rear axles)
+GAP_CONVENTIONS = ("bumpers", "reference_points")
 
 
 @dataclass(frozen=True)
@@ -138,9 +147,14 @@ def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
     npc_position = spec.get("npc_position")
     if npc_position not in ("front", "behind", None):
         raise LayoutError(f"{where}.npc_position: must be 'front', 'behind' or null")
+    gaps_between = spec.get("gaps_between")
+    if gaps_between not in (*GAP_CONVENTIONS, None):
+        raise LayoutError(f"{where}.gaps_between: must be one of {', '.join(GAP_CONVENTIONS)} "
+                          f"or absent, got {gaps_between!r}")
     return ClassLayout(code=code, tag=str(_require(spec, "tag", str, where)),
                        npc_position=npc_position, columns=columns,
-                       relative_speed_sign=int(sign) if sign in (1, -1) else None)
+                       relative_speed_sign=int(sign) if sign in (1, -1) else None,
+                       gaps_between=gaps_between)
 
 
 def _column(spec: Any, where: str) -> Column:

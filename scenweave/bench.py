@@ -68,6 +68,8 @@ class BenchSettings:
     replay_file: Path | None = None
     seed: int = 7
     top_n: int = 5
+    #: player.ReplaySettings: every scenario is played in esmini and judged (None: no replay)
+    replay: Any = None
 
 
 @dataclass
@@ -95,25 +97,27 @@ def model_dir_name(model: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", model)
 
 
-def agent_settings_for(llm: str, **agent: Any) -> Callable[[str], PipelineSettings]:
+def agent_settings_for(llm: str, replay: Any = None,
+                       **agent: Any) -> Callable[[str], PipelineSettings]:
     """Pipeline settings per model name: the agent with that model on backend ``llm``;
-    ``agent`` holds further AgentSettings fields (repair, replay_file, ...)."""
+    ``agent`` holds further AgentSettings fields (repair, replay_file, ...); ``replay`` plays
+    every scenario (the reference's too) in esmini."""
     if llm not in LLM_BACKENDS:
         raise BenchError(f"--llm {llm!r}: choose one of {', '.join(LLM_BACKENDS)}")
 
     def settings(model: str) -> PipelineSettings:
         if model == REFERENCE:
-            return PipelineSettings(no_llm=True)
+            return PipelineSettings(no_llm=True, replay=replay)
         try:
             from agent import AgentSettings
         except ImportError as err:
             raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
                              f"({err}); benchmark --models {REFERENCE} only") from err
         try:
-            agent_settings = AgentSettings(model=model, llm=llm, **agent)
+            agent_settings = AgentSettings(model=model, llm=llm, replay=replay, **agent)
         except ValueError as err:  # e.g. an unknown --repair: the message names the option
             raise BenchError(str(err)) from err
-        return PipelineSettings(no_llm=False, agent=agent_settings)
+        return PipelineSettings(no_llm=False, agent=agent_settings, replay=replay)
 
     return settings
 
@@ -136,7 +140,8 @@ def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = No
               settings_for: Callable[[str], PipelineSettings] | None = None) -> BenchResult:
     """Run every model over the selected records, aggregate, write json, figures and html."""
     settings_for = settings_for or agent_settings_for(
-        settings.llm, repair=settings.repair, replay_file=settings.replay_file)
+        settings.llm, replay=settings.replay, repair=settings.repair,
+        replay_file=settings.replay_file)
     pipelines = {model: settings_for(model) for model in settings.models}  # fail before running
     root = Path(out_root) / (bench_id or datetime.now(UTC).strftime("bench-%Y%m%d-%H%M%S"))
     root.mkdir(parents=True, exist_ok=True)

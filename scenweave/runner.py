@@ -58,8 +58,8 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
               matcher: Any = None, jobs: int = 1) -> RunResult:
     """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists.
 
-    ``jobs`` > 1 makes the scenarios in that many processes (forked from this one, so they
-    share the loaded map and spawn database); this process commits each scenario folder.
+    ``jobs`` > 1 makes the scenarios in that many fresh processes (each gets the matcher once);
+    this process commits each scenario folder.
     """
     loaded = load_input(Path(data), selection)
     folder = RunFolder.open(out_root, run_id)
@@ -105,8 +105,12 @@ def _process_in_worker(params: dict, index: int, staging: Path,
 
 def _in_processes(todo: list[tuple[int, dict]], folder: RunFolder, settings: PipelineSettings,
                   matcher: Any, jobs: int) -> Iterator[tuple[dict, Path, dict]]:
-    """Each scenario made in one of ``jobs`` forked processes, yielded as it finishes."""
-    context = multiprocessing.get_context("fork")
+    """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
+
+    Workers are spawned, not forked: a forked copy of this process would inherit the
+    player's engine server, which only its parent can talk to.
+    """
+    context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(jobs, mp_context=context, initializer=_remember_matcher,
                              initargs=(matcher,)) as pool:
         pending = {}

@@ -39,6 +39,8 @@ WRONG_WAY_RAD = math.radians(45)
 STOPPED_MS = 0.1
 #: the right turn turns at least this much (rad, clockwise)
 RIGHT_TURN_MIN_RAD = math.radians(45)
+#: by the exit point, the ego has turned as much as the right movement, to this much (rad)
+TURN_HEADING_TOL_RAD = math.radians(20)
 #: the turning ego passes this close to the spawn stage's exit point (m)
 TURN_EXIT_REACH_M = 3.0
 #: classes whose NPC's gap is recorded ``duration_s`` after the manoeuvre start as well
@@ -296,20 +298,32 @@ def _stop_or_pass(judge: _Judge) -> None:
 
 
 def _right_turn(judge: _Judge) -> None:
+    """U4_4 reaches the exit the spawn stage found for the junction's right movement, turned
+    the way that movement turns (roads may bend on afterwards); without the exit in params,
+    the whole drive must turn right."""
     params = judge.params
     if params.get("maneuver_class") != "U4_4":
         return
-    turned = heading_change(judge.playback, "hero")
-    if turned > -RIGHT_TURN_MIN_RAD:
-        judge.fail("REPLAY_TURN", f"the ego turns {math.degrees(turned):+.0f} deg (right turns "
-                   f"are negative); the record turns right")
-    exit_xy = (_number(params, "turn_exit_x"), _number(params, "turn_exit_y"))
-    if None not in exit_xy:
-        track = judge.playback.tracks["hero"]
-        closest = min(math.dist(exit_xy, p) for p in zip(track["x"], track["y"], strict=True))
-        if closest > TURN_EXIT_REACH_M:
-            judge.fail("REPLAY_TURN", f"the ego passes {closest:.1f} m from the right turn's exit "
-                       "lane at its nearest")
+    track = judge.playback.tracks["hero"]
+    exit_pose = [_number(params, f"turn_exit_{k}") for k in "xyh"]
+    if None in exit_pose:
+        turned = heading_change(judge.playback, "hero")
+        if turned > -RIGHT_TURN_MIN_RAD:
+            judge.fail("REPLAY_TURN", f"the ego turns {math.degrees(turned):+.0f} deg (right "
+                       "turns are negative); the record turns right")
+        return
+    distances = [math.dist(exit_pose[:2], p) for p in zip(track["x"], track["y"], strict=True)]
+    nearest = min(range(len(distances)), key=distances.__getitem__)
+    if distances[nearest] > TURN_EXIT_REACH_M:
+        judge.fail("REPLAY_TURN", f"the ego passes {distances[nearest]:.1f} m from the right "
+                   "turn's exit lane at its nearest")
+        return
+    turned = heading_change(judge.playback, "hero", until=nearest)
+    movement = math.remainder(exit_pose[2] - track["h"][0], math.tau)
+    if abs(turned - movement) > TURN_HEADING_TOL_RAD:
+        judge.fail("REPLAY_TURN", f"the ego has turned {math.degrees(turned):+.0f} deg when it "
+                   f"reaches the exit lane; the right movement turns "
+                   f"{math.degrees(movement):+.0f} deg", judge.playback.times[nearest])
 
 
 def _collisions(judge: _Judge) -> None:
@@ -394,9 +408,10 @@ def travelled(playback, entity: str, time_s: float) -> float:
     return total
 
 
-def heading_change(playback, entity: str) -> float:
-    """Total turn of ``entity`` over the replay (rad, counter-clockwise positive)."""
-    headings = playback.tracks[entity]["h"]
+def heading_change(playback, entity: str, until: int | None = None) -> float:
+    """Total turn of ``entity`` over the replay, or up to sample ``until`` (rad,
+    counter-clockwise positive)."""
+    headings = playback.tracks[entity]["h"][:None if until is None else until + 1]
     return sum(math.remainder(b - a, math.tau) for a, b in zip(headings, headings[1:],
                                                                 strict=False))
 

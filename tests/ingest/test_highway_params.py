@@ -13,16 +13,22 @@ from ingest.issues import RecordIssue
 from tests.ingest.builders import write_npy
 
 KMH = 3.6
+# params hold reference-point gaps and the bundled layouts give bumper gaps (docs/params.md):
+# a car ahead is further by the ego's front overhang (0.8 x 4.8 m) and its own rear overhang
+# (0.2 x its length), one behind by the ego's rear (0.2 x 4.8) and its own front (0.8 x length)
+AHEAD = {"car": 3.84 + 0.2 * 3.7, "truck": 3.84 + 0.2 * 5.2, "van": 3.84 + 0.2 * 5.9}
+BEHIND = {"car": 0.96 + 0.8 * 3.7, "truck": 0.96 + 0.8 * 5.2}
 BRAKE_ROWS = [["108", "90", "2.0", "-36", "30.5", "0.4", "Yes", "Truck"],
               ["72", "36", "1.0", "-54", "12", "0.9", "No", "Car"]]
 BRAKE_EXPECTED = [
     dict(ego_speed_ms=30.0, npc_speed_ms=25.0, delta_speed_ms=-10.0, npc_end_speed_ms=15.0,
-         ego_end_speed_ms=30.0, npc_distance_m=30.5, brake_intensity=0.4, timeout_s=10.0,
-         other_dir_traffic=True, npc_vehicle_type="truck", required_lane_sides=[],
-         gap_ahead_m=30.5, gap_behind_m=0.0, max_speed_ms=30.0, npc_position="front"),
+         ego_end_speed_ms=30.0, npc_distance_m=30.5 + AHEAD["truck"], brake_intensity=0.4,
+         timeout_s=10.0, other_dir_traffic=True, npc_vehicle_type="truck",
+         required_lane_sides=[], gap_ahead_m=30.5 + AHEAD["truck"], gap_behind_m=0.0,
+         max_speed_ms=30.0, npc_position="front"),
     # lead_end = max(10 - 15, 0) = 0: the lead brakes to a standstill
     dict(ego_speed_ms=20.0, npc_speed_ms=10.0, npc_end_speed_ms=0.0, timeout_s=7.5,
-         npc_distance_m=12.0, other_dir_traffic=False),
+         npc_distance_m=12.0 + AHEAD["car"], other_dir_traffic=False),
 ]
 LC_ROWS = [["126", "133.2", "4", "No", "Left"], ["100.8", "97.2", "3", "Yes", "Right"]]
 LC_EXPECTED = [
@@ -57,17 +63,18 @@ CASES = {
     "CINF": ([["100.8", "-7.2", "3.6", "4.0", "20", "No", "Left", "Car"],
               ["90", "18", "-7.2", "3", "8.5", "Yes", "Right", "Van"]],
              [dict(ego_speed_ms=28.0, npc_speed_ms=26.0, npc_end_speed_ms=27.0,
-                   npc_distance_m=20.0, lane_change_direction="left",
+                   npc_distance_m=20.0 + AHEAD["car"], lane_change_direction="left",
                    required_lane_sides=["right"], timeout_s=15.0, ego_end_speed_ms=28.0),
               dict(ego_speed_ms=25.0, npc_speed_ms=30.0, npc_end_speed_ms=28.0,
                    required_lane_sides=["left"], timeout_s=12.5, npc_vehicle_type="van")]),
     "CINB": ([["108", "7.2", "0", "5", "-25", "No", "Right", "Car"],
               ["72", "-3.6", "3.6", "2", "-40", "No", "Left", "Truck"]],
              [dict(ego_speed_ms=30.0, npc_speed_ms=32.0, npc_end_speed_ms=32.0,
-                   npc_distance_m=-25.0, npc_position="behind", required_lane_sides=["left"],
-                   gap_behind_m=25.0, gap_ahead_m=0.0, timeout_s=17.5),
+                   npc_distance_m=-25.0 - BEHIND["car"], npc_position="behind",
+                   required_lane_sides=["left"], gap_behind_m=25.0 + BEHIND["car"],
+                   gap_ahead_m=0.0, timeout_s=17.5),
               dict(npc_speed_ms=19.0, npc_end_speed_ms=20.0, required_lane_sides=["right"],
-                   gap_behind_m=40.0, timeout_s=10.0)]),
+                   gap_behind_m=40.0 + BEHIND["truck"], timeout_s=10.0)]),
     "COUTF": ([["126", "0.36", "0.72", "3", "25", "No", "Left", "Car"],
                ["54", "-0.36", "-0.36", "2", "10", "Yes", "Right", "Car"]],
               [dict(ego_speed_ms=35.0, npc_speed_ms=35.1, npc_end_speed_ms=35.3,
@@ -78,37 +85,45 @@ CASES = {
     "COUTB": ([["108", "3.6", "0", "4", "-20", "No", "Left", "Car"],
                ["90", "-7.2", "0", "3", "-12", "No", "Right", "Car"]],
               [dict(ego_speed_ms=30.0, npc_speed_ms=29.0, npc_end_speed_ms=29.0,
-                    ego_end_speed_ms=30.0, required_lane_sides=["left"], gap_behind_m=20.0),
-               dict(npc_speed_ms=27.0, required_lane_sides=["right"], gap_behind_m=12.0)]),
+                    ego_end_speed_ms=30.0, required_lane_sides=["left"],
+                    gap_behind_m=20.0 + BEHIND["car"]),
+               dict(npc_speed_ms=27.0, required_lane_sides=["right"],
+                    gap_behind_m=12.0 + BEHIND["car"])]),
     "LCF": (LC_ROWS, LC_EXPECTED),
     "LCB": (LC_ROWS, LC_EXPECTED),
     "FLF": (FL_ROWS,
             [dict(ego_speed_ms=20.0, ego_end_speed_ms=15.0, npc_speed_ms=25.0,
-                  npc_end_speed_ms=25.0, npc_distance_m=20.0, npc_distance_end_m=80.0,
-                  npc_dist_traveled_m=200.0, behavior_type="B1", timeout_s=25.0,
-                  max_speed_ms=25.0, gap_ahead_m=20.0, npc_position="front"),
-             dict(ego_speed_ms=30.0, npc_speed_ms=28.0, npc_distance_m=60.0,
-                  npc_distance_end_m=52.0, behavior_type="B4", npc_vehicle_type="truck")]),
+                  npc_end_speed_ms=25.0, npc_distance_m=20.0 + AHEAD["car"],
+                  npc_distance_end_m=80.0 + AHEAD["car"], npc_dist_traveled_m=200.0,
+                  behavior_type="B1", timeout_s=25.0, max_speed_ms=25.0,
+                  gap_ahead_m=20.0 + AHEAD["car"], npc_position="front"),
+             dict(ego_speed_ms=30.0, npc_speed_ms=28.0, npc_distance_m=60.0 + AHEAD["truck"],
+                  npc_distance_end_m=52.0 + AHEAD["truck"], behavior_type="B4",
+                  npc_vehicle_type="truck")]),
     "FLB": (FLB_ROWS,
-            [dict(npc_distance_m=-20.0, npc_distance_end_m=-80.0, gap_behind_m=20.0,
-                  gap_ahead_m=0.0, npc_position="behind", ego_speed_ms=25.0,
-                  npc_speed_ms=20.0, npc_end_speed_ms=15.0),
-             dict(npc_distance_m=-60.0, npc_distance_end_m=-68.0, behavior_type="B4")]),
+            [dict(npc_distance_m=-20.0 - BEHIND["car"], npc_distance_end_m=-80.0 - BEHIND["car"],
+                  gap_behind_m=20.0 + BEHIND["car"], gap_ahead_m=0.0, npc_position="behind",
+                  ego_speed_ms=25.0, npc_speed_ms=20.0, npc_end_speed_ms=15.0),
+             dict(npc_distance_m=-60.0 - BEHIND["truck"],
+                  npc_distance_end_m=-68.0 - BEHIND["truck"], behavior_type="B4")]),
     "FRF": (FRF_ROWS,
             [dict(ego_speed_ms=30.0, ego_end_speed_ms=32.0, center_present=True,
-                  center_distance_m=40.0, center_end_distance_m=35.0, center_speed_ms=30.0,
-                  right_present=False, right_speed_ms=0.0, left_present=True,
-                  left_distance_m=20.0, left_end_speed_ms=34.0, left_vehicle_type="van",
-                  required_lane_sides=["left"], gap_ahead_m=40.0, max_speed_ms=34.0,
+                  center_distance_m=40.0 + AHEAD["car"], center_end_distance_m=35.0 + AHEAD["car"],
+                  center_speed_ms=30.0, right_present=False, right_speed_ms=0.0,
+                  left_present=True, left_distance_m=20.0 + AHEAD["van"], left_end_speed_ms=34.0,
+                  left_vehicle_type="van", required_lane_sides=["left"],
+                  gap_ahead_m=40.0 + AHEAD["car"], max_speed_ms=34.0,
                   timeout_s=30.0, has_npc=True, driving_side="right"),
              dict(ego_speed_ms=25.0, center_present=False, right_present=False,
                   left_present=False, required_lane_sides=[], has_npc=False,
                   npc_position=None, gap_ahead_m=0.0)]),
     "FRB": (FRB_ROWS,
-            [dict(ego_speed_ms=30.0, center_present=True, center_distance_m=-30.0,
-                  right_present=True, right_distance_m=-50.0, right_end_distance_m=-40.0,
-                  right_vehicle_type="truck", left_present=False,
-                  required_lane_sides=["right"], gap_behind_m=50.0, timeout_s=20.0,
+            [dict(ego_speed_ms=30.0, center_present=True,
+                  center_distance_m=-30.0 - BEHIND["car"], right_present=True,
+                  right_distance_m=-50.0 - BEHIND["truck"],
+                  right_end_distance_m=-40.0 - BEHIND["truck"], right_vehicle_type="truck",
+                  left_present=False, required_lane_sides=["right"],
+                  gap_behind_m=50.0 + BEHIND["truck"], timeout_s=20.0,
                   npc_position="behind", other_dir_traffic=False),
              dict(ego_speed_ms=20.0, ego_end_speed_ms=22.0, has_npc=False,
                   required_lane_sides=[], other_dir_traffic=True, timeout_s=17.5)]),
@@ -135,12 +150,13 @@ def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path)
 
 
 def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):
-    # 15 m behind, 2 m/s faster for 5 s: 5 m behind at the end, closer than two cars can be
-    write_npy(tmp_path, "CINB", [["108", "7.2", "0", "5", "-15", "No", "Right", "Car"]])
+    # 8 m between the bumpers (11.92 m between reference points), 2 m/s faster for 5 s: it
+    # would end 1.92 m behind the ego's reference point, inside the ego
+    write_npy(tmp_path, "CINB", [["108", "7.2", "0", "5", "-8", "No", "Right", "Car"]])
     (item,) = iter_raw_records(tmp_path, IngestReport())
     with pytest.raises(RecordIssue) as raised:
         extract_params(item.record)
-    assert raised.value.field == "npc_distance_m" and "-5.0 m from the ego" in raised.value.message
+    assert raised.value.field == "npc_distance_m" and "-1.9 m from the ego" in raised.value.message
 
 
 @pytest.mark.parametrize("code", sorted(CASES))

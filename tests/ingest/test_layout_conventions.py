@@ -19,6 +19,9 @@ from tests.ingest.builders import write_npy
 DEFAULT = json.loads(DEFAULT_LAYOUT_PATH.read_text())
 CINF_ROW = ["100.8", "-7.2", "3.6", "4.0", "20", "No", "Left", "Car"]
 ABSENT = ["-1", "-1", "-3.6", "-3.6"]
+#: the bundled layouts measure gaps between bumpers; params hold them between reference points:
+#: a car ahead is further by the ego's front overhang (0.8 x 4.8 m) and its rear (0.2 x 3.7 m)
+CAR_AHEAD = 0.8 * 4.8 + 0.2 * 3.7
 
 
 def _custom(tmp_path, change) -> object:
@@ -89,7 +92,8 @@ def _add_position_sentinel(classes, value):
 def test_free_ride_sentinels_of_a_custom_layout_rule_both_has_npc_and_the_slots(tmp_path):
     row = _frf_row("999", "999")
     [record], [params] = _params_from_disk(tmp_path, "FRF", [row])
-    assert record["has_npc"] is True and params["center_distance_m"] == pytest.approx(999.0)
+    assert record["has_npc"] is True
+    assert params["center_distance_m"] == pytest.approx(999.0 + CAR_AHEAD)
     # this lab writes 999 for 'nobody there': centre and left become absent, right already is
     custom = _custom(tmp_path, lambda c: _add_position_sentinel(c, 999.0))
     [record], [params] = _params_from_disk(tmp_path, "FRF", [row], custom)
@@ -101,7 +105,8 @@ def test_free_ride_sentinels_of_a_custom_layout_rule_both_has_npc_and_the_slots(
     [record], [params] = _params_from_disk(tmp_path, "FRF", [_frf_row("40", "999")], custom)
     assert record["has_npc"] is True
     assert (params["center_present"], params["left_present"]) == (True, False)
-    assert params["required_lane_sides"] == [] and params["gap_ahead_m"] == pytest.approx(40.0)
+    assert params["required_lane_sides"] == []
+    assert params["gap_ahead_m"] == pytest.approx(40.0 + CAR_AHEAD)
 
 
 def test_present_vehicle_whose_end_values_are_sentinels_keeps_its_start_values(tmp_path):
@@ -109,8 +114,20 @@ def test_present_vehicle_whose_end_values_are_sentinels_keeps_its_start_values(t
     row[5], row[7] = "-1", "-3.6"  # the centre car left the sensor's range by the end
     _, [params] = _params_from_disk(tmp_path, "FRF", [row])
     assert params["center_present"] is True
-    assert params["center_end_distance_m"] == pytest.approx(40.0)
+    assert params["center_end_distance_m"] == pytest.approx(40.0 + CAR_AHEAD)
     assert params["center_end_speed_ms"] == pytest.approx(30.0)
+
+
+def test_a_layout_says_whether_its_gaps_are_between_bumpers_or_reference_points(tmp_path):
+    _, [bumpers] = _params_from_disk(tmp_path, "CINF", [CINF_ROW])
+    assert bumpers["npc_distance_m"] == pytest.approx(20.0 + CAR_AHEAD)
+    custom = _custom(tmp_path, lambda c: c["CINF"].update(gaps_between="reference_points"))
+    [record], [reference] = _params_from_disk(tmp_path, "CINF", [CINF_ROW], custom)
+    assert record["conventions"]["gaps_between"] == "reference_points"
+    assert reference["npc_distance_m"] == pytest.approx(20.0)
+    wrong = _custom(tmp_path, lambda c: c["CINF"].update(gaps_between="centres"))
+    with pytest.raises(LayoutError, match="gaps_between"):
+        load_layouts(wrong)
 
 
 def test_records_without_conventions_get_the_bundled_layouts(tmp_path):

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from corpus.corpus_utils import clearance_m
+from corpus.corpus_utils import clearance_m, reference_gap_m
 from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from ingest import IngestReport, check_record, extract_params, iter_raw_records
 from ingest.issues import RecordIssue
@@ -62,12 +62,13 @@ def test_brake_rules_hold_on_any_valid_row(tmp_path, rows):
         assert p["npc_end_speed_ms"] >= 0
         assert p["timeout_s"] == pytest.approx(2.5 * (2.0 + float(row[2])))
         assert p["max_speed_ms"] >= p["ego_speed_ms"]
-        assert p["gap_ahead_m"] == pytest.approx(float(row[4]))
+        assert p["gap_ahead_m"] == pytest.approx(reference_gap_m(float(row[4]), row[7].lower()))
 
 
 def _merges_level_with_the_ego(row) -> bool:
     """CINB: npc = ego + REL, end = npc + DELTA; it gains on the constant-speed ego."""
     ego, rel, delta, duration, distance = (float(v) for v in row[:5])
+    distance = reference_gap_m(distance, str(row[7]).lower())  # the layout's gaps: bumpers
     npc = max(ego + rel, 0.0)
     gained = ((npc + max(npc + delta, 0.0)) / 2 - ego) / 3.6 * duration
     return distance + gained > -clearance_m(str(row[7]).lower())
@@ -84,7 +85,8 @@ def test_a_cut_in_behind_ends_behind_the_ego_or_is_an_issue(tmp_path, rows):
             assert raised.value.field == "npc_distance_m"
         else:
             (params,), _ = _params(tmp_path, "CINB", [row])
-            assert params["npc_distance_m"] == float(row[4])
+            assert params["npc_distance_m"] == pytest.approx(
+                reference_gap_m(float(row[4]), str(row[7]).lower()))
 
 
 @settings_
@@ -209,10 +211,15 @@ def test_free_ride_sentinels_make_slots_absent_and_nothing_else(tmp_path, data, 
             start_posx, start_vel = float(cells["posx_begin_m"]), float(cells["vel_begin_ms"])
             assert p[f"{slot}_speed_ms"] == pytest.approx(start_vel)
             assert p[f"{slot}_end_speed_ms"] == pytest.approx(float(end_vel))
-            assert p[f"{slot}_distance_m"] == pytest.approx(sign * abs(start_posx))
-            assert p[f"{slot}_end_distance_m"] == pytest.approx(sign * abs(float(end_posx)))
-            assert p[f"{slot}_vehicle_type"] == cells["vehicle_type"].lower()
-        starts = [sign * abs(float(slots[s]["posx_begin_m"])) for s in slots if present[s]]
+            kind = cells["vehicle_type"].lower()  # bumper gaps in, reference-point gaps out
+            assert p[f"{slot}_distance_m"] == pytest.approx(
+                reference_gap_m(sign * abs(start_posx), kind))
+            assert p[f"{slot}_end_distance_m"] == pytest.approx(
+                reference_gap_m(sign * abs(float(end_posx)), kind))
+            assert p[f"{slot}_vehicle_type"] == kind
+        starts = [reference_gap_m(sign * abs(float(slots[s]["posx_begin_m"])),
+                                  slots[s]["vehicle_type"].lower())
+                  for s in slots if present[s]]
         assert p["gap_ahead_m"] == pytest.approx(max([g for g in starts if g > 0], default=0.0))
         assert p["gap_behind_m"] == pytest.approx(max([-g for g in starts if g < 0], default=0.0))
 
@@ -254,6 +261,7 @@ def test_follow_classes_have_no_sentinels_a_negative_cell_is_an_error(tmp_path, 
         assert p["npc_position"] == ("front" if code == "FLF" else "behind")
         assert p["npc_speed_ms"] == pytest.approx(float(r[2]) / 3.6)
         assert p["npc_end_speed_ms"] == pytest.approx(float(r[3]) / 3.6)
-        assert p["npc_distance_m"] == pytest.approx(sign * float(r[4]))
-        assert p["npc_distance_end_m"] == pytest.approx(sign * float(r[5]))
+        kind = r[10].lower()  # bumper gaps in, reference-point gaps out
+        assert p["npc_distance_m"] == pytest.approx(reference_gap_m(sign * float(r[4]), kind))
+        assert p["npc_distance_end_m"] == pytest.approx(reference_gap_m(sign * float(r[5]), kind))
         assert p["behavior_type"] == r[9]

@@ -1,22 +1,38 @@
 """Playing one prepared scenario in esmini's library, in a child process with a time limit.
 
 esmini keeps global state and aborts the process on some errors (``LOG_ERROR_AND_QUIT``), so a
-scenario is never played in the caller's process: ``play_file`` starts a child (forked from a
-small server process that has already loaded the library), which steps the scenario at a fixed
-time step and sends back every entity's state at each step, the collisions esmini detected and
-the storyboard's state changes. A crash, an abort or a hang of the engine becomes a
-``Playback`` with ``engine_error`` set, never an exception of the caller.
+scenario is never played in the caller's process. A small *player server* (one per caller
+process, started on first use: a fresh interpreter that imports the player and loads the
+library once) forks one child per scenario; the child steps the scenario at a fixed time step
+and sends back every entity's state at each step, the collisions esmini detected and the
+storyboard's state changes. The server kills a child still running after the wall-clock limit.
+A crash, an abort or a hang of the engine becomes a ``Playback`` with ``engine_error`` set,
+never an exception of the caller.
+
+Why not ``multiprocessing``: a forkserver (or spawn) child re-imports the caller's
+``__main__`` module, and everything it imports, for every scenario (40 ms for the CLI, 0.4 s
+for a script importing numpy and scipy), and forking the caller itself is unsafe once it runs
+threads (the agent's LLM). The server is a fork of a process that holds nothing but the player.
 """
 
 from __future__ import annotations
 
+import atexit
 import ctypes
-import multiprocessing
+import itertools
 import os
+import pickle
+import select
+import shutil
+import signal
+import struct
+import subprocess
+import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from player.locate import find_esmini
 from player.playback import Playback, StoryboardChange
@@ -27,6 +43,22 @@ ELEMENT_TYPES = {1: "storyboard", 2: "story", 3: "act", 4: "maneuver_group", 5: 
 ELEMENT_STATES = {0: "init", 1: "standby", 2: "running", 3: "complete"}
 #: how many log lines of esmini a playback keeps (warnings and errors first)
 LOG_LINES_KEPT = 40
+#: how a playback's ``engine_error`` begins when the wall-clock limit stopped it
+TIMEOUT_MESSAGE = "esmini did not finish within"
+#: how long past the wall-clock limit the caller waits for the server's answer (s)
+SERVER_GRACE_S = 20.0
+#: how long the server may take to start (import the engine, load the library) (s)
+SERVER_START_S = 60.0
+#: the server's program: the engine and the modules it imports (plain Python), without the
+#: package's __init__ (which imports the whole player, numpy and lxml: 0.2 s more per start)
+SERVER_PROGRAM = """
+import sys, types
+package = types.ModuleType("player")
+package.__path__ = [sys.argv[1]]
+sys.modules["player"] = package
+from player.engine import serve
+serve()
+"""
 
 
 class ObjectState(ctypes.Structure):
@@ -70,10 +102,11 @@ def _load(library_path: str) -> Any:
 
 
 def preload() -> None:
-    """Load the library in the fork server, so that each child starts with it loaded."""
+    """Load the library in this process (the server), so that each child starts with it."""
     _load(str(find_esmini().library))
 
 
+# --- the child: one scenario ------------------------------------------------------------------
 def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_s: float,
                    log_path: str) -> dict:
     """The child's work: init, step to ``until_s`` (or esmini's quit), record everything."""
@@ -93,7 +126,8 @@ def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_
     started = time.perf_counter()
     if lib.SE_InitWithArgs(len(args), argv) != 0:
         return {"engine_error": "esmini could not load the scenario (SE_InitWithArgs failed)",
-                "storyboard": [c.to_list() for c in changes]}
+                "storyboard": [c.to_list() for c in changes],
+                "marks": {"started": started, "loaded": time.perf_counter()}}
     loaded = time.perf_counter()
     # SE_InitWithArgs clears the callbacks, so it is registered after (the storyboard only
     # starts in the first step)
@@ -118,23 +152,16 @@ def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_
     while lib.SE_GetQuitFlag() == 0 and lib.SE_GetSimulationTime() < until_s - 1e-9:
         lib.SE_StepDT(time_step_s)
         record()
+    stepped = time.perf_counter()
     quit_flag = lib.SE_GetQuitFlag()
-    lib.SE_Close()
+    lib.SE_Close()  # flushes esmini's log, which the caller reads
     playback.storyboard = changes
     playback.quit_by_engine = bool(quit_flag) and playback.times[-1] < until_s - time_step_s
     playback.timings_s = {"load": round(loaded - started, 4),
-                          "step": round(time.perf_counter() - loaded, 4)}
-    return playback.to_dict()
-
-
-def _child(conn: Any, *args: Any) -> None:
-    _silence_stdio()  # esmini prints its version and config lines even with --disable_stdout
-    try:
-        conn.send(_step_scenario(*args))
-    except Exception as err:  # noqa: BLE001 - reported to the parent as the engine's error
-        conn.send({"engine_error": f"{type(err).__name__}: {err}"})
-    finally:
-        conn.close()
+                          "step": round(stepped - loaded, 4)}
+    reply = playback.to_dict()
+    reply["marks"] = {"started": started, "loaded": loaded, "stepped": stepped}
+    return reply
 
 
 def _silence_stdio() -> None:
@@ -144,16 +171,228 @@ def _silence_stdio() -> None:
     os.close(devnull)
 
 
-_context: Any = None
+# --- the server: forks a child per scenario, enforces the wall-clock limit -------------------
+def serve() -> None:
+    """The player server's loop: one request (a pickled dict) in on stdin, one reply out on
+    the original stdout, until stdin closes (``SERVER_PROGRAM`` runs it); esmini's own output
+    goes to /dev/null."""
+    requests = os.fdopen(os.dup(0), "rb", buffering=0)
+    replies = os.fdopen(os.dup(1), "wb", buffering=0)
+    devnull = os.open(os.devnull, os.O_RDWR)
+    os.dup2(devnull, 0)
+    os.dup2(devnull, 1)
+    os.close(devnull)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the caller's Ctrl-C is the caller's
+    try:
+        preload()
+    except Exception as err:  # noqa: BLE001 - answered to every request instead
+        broken = f"{type(err).__name__}: {err}"
+    else:
+        broken = ""
+    _write_frame(replies, {"ready": not broken, "problem": broken})
+    while (request := _read_frame(requests)) is not None:
+        _write_frame(replies, _run_child(request) if not broken else {"server_error": broken})
 
 
-def _process_context() -> Any:
-    """A forkserver context whose server has the library loaded (children start in ms)."""
-    global _context
-    if _context is None:
-        _context = multiprocessing.get_context("forkserver")
-        _context.set_forkserver_preload(["player.preloaded"])
-    return _context
+def _run_child(request: dict) -> dict:
+    """Fork a child playing ``request``; its reply, or why there is none."""
+    reading, writing = os.pipe()
+    forked = time.perf_counter()
+    pid = os.fork()
+    if pid == 0:  # the child
+        os.close(reading)
+        code = 0
+        try:
+            _silence_stdio()
+            try:
+                reply = _step_scenario(request["library"], request["xosc"],
+                                       request["time_step_s"], request["until_s"],
+                                       request["log"])
+            except Exception as err:  # noqa: BLE001 - reported as the engine's error
+                reply = {"engine_error": f"{type(err).__name__}: {err}"}
+            reply.setdefault("marks", {})["forked"] = forked
+            data = pickle.dumps(reply, pickle.HIGHEST_PROTOCOL)
+            with os.fdopen(writing, "wb") as out:
+                out.write(data)
+        except BaseException:  # noqa: BLE001 - the exit code says it
+            code = 70
+        finally:
+            os._exit(code)
+    os.close(writing)
+    chunks, timed_out = [], False
+    deadline = forked + request["wall_time_s"]
+    with os.fdopen(reading, "rb", buffering=0) as pipe:
+        while True:
+            remaining = deadline - time.perf_counter()
+            if remaining <= 0:
+                timed_out = True
+                os.kill(pid, signal.SIGKILL)
+                break
+            if not select.select([pipe], [], [], remaining)[0]:
+                continue
+            chunk = pipe.read(1 << 20)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    _, status = os.waitpid(pid, 0)
+    exitcode = os.waitstatus_to_exitcode(status)
+    reply = None
+    if not timed_out and exitcode == 0:
+        try:
+            reply = pickle.loads(b"".join(chunks))
+        except Exception:  # noqa: BLE001 - a torn reply is no reply
+            reply = None
+    return {"reply": reply, "exitcode": exitcode, "timed_out": timed_out}
+
+
+def _write_frame(stream: BinaryIO, obj: Any) -> None:
+    data = pickle.dumps(obj, pickle.HIGHEST_PROTOCOL)
+    view = memoryview(struct.pack("<Q", len(data)) + data)
+    while view:  # an unbuffered stream may take part of it
+        view = view[stream.write(view) or 0:]
+
+
+def _read_frame(stream: BinaryIO) -> Any:
+    header = _read_exact(stream, 8)
+    if header is None:
+        return None
+    data = _read_exact(stream, struct.unpack("<Q", header)[0])
+    return None if data is None else pickle.loads(data)
+
+
+def _read_exact(stream: BinaryIO, size: int) -> bytes | None:
+    parts, left = [], size
+    while left:
+        chunk = stream.read(left)
+        if not chunk:
+            return None
+        parts.append(chunk)
+        left -= len(chunk)
+    return b"".join(parts)
+
+
+class _Server:
+    """The caller's handle on its player server (started on first use, again after a crash;
+    a fork of the caller starts its own)."""
+
+    def __init__(self) -> None:
+        self.forget()
+
+    def forget(self) -> None:
+        """Drop the handle without touching the server (in a forked child of the caller)."""
+        self.process: subprocess.Popen | None = None
+        self.ready = False
+        self.lock = threading.Lock()
+        self.stderr: Path | None = None
+
+    def launch(self) -> None:
+        """Start the server if there is none, without waiting for it."""
+        if self.process is not None and self.process.poll() is None:
+            return
+        self.process, self.ready = None, False
+        self.stderr = _scratch() / f"server-{os.getpid()}.log"
+        with open(self.stderr, "wb") as errors:
+            self.process = subprocess.Popen(
+                [sys.executable, "-c", SERVER_PROGRAM, str(Path(__file__).resolve().parent)],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors, bufsize=0,
+                close_fds=True, start_new_session=True)
+
+    def ask(self, request: dict, timeout_s: float) -> dict:
+        """Send ``request``; the server's reply, or ``{"server_error": why}``."""
+        with self.lock:
+            problem = self._start()
+            if problem:
+                return {"server_error": problem}
+            process = self.process
+            try:
+                _write_frame(process.stdin, request)
+                if not select.select([process.stdout], [], [], timeout_s)[0]:
+                    self.stop()
+                    return {"server_error": f"the player server did not answer in {timeout_s:g} s"}
+                reply = _read_frame(process.stdout)
+            except (OSError, EOFError, pickle.UnpicklingError) as err:
+                reply, problem = None, f"{type(err).__name__}: {err}"
+            if reply is None:
+                why = problem or self._last_words()
+                self.stop()
+                return {"server_error": f"the player server ended ({why})"}
+            return reply
+
+    def _start(self) -> str:
+        """Launch the server if needed and wait until it has loaded the library."""
+        self.launch()
+        if self.ready:
+            return ""
+        process = self.process
+        try:
+            if not select.select([process.stdout], [], [], SERVER_START_S)[0]:
+                raise TimeoutError(f"no answer in {SERVER_START_S:g} s")
+            hello = _read_frame(process.stdout)
+        except (OSError, EOFError, TimeoutError, pickle.UnpicklingError) as err:
+            hello = {"ready": False, "problem": f"{type(err).__name__}: {err}"}
+        if not hello or not hello.get("ready"):
+            problem = (hello or {}).get("problem") or self._last_words()
+            self.stop()
+            return f"the player server did not start ({problem})"
+        self.ready = True
+        return ""
+
+    def _last_words(self) -> str:
+        try:
+            lines = self.stderr.read_text(errors="replace").strip().splitlines()
+        except (OSError, AttributeError):
+            lines = []
+        return lines[-1] if lines else "no message"
+
+    def stop(self) -> None:
+        process, self.process, self.ready = self.process, None, False
+        if process is None:
+            return
+        try:
+            process.stdin.close()
+            process.wait(timeout=2)
+        except (OSError, subprocess.TimeoutExpired):
+            process.kill()
+            process.wait()
+        finally:
+            process.stdout.close()
+
+
+_server = _Server()
+atexit.register(_server.stop)
+os.register_at_fork(after_in_child=_server.forget)
+_folder: Path | None = None
+_counter = itertools.count()
+
+
+def _scratch() -> Path:
+    """A folder of this process for scenario copies and esmini's logs."""
+    global _folder
+    if _folder is None or not _folder.is_dir():
+        _folder = Path(tempfile.mkdtemp(prefix="scenweave-esmini-"))
+        atexit.register(shutil.rmtree, _folder, True)
+    return _folder
+
+
+def warm_up() -> None:
+    """Start the player server now (it loads while the caller prepares the scenario)."""
+    with _server.lock:
+        _server.launch()
+
+
+def play_xml(xosc: bytes, until_s: float, time_step_s: float = 0.05,
+             wall_time_s: float = 30.0) -> Playback:
+    """Play a prepared (esmini-ready) scenario given as XML; never raises for the scenario.
+
+    The child is killed after ``wall_time_s``; what esmini logged is kept in the playback.
+    """
+    name = f"{os.getpid()}-{next(_counter)}"
+    path = _scratch() / f"{name}.xosc"
+    path.write_bytes(xosc)
+    try:
+        return play_file(path, until_s, time_step_s, wall_time_s)
+    finally:
+        path.unlink(missing_ok=True)
 
 
 def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
@@ -161,45 +400,40 @@ def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
     """Play a prepared (esmini-ready) scenario file headless; never raises for the scenario.
 
     The child is killed after ``wall_time_s``; what esmini logged is kept in the playback.
+    ``timings_s``: ``start`` (until the child runs), ``load``, ``step``, ``collect`` (the
+    playback back here), ``total``.
     """
     library = str(find_esmini().library)
-    context = _process_context()
-    with tempfile.TemporaryDirectory(prefix="scenweave-esmini-") as tmp:
-        log_path = os.path.join(tmp, "esmini.log")
-        receiver, sender = context.Pipe(duplex=False)
-        child = context.Process(target=_child, daemon=True,
-                                args=(sender, library, str(xosc_path), time_step_s, until_s,
-                                      log_path))
-        started = time.perf_counter()
-        child.start()
-        sender.close()
-        reply = _receive(receiver, wall_time_s)
-        child.join(timeout=0 if reply is None else 5)
-        if child.is_alive():
-            child.kill()
-            child.join()
-        log = _log_lines(log_path)
+    log_path = _scratch() / f"{os.getpid()}-{next(_counter)}.log"
+    started = time.perf_counter()
+    answer = _server.ask({"library": library, "xosc": str(Path(xosc_path).resolve()),
+                          "time_step_s": time_step_s, "until_s": until_s,
+                          "log": str(log_path), "wall_time_s": wall_time_s},
+                         wall_time_s + SERVER_GRACE_S)
+    reply = answer.get("reply")
+    log = _log_lines(log_path)
+    log_path.unlink(missing_ok=True)
     if reply is None:
-        why = (f"esmini did not finish within {wall_time_s:g} s (ReplaySettings.wall_time_s)"
-               if child.exitcode in (None, -9) else
-               f"esmini ended the process (exit code {child.exitcode})")
+        if answer.get("server_error"):
+            why = answer["server_error"]
+        elif answer.get("timed_out"):
+            why = f"{TIMEOUT_MESSAGE} {wall_time_s:g} s (ReplaySettings.wall_time_s)"
+        else:
+            why = f"esmini ended the process (exit code {answer.get('exitcode')})"
         reply = {"engine_error": why}
+    marks = reply.pop("marks", {})
     playback = Playback.from_dict(reply)
     playback.log = log
-    playback.timings_s["total"] = round(time.perf_counter() - started, 4)
+    done = time.perf_counter()
+    if "started" in marks:
+        playback.timings_s["start"] = round(marks["started"] - started, 4)
+    if "stepped" in marks:
+        playback.timings_s["collect"] = round(done - marks["stepped"], 4)
+    playback.timings_s["total"] = round(done - started, 4)
     return playback
 
 
-def _receive(receiver: Any, wall_time_s: float) -> dict | None:
-    try:
-        if receiver.poll(wall_time_s):
-            return receiver.recv()
-    except (EOFError, OSError):
-        pass
-    return None
-
-
-def _log_lines(path: str) -> list[str]:
+def _log_lines(path: Path) -> list[str]:
     try:
         lines = Path(path).read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError:

@@ -1,4 +1,4 @@
-"""How a replay runs: time step, wall-clock limit, how long past the scenario's end."""
+"""How a replay runs: time step, wall-clock limit, how long past the scenario's end, the map."""
 
 from __future__ import annotations
 
@@ -15,3 +15,6 @@ class ReplaySettings:
     wall_time_s: float = 30.0
     #: how long a scenario plays when its file states no stop time (s)
     default_duration_s: float = 60.0
+    #: play on a copy of the map cut to the roads the scenario reaches (``player.maps``); a
+    #: replay whose entities leave them is played again on the whole map
+    cut_map: bool = True

@@ -341,20 +341,16 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
                    ego: str = "hero") -> float | None:
     """Metres from the ego's reference point to ``entity``'s, along ``entity``'s lane, at
     ``time_s`` (positive ahead). The ego's position is carried sideways onto that lane at its
-    own ``s`` (the two share a road), or, on another road, the lane id beside it."""
+    own ``s``: the entity's lane id on a shared road, else the ego's lane or the lane beside it
+    on either side (lane ids change across road ends, the chain of lanes does not)."""
     import spawn_db
 
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[ego], playback.tracks[entity]
-    lane_b = tb["lane"][i]
-    starts = [(ta["road"][i], lane_b, playback.value(ego, "s", time_s))]
-    if ta["road"][i] != tb["road"][i]:
-        offset = lane_b - tb["lane"][0] if tb["road"][0] == ta["road"][0] else 0
-        starts.append((ta["road"][i], ta["lane"][i] + offset, playback.value(ego, "s", time_s)))
-    end = (tb["road"][i], lane_b, playback.value(entity, "s", time_s))
-    for road, lane, s in starts:
-        if lane == 0:
-            continue
+    road, s = ta["road"][i], playback.value(ego, "s", time_s)
+    end = (tb["road"][i], tb["lane"][i], playback.value(entity, "s", time_s))
+    for lane in _lanes_beside(road, ta["lane"][i], tb["lane"][i] if tb["road"][i] == road
+                              else None, s, map_path):
         try:
             along = spawn_db.distance_along_lane(road, lane, s, *end, map_path=map_path)
         except spawn_db.SpawnDbError:
@@ -362,6 +358,23 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
         if along is not None:
             return along
     return None
+
+
+def _lanes_beside(road, ego_lane: int, shared_lane: int | None, s: float,
+                  map_path) -> list[int]:
+    """Lane ids on the ego's road to measure from: the other's own (same road), the ego's,
+    and the same-direction lanes left and right of it."""
+    import spawn_db
+
+    lanes = [lane for lane in (shared_lane, ego_lane) if lane]
+    network = spawn_db.road_network(map_path)
+    try:
+        key = network.key_at(road, ego_lane, s)
+    except spawn_db.SpawnDbError:
+        return lanes
+    lanes += [n.lane_id for side in ("left", "right")
+              if (n := network.neighbour(key, side)) is not None]
+    return list(dict.fromkeys(lanes))
 
 
 def lane_changes(playback, entity: str) -> list[tuple[float, str]]:

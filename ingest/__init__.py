@@ -1,18 +1,21 @@
 """Ingest: raw MOOVE data -> canonical records -> flat params (docs/params.md).
 
 Public API: ``ingest_directory``, ``iter_raw_records``, ``load_records``, ``extract_params``,
-``extract_with_variants``, ``load_layouts``, sample data in ``ingest.samples``.
+``extract_with_variants``, ``check_playable`` (params no replay can show are an input issue),
+``load_layouts``, sample data in ``ingest.samples``.
 """
 
 from ingest.batch import ingest_directory, iter_raw_records
 from ingest.extract import extract_params
 from ingest.issues import IngestError, IngestReport, Issue, LayoutError
 from ingest.layouts import load_layouts
+from ingest.playable import check_playable
 from ingest.records import check_record, load_records
 from ingest.variants import extract_with_variants
 
 __all__ = [
-    "IngestError", "IngestReport", "Issue", "LayoutError", "check_record", "extract_params",
+    "IngestError", "IngestReport", "Issue", "LayoutError", "check_playable", "check_record",
+    "extract_params",
     "extract_with_variants", "ingest_directory", "iter_raw_records", "load_layouts",
     "load_records",
 ]

@@ -8,12 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from corpus.corpus_utils import clearance_m, reference_gap_m
-from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
+from corpus.corpus_utils import reference_gap_m
 from ingest.freeride import SLOTS, slot_params
 from ingest.issues import RecordIssue
 from ingest.layouts import FAMILY_OF_CLASS, default_layouts
-from schemas.replay import GAP_TOL_M
 
 KMH = 3.6
 HIGHWAY_MANEUVER_START_S = 2.0
@@ -92,14 +90,6 @@ def record_conventions(record: dict) -> dict:
 
 
 def _brake(raw: dict, code: str, conventions: dict) -> dict:
-    lead_ms, delta_ms = raw["lead_vel_kmh"] / KMH, raw["delta_vel_kmh"] / KMH
-    slowed = min(max(-delta_ms, 0.0), max(lead_ms, 0.0))
-    if raw["duration_s"] > 0 and slowed / raw["duration_s"] > MAX_PLAYABLE_DECELERATION_MS2:
-        raise RecordIssue(
-            f"the lead slows by {slowed:.1f} m/s within {raw['duration_s']:g} s "
-            f"({slowed / raw['duration_s']:.1f} m/s^2): harder than any car brakes "
-            f"(scenarios allow {MAX_PLAYABLE_DECELERATION_MS2:g} m/s^2), no replay can show it",
-            field="delta_vel_kmh")
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": raw["lead_vel_kmh"] / KMH,
@@ -116,9 +106,6 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
     except KeyError as err:
         raise RecordIssue("the layout gives no relative_speed_sign for this class",
                           field="conventions.relative_speed_sign") from err
-    if code == "CINB":
-        _merges_behind(raw, max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0),
-                       conventions)
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
@@ -127,25 +114,6 @@ def _cut(raw: dict, code: str, conventions: dict) -> dict:
         "lane_change_direction": raw["direction"].lower(),
         "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
     }
-
-
-def _merges_behind(raw: dict, npc_kmh: float, conventions: dict) -> None:
-    """A cut-in behind ends with the car behind the ego (the ego keeps its speed): a record
-    whose speeds bring it level with the ego first describes no cut-in a replay can show."""
-    npc_end_kmh = max(npc_kmh + raw["delta_vel_kmh"], 0.0)
-    closing = ((npc_kmh + npc_end_kmh) / 2 - raw["ego_vel_kmh"]) / KMH * raw["duration_s"]
-    kind = str(raw["lead_vehicle_type"]).lower()
-    start = raw["npc_distance_m"]
-    if conventions.get("gaps_between", "reference_points") == "bumpers":
-        start = reference_gap_m(start, kind)
-    end_gap = start + closing
-    room = clearance_m(kind)
-    if end_gap > -room:
-        raise RecordIssue(
-            f"the car merging behind starts {raw['npc_distance_m']:g} m behind the ego and "
-            f"gains {closing:.1f} m in {raw['duration_s']:g} s: it would end {end_gap:.1f} m from "
-            f"the ego's reference point, not behind it (at least {room:.1f} m)",
-            field="npc_distance_m")
 
 
 def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
@@ -158,7 +126,6 @@ def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
 
 def _follow(raw: dict, code: str, conventions: dict) -> dict:
     sign = -1.0 if code == "FLB" else 1.0
-    _gaps_follow_from_speeds(raw, sign)
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
@@ -170,19 +137,6 @@ def _follow(raw: dict, code: str, conventions: dict) -> dict:
         "behavior_type": raw["behavior_type"],
         "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
     }
-
-
-def _gaps_follow_from_speeds(raw: dict, sign: float) -> None:
-    """A following record's end gap must be what its speeds make of its start gap (both cars
-    change speed linearly, as a scenario plays them); otherwise no replay can show both."""
-    drift = ((raw["lead_vel_begin_kmh"] + raw["lead_vel_end_kmh"])
-             - (raw["ego_vel_begin_kmh"] + raw["ego_vel_end_kmh"])) / 2 / KMH * raw["duration_s"]
-    begin, end = sign * abs(raw["npc_distance_begin_m"]), sign * abs(raw["npc_distance_end_m"])
-    if abs(begin + drift - end) > GAP_TOL_M:
-        raise RecordIssue(
-            f"the gap goes from {begin:g} m to {end:g} m, but the speeds make it "
-            f"{begin + drift:.1f} m after {raw['duration_s']:g} s (they differ by more than "
-            f"{GAP_TOL_M:g} m): no replay can show both", field="npc_distance_end_m")
 
 
 def _free_ride(raw: dict, code: str, conventions: dict) -> dict:

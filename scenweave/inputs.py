@@ -9,6 +9,7 @@ from pathlib import Path
 from ingest import (
     IngestReport,
     Issue,
+    check_playable,
     extract_params,
     extract_with_variants,
     iter_raw_records,
@@ -87,10 +88,15 @@ def _records(data: Path, loaded: LoadedInput,
 
 
 def _with_variants(record: dict, selection: InputSelection) -> list[dict]:
+    """The record's params (and its variants), each one a replay can show
+    (``ingest.check_playable``; else the record is an input issue)."""
     base = extract_params(record)
-    if not selection.variants:
-        return [base]
-    return [base, *extract_with_variants(record, selection.variants, selection.seed)]
+    made = [base]
+    if selection.variants:
+        made += extract_with_variants(record, selection.variants, selection.seed)
+    for params in made:
+        check_playable(params)
+    return made
 
 
 def _issue(record: dict, file: str, err: Exception) -> Issue:

@@ -12,6 +12,17 @@ SAMPLE_SEED = 7
 
 
 @pytest.fixture(scope="session")
+def esmini() -> None:
+    """Skip, loudly, where no esmini is installed (setup installs it: scripts/setup.d)."""
+    from player import PlayerUnavailable, find_esmini
+
+    try:
+        find_esmini()
+    except PlayerUnavailable as err:
+        pytest.skip(f"REPLAY NOT TESTED: no esmini here ({err})")
+
+
+@pytest.fixture(scope="session")
 def sample_raw(tmp_path_factory) -> Path:
     """Raw sample data in the MOOVE formats: 3 rows per highway class, 2 files per urban class."""
     root = tmp_path_factory.mktemp("sample_raw")

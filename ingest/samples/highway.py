@@ -162,7 +162,7 @@ def _free_ride(rng: np.random.Generator, n: int, code: str) -> Columns:
         "other_dir_traffic": _yes_no(rng, n),
     }
     for slot, p_present in (("center", 0.7), ("right", 0.5), ("left", 0.5)):
-        columns.update(_slot(rng, n, slot, p_present, (ego0 + ego1) / 2, duration, behind))
+        columns.update(_slot(rng, n, slot, p_present, ego0, ego1, duration, behind))
     if n >= 1:  # edge row: nobody around, every slot a sentinel (position -1, speed -3.6)
         for slot in ("center", "right", "left"):
             for key, value in (("posx_begin_m", -1.0), ("posx_end_m", -1.0),
@@ -172,20 +172,24 @@ def _free_ride(rng: np.random.Generator, n: int, code: str) -> Columns:
     return columns
 
 
-def _slot(rng: np.random.Generator, n: int, slot: str, p_present: float,
-          ego_mean_kmh: np.ndarray, duration: np.ndarray, behind: bool) -> Columns:
+def _slot(rng: np.random.Generator, n: int, slot: str, p_present: float, ego0_kmh: np.ndarray,
+          ego1_kmh: np.ndarray, duration: np.ndarray, behind: bool) -> Columns:
     present = rng.random(n) < p_present
     sign = -1 if behind else 1
-    ego_ms = ego_mean_kmh / 3.6
-    speed0 = np.clip(ego_ms + rng.normal(0, 2.5, n), 5, None)
+    ego0, ego1 = ego0_kmh / 3.6, ego1_kmh / 3.6
+    # the slot's speed relative to the ego keeps its sign over the record, so the gap only
+    # grows or only shrinks (both change speed linearly), and it ends no closer than 10 m: the
+    # end gap follows from the speeds and no car drives through the ego's
+    rel0 = np.clip(ego0 + rng.normal(0, 2.5, n), 5, None) - ego0
+    rel1 = rel0 + rng.normal(0, 0.5, n)
+    rel1 = np.where(np.sign(rel1) == np.sign(rel0), rel1, 0.0)
     gap0 = rng.uniform(15, 90, n)
-    # the end gap follows from the speeds (linear changes), and the slot's car does not come
-    # closer than 10 m: no overtaking through the ego's car
-    closing_limit = (gap0 - 10.0) / duration
-    relative = np.clip(speed0 + rng.normal(0, 1.0, n) / 2 - ego_ms, None, closing_limit) \
-        if behind else np.clip(speed0 + rng.normal(0, 1.0, n) / 2 - ego_ms, -closing_limit, None)
-    speed1 = np.clip(2 * (ego_ms + relative) - speed0, 5, None)
-    gap1 = gap0 + sign * ((speed0 + speed1) / 2 - ego_ms) * duration
+    closing = -sign * (rel0 + rel1) / 2
+    limit = (gap0 - 10.0) / duration
+    scale = np.where(closing > limit, limit / np.where(closing > 0, closing, 1.0), 1.0)
+    rel0, rel1 = rel0 * scale, rel1 * scale
+    speed0, speed1 = ego0 + rel0, ego1 + rel1
+    gap1 = gap0 + sign * (rel0 + rel1) / 2 * duration
     absent_speed = rng.choice([-3.6, -1.0], n)
     return {
         f"{slot}_posx_begin_m": np.where(present, np.round(sign * gap0, 1), -1.0),

@@ -14,7 +14,7 @@ from spawn_db import SpawnMatcher
 from tests.agent.conftest import fenced
 from tests.agent.test_graph import events, nodes_in_trace
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("esmini")]
 
 #: a script that writes the reference's file, then gives every trigger a rising edge: valid,
 #: faithful to every number, and in esmini nothing scripted at t = 0 ever happens

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from ingest import IngestReport, extract_params, iter_raw_records
+from ingest import IngestReport, check_playable, extract_params, iter_raw_records
 from ingest.issues import RecordIssue
 from tests.ingest.builders import write_npy
 
@@ -143,10 +143,12 @@ def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path)
     write_npy(tmp_path, "FLF", inconsistent)
     report = IngestReport()
     (item,) = iter_raw_records(tmp_path, report)
+    params = extract_params(item.record)  # extraction reads what the record says
     with pytest.raises(RecordIssue) as raised:
-        extract_params(item.record)
+        check_playable(params)
     assert raised.value.field == "npc_distance_end_m"
-    assert "20 m to 45 m" in raised.value.message and "80.0 m" in raised.value.message
+    # 20 and 45 m between bumpers are 24.58 and 49.58 m between reference points (a car ahead)
+    assert "24.6 m to 49.6 m" in raised.value.message and "84.6 m" in raised.value.message
 
 
 def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):
@@ -155,7 +157,7 @@ def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):
     write_npy(tmp_path, "CINB", [["108", "7.2", "0", "5", "-8", "No", "Right", "Car"]])
     (item,) = iter_raw_records(tmp_path, IngestReport())
     with pytest.raises(RecordIssue) as raised:
-        extract_params(item.record)
+        check_playable(extract_params(item.record))
     assert raised.value.field == "npc_distance_m" and "-1.9 m from the ego" in raised.value.message
 
 

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from corpus.corpus_utils import clearance_m, reference_gap_m
 from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
-from ingest import IngestReport, check_record, extract_params, iter_raw_records
+from ingest import IngestReport, check_playable, check_record, extract_params, iter_raw_records
 from ingest.issues import RecordIssue
 from ingest.layouts import load_layouts
 from tests.ingest.builders import write_npy
@@ -40,6 +40,12 @@ def _params(tmp_path, code, rows):
     return [extract_params(i.record) for i in items], report
 
 
+def _apart_at_the_start(row) -> bool:
+    """The lead stands further than the two cars' safety distance (reference points)."""
+    kind = str(row[7]).lower()
+    return reference_gap_m(float(row[4]), kind) >= clearance_m(kind)
+
+
 def _lead_deceleration(row) -> float:
     lead, delta, duration = float(row[1]) / 3.6, float(row[3]) / 3.6, float(row[2])
     slowed = min(max(-delta, 0.0), max(lead, 0.0))
@@ -49,14 +55,17 @@ def _lead_deceleration(row) -> float:
 @settings_
 @given(rows=st.lists(brake_row, min_size=1, max_size=8))
 def test_brake_rules_hold_on_any_valid_row(tmp_path, rows):
-    playable = [row for row in rows if _lead_deceleration(row) <= MAX_PLAYABLE_DECELERATION_MS2]
-    if len(playable) < len(rows):  # braking no car can: a clear issue naming the field
-        with pytest.raises(RecordIssue) as raised:
-            _params(tmp_path, "BRAKE", rows)
-        assert raised.value.field == "delta_vel_kmh" and "m/s^2" in raised.value.message
-    params, report = _params(tmp_path, "BRAKE", playable) if playable else ([], None)
-    assert report is None or (report.issues == [] and len(params) == len(playable))
-    for p, row in zip(params, playable, strict=True):
+    params, report = _params(tmp_path, "BRAKE", rows)
+    assert report.issues == [] and len(params) == len(rows)
+    for p, row in zip(params, rows, strict=True):
+        playable = (_lead_deceleration(row) <= MAX_PLAYABLE_DECELERATION_MS2
+                    and _apart_at_the_start(row))
+        if playable:
+            check_playable(p)
+        else:  # braking no car can, or a lead inside the ego: an issue naming the field
+            with pytest.raises(RecordIssue) as raised:
+                check_playable(p)
+            assert raised.value.field in ("delta_vel_kmh", "npc_distance_m")
         assert p["npc_end_speed_ms"] == pytest.approx(
             max(float(row[1]) / 3.6 + float(row[3]) / 3.6, 0.0))
         assert p["npc_end_speed_ms"] >= 0
@@ -79,24 +88,21 @@ def _merges_level_with_the_ego(row) -> bool:
 def test_a_cut_in_behind_ends_behind_the_ego_or_is_an_issue(tmp_path, rows):
     behind = [r for r in rows if float(r[4]) < 0]
     for row in behind:
+        (params,), _ = _params(tmp_path, "CINB", [row])
+        assert params["npc_distance_m"] == pytest.approx(
+            reference_gap_m(float(row[4]), str(row[7]).lower()))
         if _merges_level_with_the_ego(row):
             with pytest.raises(RecordIssue) as raised:
-                _params(tmp_path, "CINB", [row])
+                check_playable(params)
             assert raised.value.field == "npc_distance_m"
         else:
-            (params,), _ = _params(tmp_path, "CINB", [row])
-            assert params["npc_distance_m"] == pytest.approx(
-                reference_gap_m(float(row[4]), str(row[7]).lower()))
+            check_playable(params)
 
 
 @settings_
 @given(rows=st.lists(cut_row, min_size=1, max_size=8), code=st.sampled_from(
     ["CINF", "CINB", "COUTF", "COUTB"]))
 def test_cut_rows_are_kept_or_rejected_by_the_side_of_the_npc(tmp_path, rows, code):
-    if code == "CINB":  # a car merging behind must end behind (tested on its own below)
-        rows = [r for r in rows if float(r[4]) > 0 or not _merges_level_with_the_ego(r)]
-    if not rows:
-        return
     params, report = _params(tmp_path, code, rows)
     behind = code.endswith("B")
     wrong_side = [i for i, r in enumerate(rows) if (float(r[4]) > 0) == behind]
@@ -139,10 +145,6 @@ def test_npc_speed_is_ego_plus_or_minus_rel_per_class(tmp_path, data, code):
     side = gap_behind if code.endswith("B") else gap_ahead
     rows = data.draw(st.lists(st.tuples(speed, signed, signed, duration, side, yes_no,
                                         left_right, vehicle), min_size=1, max_size=6))
-    if code == "CINB":  # rows that merge level with the ego are issues (tested above)
-        rows = [r for r in rows if not _merges_level_with_the_ego(r)]
-        if not rows:
-            return
     params, report = _params(tmp_path, code, rows)
     assert report.issues == []
     for p, (ego, rel, delta, *_rest) in zip(params, rows, strict=True):
@@ -227,16 +229,6 @@ def test_free_ride_sentinels_make_slots_absent_and_nothing_else(tmp_path, data, 
 fl_number = st.one_of(speed, st.just("-1"), st.just("-3.6"))
 
 
-def _end_gap_from_speeds(row: tuple, sign: float) -> tuple | None:
-    """The row with the end gap its speeds make (a record where they differ is an issue,
-    test_highway_params); None when the other car would end on the ego's other side."""
-    ego0, ego1, lead0, lead1, gap0 = (float(c) for c in row[:5])
-    end = sign * gap0 + ((lead0 + lead1) - (ego0 + ego1)) / 2 / 3.6 * float(row[7])
-    if sign * end <= 0.01:
-        return None
-    return (*row[:5], f"{abs(end):.4f}", *row[6:])
-
-
 @settings_
 @given(rows=st.lists(st.tuples(fl_number, fl_number, fl_number, fl_number, fl_number,
                                fl_number, fl_number, duration, yes_no,
@@ -247,11 +239,6 @@ def test_follow_classes_have_no_sentinels_a_negative_cell_is_an_error(tmp_path, 
     # FL files carry no 'absent' markers: -1 or -3.6 is a bad value (its row is reported),
     # never a missing lead; a good row always has its lead, ahead (FLF) or behind (FLB)
     sign = 1.0 if code == "FLF" else -1.0
-    rows = [r if any(float(c) < 0 for c in r[:7]) else _end_gap_from_speeds(r, sign)
-            for r in rows]
-    rows = [r for r in rows if r is not None]
-    if not rows:
-        return
     params, report = _params(tmp_path, code, rows)
     bad = {i for i, r in enumerate(rows) if any(float(c) < 0 for c in r[:7])}
     assert {i.row for i in report.issues} == bad

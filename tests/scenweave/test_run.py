@@ -10,6 +10,7 @@ from click.testing import CliRunner
 
 from player import ReplaySettings
 from scenweave.cli import cli
+from scenweave.commands.agent_options import replay_settings_for
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.runner import default_matcher, run_batch
@@ -27,12 +28,12 @@ def first_run(sample_raw, tmp_path_factory, matcher):
     """The sample data through every stage, the replay in esmini included."""
     out = tmp_path_factory.mktemp("runs")
     result = run_batch(sample_raw, out, InputSelection(),
-                       PipelineSettings(no_llm=True, replay=ReplaySettings()),
+                       PipelineSettings(no_llm=True, replay=replay_settings_for(None)),
                        run_id="r1", matcher=matcher)
     return result, out
 
 
-def test_every_sample_scenario_replays_as_recorded(first_run):
+def test_every_sample_scenario_replays_as_recorded(first_run, esmini):
     result, out = first_run
     replay = result.summary["replay"]
     assert replay["played"] == result.summary["total"] == replay["passed"], replay["codes"]
@@ -42,7 +43,7 @@ def test_every_sample_scenario_replays_as_recorded(first_run):
 
 
 def test_jobs_make_the_same_scenarios_in_several_processes(first_run, sample_raw, tmp_path,
-                                                           matcher):
+                                                           matcher, esmini):
     result, out = first_run
     parallel = run_batch(sample_raw, tmp_path, InputSelection(),
                          PipelineSettings(no_llm=True, replay=ReplaySettings()),

@@ -25,7 +25,7 @@ from schemas.scenario_doc import ScenarioDoc
 from spawn_db import SpawnMatcher
 from tests.corpus.params_examples import TAGS
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("esmini")]
 
 
 @pytest.fixture(scope="module")

@@ -101,32 +101,46 @@ def judge_collisions_only(playback) -> list[Finding]:
 # --- the checks ------------------------------------------------------------------------------
 
 def _start_poses(judge: _Judge) -> None:
-    """Every vehicle starts on a driving lane, facing its lane's direction of traffic."""
+    """Every vehicle starts on a driving lane, on its centre, facing its traffic.
+
+    The lane is the one the spawn stage chose (``<prefix>_road_id/_lane_id/_s``) where params
+    name it: inside a junction, connecting roads overlap and esmini may report any of them.
+    Otherwise it is the lane esmini found the vehicle on.
+    """
     import spawn_db
 
     network = spawn_db.road_network(judge.map_path)
+    planned = {entity: prefix for entity, prefix in placed_actors(judge.params)}
     for entity in judge.playback.entities:
         track = judge.playback.tracks[entity]
-        if abs(track["lane_offset"][0]) > OFF_LANE_M:
-            judge.fail("REPLAY_OFF_LANE", f"{entity} starts {abs(track['lane_offset'][0]):.1f} m "
-                       f"from the centre of the nearest lane (road {track['road'][0]}, lane "
-                       f"{track['lane'][0]})", 0.0)
-            continue
+        lane = _planned_lane(judge.params, planned.get(entity)) or \
+            (track["road"][0], track["lane"][0], track["s"][0])
         try:
-            lane_h = network.lane_to_world(track["road"][0], track["lane"][0], track["s"][0]).h
-            drivable = network.is_drivable(track["road"][0], track["lane"][0], track["s"][0])
+            pose = network.lane_to_world(*lane)
+            drivable = network.is_drivable(*lane)
         except spawn_db.SpawnDbError:
-            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {track['road'][0]} lane "
-                       f"{track['lane'][0]}, which is not a lane of the map", 0.0)
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {lane[0]} lane {lane[1]}, "
+                       "which is not a lane of the map", 0.0)
             continue
+        off = math.hypot(track["x"][0] - pose.x, track["y"][0] - pose.y)
+        turned = math.remainder(track["h"][0] - pose.h, math.tau)
+        where = f"(road {lane[0]}, lane {lane[1]})"
         if not drivable:
-            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {track['road'][0]} lane "
-                       f"{track['lane'][0]}, which is not a driving lane", 0.0)
-        elif abs(math.remainder(track["h"][0] - lane_h, math.tau)) > WRONG_WAY_RAD:
-            judge.fail("REPLAY_WRONG_WAY", f"{entity} starts facing "
-                       f"{math.degrees(math.remainder(track['h'][0] - lane_h, math.tau)):.0f} deg "
-                       f"off its lane's direction of traffic (road {track['road'][0]}, lane "
-                       f"{track['lane'][0]})", 0.0)
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts on a lane that is not a driving lane "
+                       f"{where}", 0.0)
+        elif off > OFF_LANE_M:
+            judge.fail("REPLAY_OFF_LANE", f"{entity} starts {off:.1f} m from the centre of its "
+                       f"lane {where}", 0.0)
+        elif abs(turned) > WRONG_WAY_RAD:
+            judge.fail("REPLAY_WRONG_WAY", f"{entity} starts facing {math.degrees(turned):.0f} "
+                       f"deg off its lane's direction of traffic {where}", 0.0)
+
+
+def _planned_lane(params: dict, prefix: str | None) -> tuple | None:
+    if prefix is None:
+        return None
+    lane = tuple(params.get(f"{prefix}_{key}") for key in ("road_id", "lane_id", "s"))
+    return None if None in lane else lane
 
 
 def _actors_present(judge: _Judge) -> None:

@@ -32,7 +32,7 @@ SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", 
 HOUR_S = 3600.0
 #: replay figures embedded in a run's report: every failed replay, up to this many passing
 #: ones per class, at most this many in all
-REPLAY_PASSING_PER_CLASS = 2
+REPLAY_PASSING_PER_CLASS = 1
 REPLAY_FIGURES_MAX = 40
 
 

@@ -196,7 +196,7 @@ def test_the_picks_are_every_failure_and_two_passing_per_class_within_the_cap():
                 "replay": {"played": True, "passed": passed, "codes": [] if passed else ["X"]}}
 
     replayed = [outcome(i, code, i % 3 == 0) for code in ("A", "B") for i in range(9)]
-    picks = replay_figure_picks(replayed)
+    picks = replay_figure_picks(replayed, passing_per_class=2)
     assert [o["replay"]["passed"] for o in picks] == [False] * 12 + [True] * 4
     assert {o["scenario_id"] for o in picks if o["replay"]["passed"]} == {
         "A_0", "A_3", "B_0", "B_3"}

@@ -55,23 +55,26 @@ def _brakes_as_a_car_can(params: dict) -> None:
             field="delta_vel_kmh")
 
 
+def _gained_m(params: dict) -> float:
+    """How much the NPC gains on the ego over the record (m; negative: it drops back)."""
+    duration = params["duration_s"]
+    return _profile(params, "npc").distance(duration) - _profile(params, "ego").distance(duration)
+
+
 def _end_gap_follows_from_speeds(params: dict) -> None:
     """A following record's end gap is what its speeds make of its start gap."""
-    duration = params["duration_s"]
-    drift = _profile(params, "npc").distance(duration) - _profile(params, "ego").distance(duration)
     begin, end = params["npc_distance_m"], params["npc_distance_end_m"]
-    if abs(begin + drift - end) > GAP_TOL_M:
+    made = begin + _gained_m(params)
+    if abs(made - end) > GAP_TOL_M:
         raise RecordIssue(
             f"the gap (reference points) goes from {begin:.1f} m to {end:.1f} m, but the speeds "
-            f"make it "
-            f"{begin + drift:.1f} m after {duration:g} s (they differ by more than "
+            f"make it {made:.1f} m after {params['duration_s']:g} s (they differ by more than "
             f"{GAP_TOL_M:g} m): no replay can show both", field="npc_distance_end_m")
 
 
 def _merges_behind(params: dict) -> None:
     """A cut-in behind ends with the car behind the ego (the ego keeps its speed)."""
-    duration = params["duration_s"]
-    gained = _profile(params, "npc").distance(duration) - _profile(params, "ego").distance(duration)
+    duration, gained = params["duration_s"], _gained_m(params)
     end_gap = params["npc_distance_m"] + gained
     room = clearance_m(params.get("npc_vehicle_type"))
     if end_gap > -room:

@@ -23,12 +23,10 @@ import itertools
 import os
 import pickle
 import select
-import shutil
 import signal
 import struct
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -36,6 +34,7 @@ from typing import Any, BinaryIO
 
 from player.locate import find_esmini
 from player.playback import Playback, StoryboardChange
+from player.scratch import scratch_folder
 
 #: esmini's StoryBoardElement::ElementType and ::State (esminiLib.hpp's public enum values)
 ELEMENT_TYPES = {1: "storyboard", 2: "story", 3: "act", 4: "maneuver_group", 5: "maneuver",
@@ -290,7 +289,7 @@ class _Server:
         if self.process is not None and self.process.poll() is None:
             return
         self.process, self.ready = None, False
-        self.stderr = _scratch() / f"server-{os.getpid()}.log"
+        self.stderr = scratch_folder("esmini") / f"server-{os.getpid()}.log"
         with open(self.stderr, "wb") as errors:
             self.process = subprocess.Popen(
                 [sys.executable, "-c", SERVER_PROGRAM, str(Path(__file__).resolve().parent)],
@@ -361,17 +360,7 @@ class _Server:
 _server = _Server()
 atexit.register(_server.stop)
 os.register_at_fork(after_in_child=_server.forget)
-_folder: Path | None = None
 _counter = itertools.count()
-
-
-def _scratch() -> Path:
-    """A folder of this process for scenario copies and esmini's logs."""
-    global _folder
-    if _folder is None or not _folder.is_dir():
-        _folder = Path(tempfile.mkdtemp(prefix="scenweave-esmini-"))
-        atexit.register(shutil.rmtree, _folder, True)
-    return _folder
 
 
 def warm_up() -> None:
@@ -387,7 +376,7 @@ def play_xml(xosc: bytes, until_s: float, time_step_s: float = 0.05,
     The child is killed after ``wall_time_s``; what esmini logged is kept in the playback.
     """
     name = f"{os.getpid()}-{next(_counter)}"
-    path = _scratch() / f"{name}.xosc"
+    path = scratch_folder("esmini") / f"{name}.xosc"
     path.write_bytes(xosc)
     try:
         return play_file(path, until_s, time_step_s, wall_time_s)
@@ -404,7 +393,7 @@ def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
     playback back here), ``total``.
     """
     library = str(find_esmini().library)
-    log_path = _scratch() / f"{os.getpid()}-{next(_counter)}.log"
+    log_path = scratch_folder("esmini") / f"{os.getpid()}-{next(_counter)}.log"
     started = time.perf_counter()
     answer = _server.ask({"library": library, "xosc": str(Path(xosc_path).resolve()),
                           "time_step_s": time_step_s, "until_s": until_s,

@@ -44,19 +44,18 @@ file's identity (path, mtime, size) and the kept road set.
 
 from __future__ import annotations
 
-import atexit
 import copy
 import hashlib
 import heapq
 import math
-import shutil
-import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from lxml import etree
+
+from player.scratch import scratch_folder
 
 #: a WorldPosition starts an entity on every road passing this close (m)
 SEED_NEAR_M = 20.0
@@ -97,7 +96,6 @@ UNBOUNDED_ACTIONS = {"FollowTrajectoryAction", "SynchronizeAction", "Longitudina
                      "SpeedProfileAction", "RandomRouteAction", "ParameterAction",
                      "VariableAction", "CustomCommandAction", "UserDefinedAction"}
 
-_folder: Path | None = None
 _prepared: dict[tuple, Path] = {}
 _indexes: dict[tuple, MapIndex] = {}
 _cuts: dict[tuple, Path] = {}
@@ -115,7 +113,7 @@ def esmini_map(map_path: Path) -> Path:
     """A copy of the whole ``map_path`` esmini can load (cached per process)."""
     key = map_identity(map_path)
     if key not in _prepared:
-        target = _cache_folder() / f"{Path(key[0]).stem}-{_digest(key)}.xodr"
+        target = scratch_folder("maps") / f"{Path(key[0]).stem}-{_digest(key)}.xodr"
         _prepared_tree(Path(key[0])).write(str(target), xml_declaration=True, encoding="utf-8")
         _prepared[key] = target
     return _prepared[key]
@@ -866,7 +864,7 @@ def cut_map(map_path: Path, roads: frozenset[str] | None) -> Path:
     key = (index.identity, roads)
     if key not in _cuts:
         digest = _digest((index.identity, sorted(roads)))
-        target = _cache_folder() / f"{Path(index.identity[0]).stem}-cut-{digest}.xodr"
+        target = scratch_folder("maps") / f"{Path(index.identity[0]).stem}-cut-{digest}.xodr"
         target.write_bytes(cut_xml(index, roads))
         _cuts[key] = target
     return _cuts[key]
@@ -957,9 +955,3 @@ def _digest(key: tuple) -> str:
     return hashlib.sha256(repr(key).encode()).hexdigest()[:12]
 
 
-def _cache_folder() -> Path:
-    global _folder
-    if _folder is None or not _folder.is_dir():
-        _folder = Path(tempfile.mkdtemp(prefix="scenweave-maps-"))
-        atexit.register(shutil.rmtree, _folder, True)
-    return _folder

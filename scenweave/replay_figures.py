@@ -569,14 +569,13 @@ def _lane_borders(network: Any) -> list[tuple[tuple[float, float, float, float],
                                               np.ndarray]]:
     """(x0, x1, y0, y1), in a junction, (n, 2) points of each border of every drivable lane,
     sampled every ~2 m along the road (as spawn_db's map picture does). Once per map."""
-    from spawn_db.lanes import lane_border_offsets
+    from spawn_db.lanes import lane_border_offsets, section_samples
 
     found = []
     for key in network.drivable_lanes():
         road = network.road(key.road_id)
         section = road.sections[key.section]
-        s = np.linspace(section.s_start, section.s_end,
-                        max(2, int((section.s_end - section.s_start) / 2.0) + 1))
+        s = section_samples(section)
         inner, outer = lane_border_offsets(road, section, key.lane_id, s)
         pose = road.plan_view.pose(s)
         for t in (inner[0], outer[0]):

@@ -83,6 +83,12 @@ def lane_center_offset(road: Road, section: LaneSection, lane_id: int,
     return centre[0], centre[1]
 
 
+def section_samples(section: LaneSection, step_m: float = 2.0) -> np.ndarray:
+    """``s`` along a lane section about ``step_m`` apart, both ends included (for drawing)."""
+    return np.linspace(section.s_start, section.s_end,
+                       max(2, int((section.s_end - section.s_start) / step_m) + 1))
+
+
 def lane_width(road: Road, section: LaneSection, lane_id: int, s: np.ndarray) -> np.ndarray:
     """Width of the lane at ``s``."""
     return _lane(section, lane_id, road).width.value(s)

@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
 from spawn_db.database import write_bytes_atomic  # noqa: E402
-from spawn_db.lanes import lane_center_offset  # noqa: E402
+from spawn_db.lanes import lane_center_offset, section_samples  # noqa: E402
 from spawn_db.road_network import RoadNetwork  # noqa: E402
 from spawn_db.signals import is_traffic_light, signal_position  # noqa: E402
 
@@ -77,8 +77,7 @@ def _draw_roads(axes, network: RoadNetwork) -> None:
     for key in network.drivable_lanes():
         road = network.road(key.road_id)
         section = road.sections[key.section]
-        s = np.linspace(section.s_start, section.s_end,
-                        max(2, int((section.s_end - section.s_start) / 2.0) + 1))
+        s = section_samples(section)
         t, _ = lane_center_offset(road, section, key.lane_id, s)
         pose = road.plan_view.pose(s)
         x = pose.x - t * np.sin(pose.hdg)

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from agent.repair import checked_repair
 from sandbox import SandboxSettings
 
 LLM_CHOICES = ("ollama", "embedded", "replay", "none")
@@ -80,18 +81,3 @@ class AgentSettings:
         if self.llm == "ollama":
             data["ollama_host"] = self.host
         return data
-
-
-def checked_repair(name: str) -> str:
-    """``name`` as a strategy module name (``patch``, ``error_feedback``); a ValueError naming
-    ``--repair`` and the choices when there is no such strategy."""
-    # imported here: agent.repair's modules import the agent's code and prompt modules, which
-    # must stay free to import these settings
-    from agent.repair import strategy_names
-
-    module_name = name.replace("-", "_")
-    names = strategy_names()
-    if module_name not in names:
-        choices = ", ".join(n.replace("_", "-") for n in names)
-        raise ValueError(f"--repair {name!r}: no such repair strategy (choose {choices})")
-    return module_name

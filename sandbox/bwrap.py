@@ -21,7 +21,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from sandbox.base import (
+from sandbox.attempt import (
     CORPUS_MOUNT,
     JOB_MOUNT,
     OUT_MOUNT,
@@ -29,8 +29,8 @@ from sandbox.base import (
     SANDBOX_ENV,
     Attempt,
     RawRun,
-    Sandbox,
 )
+from sandbox.base import Sandbox
 from sandbox.capture import CappedBuffer, drain_in_background
 from sandbox.cgroups import RunCgroup
 from sandbox.errors import SandboxError, SandboxUnavailable

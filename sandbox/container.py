@@ -22,7 +22,7 @@ from docker.errors import APIError, DockerException, NotFound
 from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
 
-from sandbox.base import (
+from sandbox.attempt import (
     CORPUS_MOUNT,
     JOB_MOUNT,
     OUT_MOUNT,
@@ -30,8 +30,8 @@ from sandbox.base import (
     SANDBOX_ENV,
     Attempt,
     RawRun,
-    Sandbox,
 )
+from sandbox.base import Sandbox
 from sandbox.capture import CappedBuffer
 from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
 from sandbox.settings import MIB, SandboxSettings

@@ -9,18 +9,32 @@ from __future__ import annotations
 
 import logging
 import threading
-from typing import Any
+from typing import Any, Protocol
 
-from sandbox.base import Attempt, Sandbox
+from sandbox.attempt import Attempt
+from sandbox.settings import SandboxSettings
 
 log = logging.getLogger(__name__)
 Slot = tuple[Attempt, Any]
 
 
+class Starter(Protocol):
+    """What the pool needs of a sandbox backend (``sandbox.base.Sandbox`` is one)."""
+
+    name: str
+    settings: SandboxSettings
+
+    def _start(self, attempt: Attempt, warm: bool) -> Any: ...
+
+    def _alive(self, handle: Any) -> bool: ...
+
+    def _abort(self, handle: Any) -> None: ...
+
+
 class WarmPool:
     """Keeps ``size`` warm sandboxes of ``box`` ready, refilling in the background."""
 
-    def __init__(self, box: Sandbox, size: int) -> None:
+    def __init__(self, box: Starter, size: int) -> None:
         self._box = box
         self._size = size
         self._ready: list[Slot] = []

@@ -263,10 +263,8 @@ def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
     if None in keys or target is None:
         return []
     ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
-    try:  # imported here: the map loads once, and only for scenarios that need it
-        import spawn_db
-    except ImportError:
-        return []
+    import spawn_db  # here: the map loads once, and only for scenarios that need it
+
     try:
         road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance)
     except spawn_db.SpawnDbError:  # not a Town04 lane position: nothing to compare with

@@ -175,10 +175,8 @@ def _walk_back(position: etree._Element, metres: float) -> tuple[str, float] | N
     lane, s = number(position, "laneId"), number(position, "s")
     if lane is None or s is None:
         return None
-    try:  # imported here: the map loads once, and only for scenarios that need it
-        import spawn_db
-    except ImportError:
-        return None
+    import spawn_db  # here: the map loads once, and only for scenarios that need it
+
     try:
         road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s,
                                                       -metres)

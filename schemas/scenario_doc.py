@@ -109,10 +109,8 @@ class ScenarioDoc:
         if None in values:
             return None
         ego_s, lane, other_s = values
-        try:  # imported here: the map loads once, and only for scenarios that need it
-            import spawn_db
-        except ImportError:
-            return None
+        import spawn_db  # here: the map loads once, and only for scenarios that need it
+
         try:
             return spawn_db.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
                                                 other.get("roadId"), int(lane), other_s)

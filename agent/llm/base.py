@@ -1,10 +1,15 @@
-"""The one small interface every LLM backend implements, and what a call returns."""
+"""The one small interface every LLM backend implements (what a call takes and returns lives
+in ``agent.llm.messages``, shared with the call log)."""
 
 from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
-from dataclasses import asdict, dataclass, field
+
+from agent.llm.log import log_call
+from agent.llm.messages import LLMReply, Prompt
+
+__all__ = ["LLM", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt"]
 
 
 class LLMUnavailable(Exception):
@@ -20,36 +25,6 @@ class LLMTimeout(LLMUnavailable):
     """The LLM did not finish one call within ``AgentSettings.timeout_s``."""
 
 
-@dataclass(frozen=True)
-class Prompt:
-    """One request: a system instruction, the user message, and who asks (for logs/replay)."""
-
-    system: str
-    user: str
-    scenario_id: str = ""
-    purpose: str = "generate"  # "generate" or "repair": which node asked
-
-    def messages(self) -> list[dict[str, str]]:
-        """The chat messages of this prompt."""
-        return [{"role": "system", "content": self.system}, {"role": "user", "content": self.user}]
-
-
-@dataclass
-class LLMReply:
-    """The raw text an LLM answered, with its cost."""
-
-    text: str
-    tokens_in: int = 0
-    tokens_out: int = 0
-    latency_s: float = 0.0
-    backend: str = ""
-    model: str = ""
-    meta: dict = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-
 class LLM(ABC):
     """A backend: ``complete(prompt)`` returns an :class:`LLMReply` or raises
     :class:`LLMUnavailable`; ``check()`` raises the same before a batch starts."""
@@ -61,8 +36,6 @@ class LLM(ABC):
 
     def complete(self, prompt: Prompt) -> LLMReply:
         """Ask once; the reply is timed and logged (``$SCENWEAVE_HOME/llm-calls.sqlite``)."""
-        from agent.llm.log import log_call
-
         started = time.perf_counter()
         reply = self._complete(prompt)
         reply.latency_s = round(time.perf_counter() - started, 4)

@@ -11,12 +11,9 @@ import sqlite3
 from contextlib import closing
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from agent.home import home
-
-if TYPE_CHECKING:
-    from agent.llm.base import LLMReply, Prompt
+from agent.llm.messages import LLMReply, Prompt
 
 LOG_NAME = "llm-calls.sqlite"
 SCHEMA = """

@@ -8,7 +8,8 @@ import pkgutil
 
 from agent.repair.base import Candidate, RepairStrategy, Request
 
-__all__ = ["Candidate", "RepairStrategy", "Request", "get_strategy", "strategy_names"]
+__all__ = ["Candidate", "RepairStrategy", "Request", "checked_repair", "get_strategy",
+           "strategy_names"]
 
 _NOT_STRATEGIES = {"base"}
 
@@ -19,8 +20,17 @@ def strategy_names() -> list[str]:
                   if m.name not in _NOT_STRATEGIES and not m.name.startswith("_"))
 
 
+def checked_repair(name: str) -> str:
+    """``name`` as a strategy module name (``patch``, ``error_feedback``); a ValueError naming
+    ``--repair`` and the choices when there is no such strategy."""
+    module_name = name.replace("-", "_")
+    names = strategy_names()
+    if module_name not in names:
+        choices = ", ".join(n.replace("_", "-") for n in names)
+        raise ValueError(f"--repair {name!r}: no such repair strategy (choose {choices})")
+    return module_name
+
+
 def get_strategy(name: str) -> RepairStrategy:
     """The strategy called ``name`` (dashes and underscores alike); ValueError if none is."""
-    from agent.settings import checked_repair
-
     return importlib.import_module(f"agent.repair.{checked_repair(name)}").STRATEGY

@@ -1,0 +1,130 @@
+"""The layering the README promises, read from the source: imports flow downward, no package
+has an import cycle among its own modules, and no broken import is silently swallowed."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+UPPER = ("scenweave", "ingest", "agent")
+BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player")
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for package in (*UPPER, *BOTTOM):
+        for path in (ROOT / package).rglob("*.py"):
+            name = ".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
+            found[name] = path
+    return found
+
+
+MODULES = _modules()
+
+
+def _imports(path: Path) -> set[str]:
+    """Every project module ``path`` imports, at the top or inside a function."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
+        else:
+            continue
+        for name in names:
+            while name and name not in MODULES:
+                name = name.rpartition(".")[0]
+            if name:
+                found.add(name)
+    return found
+
+
+GRAPH = {name: _imports(path) - {name} for name, path in MODULES.items()}
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan, iteratively)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, edges = work[-1]
+            step = next(edges, None)
+            if step is not None:
+                if step not in index:
+                    index[step] = low[step] = len(index)
+                    stack.append(step)
+                    on_stack.add(step)
+                    work.append((step, iter(sorted(graph[step]))))
+                elif step in on_stack:
+                    low[node] = min(low[node], index[step])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+@pytest.mark.parametrize("package", [*UPPER, *BOTTOM])
+def test_no_import_cycle_among_a_packages_modules(package):
+    own = {name: {target for target in targets if target.split(".")[0] == package
+                  and not name.startswith(target + ".")}
+           for name, targets in GRAPH.items() if name.split(".")[0] == package}
+    assert _cycles(own) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+@pytest.mark.parametrize("package", BOTTOM)
+def test_bottom_packages_never_import_the_upper_ones(package):
+    upward = sorted((name, target) for name, targets in GRAPH.items()
+                    if name.split(".")[0] == package
+                    for target in targets if target.split(".")[0] in UPPER)
+    assert upward == []
+
+
+#: modules that may answer an ImportError with a value, and why
+EXPECTED_IMPORT_ERRORS = {
+    # it imports what an LLM-written script names, to suggest a correction: a module that
+    # does not exist is an answer there, not a broken import of ScenWeave's
+    "agent.repair.code_corrections",
+}
+
+
+def test_no_import_error_is_swallowed():
+    """A handler of ImportError must raise (naming what to install), never return or pass."""
+    quiet = []
+    for name, path in MODULES.items():
+        if name in EXPECTED_IMPORT_ERRORS:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            catches = isinstance(node, ast.ExceptHandler) and "ImportError" in ast.unparse(
+                node.type or ast.Name("BaseException"))
+            if catches and not any(isinstance(child, ast.Raise) for child in ast.walk(node)):
+                quiet.append(f"{name}:{node.lineno}")
+    assert quiet == []

@@ -27,7 +27,11 @@ def engine_answers(url: str) -> bool:
 
 
 def start_podman_service(socket: Path, ready_within_s: float = 30.0) -> subprocess.Popen:
-    """Start ``podman system service`` on ``socket``; the caller stops the returned process."""
+    """Start ``podman system service`` on ``socket``; the caller stops the returned process.
+
+    It runs in the socket's folder: podman's conmon writes files into the service's working
+    folder (an empty ``oom`` when it OOM-kills a container), which must not be the user's.
+    """
     if shutil.which("podman") is None:
         raise SandboxUnavailable("podman not found: install the Debian packages podman and runc "
                                  "(scripts/apt-packages.txt)")
@@ -35,7 +39,8 @@ def start_podman_service(socket: Path, ready_within_s: float = 30.0) -> subproce
     url = f"unix://{socket}"
     service = subprocess.Popen(["podman", "system", "service", "--time=0", url],
                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.PIPE, start_new_session=True)
+                               stderr=subprocess.PIPE, start_new_session=True,
+                               cwd=socket.parent)
     deadline = time.monotonic() + ready_within_s
     while time.monotonic() < deadline:
         if service.poll() is not None:

@@ -90,11 +90,15 @@ def allocated_mib(stdout: str) -> int:
 
 def test_memory_bomb_is_killed_at_the_memory_limit(make_box, tmp_path):
     box = make_box(memory_mb=128)
+    here = set(Path.cwd().iterdir())
     result = box.run(MEMORY_BOMB, {}, tmp_path)
     assert not result.ok and not result.timed_out
     assert result.error_type in ("Killed", "MemoryError"), result
     # it got going, and was stopped below the 128 MiB cap (the interpreter uses some too)
     assert 32 <= allocated_mib(result.stdout) < 128, result.stdout
+    # the engine's side effects (podman's conmon writes an empty 'oom' into the API service's
+    # working folder) stay out of the folder the user works in
+    assert set(Path.cwd().iterdir()) == here
 
 
 @pytest.mark.parametrize("body", ["while True:\n        pass", "import time; time.sleep(120)"],

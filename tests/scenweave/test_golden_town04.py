@@ -14,7 +14,7 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from scenweave.cli import main
+from scenweave.cli import cli
 
 GOLDEN = Path(__file__).parents[1] / "golden" / "town04_no_llm.json"
 
@@ -22,10 +22,10 @@ GOLDEN = Path(__file__).parents[1] / "golden" / "town04_no_llm.json"
 def test_sample_data_gives_byte_identical_town04_scenarios(tmp_path: Path) -> None:
     golden = json.loads(GOLDEN.read_text())["scenario_sha256"]
     runner = CliRunner()
-    made = runner.invoke(main, ["sample-data", str(tmp_path / "data"), "--seed", "7",
+    made = runner.invoke(cli, ["sample-data", str(tmp_path / "data"), "--seed", "7",
                                 "--per-class", "3"])
     assert made.exit_code == 0, made.output
-    ran = runner.invoke(main, ["run", str(tmp_path / "data"), "--out", str(tmp_path / "runs"),
+    ran = runner.invoke(cli, ["run", str(tmp_path / "data"), "--out", str(tmp_path / "runs"),
                                "--no-llm", "--no-replay", "--run-id", "golden"])
     assert ran.exit_code == 0, ran.output
     run_dir = tmp_path / "runs" / "golden"

@@ -14,9 +14,10 @@ import importlib
 from typing import Any
 
 _EXPORTS = {
-    "LLMTimeout": "agent.llm.base", "LLMUnavailable": "agent.llm.base",
-    "AgentOutcome": "agent.run", "close_shared": "agent.run", "run_scenario": "agent.run",
-    "LLM_CHOICES": "agent.settings", "AgentSettings": "agent.settings",
+    "LLMTimeout": "scenweave.agent.llm.base", "LLMUnavailable": "scenweave.agent.llm.base",
+    "AgentOutcome": "scenweave.agent.run", "close_shared": "scenweave.agent.run",
+    "run_scenario": "scenweave.agent.run",
+    "LLM_CHOICES": "scenweave.agent.settings", "AgentSettings": "scenweave.agent.settings",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -24,5 +25,5 @@ __all__ = sorted(_EXPORTS)
 
 def __getattr__(name: str) -> Any:
     if name not in _EXPORTS:
-        raise AttributeError(f"module 'agent' has no attribute {name!r}")
+        raise AttributeError(f"module 'scenweave.agent' has no attribute {name!r}")
     return getattr(importlib.import_module(_EXPORTS[name]), name)

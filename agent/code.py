@@ -125,9 +125,9 @@ def _enum_dot_notation(code: str) -> tuple[str, bool]:
 
 
 def _corpus_package(code: str) -> tuple[str, bool]:
-    fixed = re.sub(r"^(\s*)from\s+corpus_utils\s+import", r"\1from corpus.corpus_utils import",
-                   code, flags=re.M)
-    fixed = re.sub(r"^(\s*)import\s+corpus_utils\b", r"\1from corpus import corpus_utils",
+    fixed = re.sub(r"^(\s*)from\s+(?:corpus\.)?corpus_utils\s+import",
+                   r"\1from scenweave.corpus.corpus_utils import", code, flags=re.M)
+    fixed = re.sub(r"^(\s*)import\s+corpus_utils\b", r"\1from scenweave.corpus import corpus_utils",
                    fixed, flags=re.M)
     return fixed, fixed != code
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from agent.settings import AgentSettings
+from scenweave.agent.settings import AgentSettings
 
 if TYPE_CHECKING:
-    from agent.llm.base import LLM
-    from agent.repair.base import RepairStrategy
-    from agent.trace import Trace
-    from sandbox import Sandbox
+    from scenweave.agent.llm.base import LLM
+    from scenweave.agent.repair.base import RepairStrategy
+    from scenweave.agent.trace import Trace
+    from scenweave.sandbox import Sandbox
 
 
 @dataclass

@@ -14,10 +14,9 @@ from typing import Literal
 
 from langgraph.graph import END, START, StateGraph
 from langgraph.runtime import Runtime
-
-from agent.context import AgentContext
-from agent.nodes import execute, fallback, generate, repair, retrieve, validate
-from agent.state import AgentState
+from scenweave.agent.context import AgentContext
+from scenweave.agent.nodes import execute, fallback, generate, repair, retrieve, validate
+from scenweave.agent.state import AgentState
 
 
 def after_generation(state: AgentState) -> Literal["execute", "fallback"]:

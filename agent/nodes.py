@@ -10,15 +10,14 @@ from pathlib import Path
 from typing import Any
 
 from langgraph.runtime import Runtime
-
-from agent.code import diff_to_reference, static_check
-from agent.context import AgentContext
-from agent.llm.base import LLMTimeout, LLMUnavailable
-from agent.repair.base import Candidate, Request
-from agent.state import AgentState, Attempt
-from agent.taxonomy import classify_exception
-from agent.trace import CODE_NAME, XOSC_NAME
-from schemas.findings import failure_category
+from scenweave.agent.code import diff_to_reference, static_check
+from scenweave.agent.context import AgentContext
+from scenweave.agent.llm.base import LLMTimeout, LLMUnavailable
+from scenweave.agent.repair.base import Candidate, Request
+from scenweave.agent.state import AgentState, Attempt
+from scenweave.agent.taxonomy import classify_exception
+from scenweave.agent.trace import CODE_NAME, XOSC_NAME
+from scenweave.schemas.findings import failure_category
 
 ATTEMPTS_DIR = "attempts"
 #: how a replay failure is put to the LLM: what the engine showed against what the record says
@@ -45,7 +44,7 @@ def node(body: NodeBody) -> Callable[[AgentState, Runtime[AgentContext]], dict]:
 @node
 def retrieve(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Pick the reference script for the manoeuvre (keyword, tag, semantic fallback)."""
-    import corpus
+    from scenweave import corpus
 
     found = corpus.retrieve(state["params"])
     reference = {"name": found.script_path.name, "path": str(found.script_path),
@@ -86,7 +85,7 @@ def execute(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Check the attempt's file: XSD, Table 5.8, semantics, parameter fidelity, CARLA lint,
     and (with replay settings) what it does when played; a replay failure is repairable."""
-    from schemas import validate_xosc
+    from scenweave.schemas import validate_xosc
 
     attempt = dict(state["attempts"][-1])
     out_dir = Path(state["out_dir"])
@@ -114,8 +113,9 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 @node
 def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Out of attempts: run the reference script directly (trusted code, in-process)."""
-    import corpus
-    from schemas import validate_xosc
+    from scenweave.schemas import validate_xosc
+
+    from scenweave import corpus
 
     out_dir = Path(state["out_dir"])
     xosc = out_dir / XOSC_NAME
@@ -209,7 +209,7 @@ def _validation_summary(result: dict) -> dict:
 
 def _write_playback(result: Any, folder: Path) -> None:
     if result.playback is not None:
-        from player import REPLAY_NAME
+        from scenweave.player import REPLAY_NAME
 
         result.playback.write(folder / REPLAY_NAME)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from agent.llm.base import Prompt
+from scenweave.agent.llm.base import Prompt
 
 #: params keys that describe where a record came from, not the scenario (kept from the LLM)
 METADATA_KEYS = frozenset({"scenario_id", "source_file", "source_row", "record_id",

@@ -18,13 +18,13 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from agent.context import AgentContext
-from agent.graph import build_graph
-from agent.llm import LLM, get_llm
-from agent.repair import get_strategy
-from agent.settings import AgentSettings
-from agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
-from sandbox import Sandbox, get_sandbox
+from scenweave.agent.context import AgentContext
+from scenweave.agent.graph import build_graph
+from scenweave.agent.llm import LLM, get_llm
+from scenweave.agent.repair import get_strategy
+from scenweave.agent.settings import AgentSettings
+from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
+from scenweave.sandbox import Sandbox, get_sandbox
 
 #: graph steps allowed per scenario: retrieve + (generate|repair, execute, validate) x attempts
 #: + fallback, with room to spare

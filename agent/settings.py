@@ -7,8 +7,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from agent.repair import checked_repair
-from sandbox import SandboxSettings
+from scenweave.agent.repair import checked_repair
+from scenweave.sandbox import SandboxSettings
 
 LLM_CHOICES = ("ollama", "embedded", "replay", "none")
 DEFAULT_MODELS = {"ollama": "qwen2.5-coder:7b", "embedded": "smollm2-135m-instruct",

@@ -29,8 +29,9 @@ STRATEGY_LABELS = {"error_feedback": "whole script (error-feedback)",
 def run_strategy(raw: Path, out: Path, classes: tuple[str, ...], repair: str,
                  max_attempts: int, sandbox: str) -> tuple[list[dict], float]:
     """All selected records through the agent with ``repair``; outcomes and wall time."""
-    from agent import AgentSettings
-    from sandbox import SandboxSettings
+    from scenweave.agent import AgentSettings
+    from scenweave.sandbox import SandboxSettings
+
     from scenweave.inputs import InputSelection
     from scenweave.pipeline import PipelineSettings
     from scenweave.runner import run_batch
@@ -91,7 +92,7 @@ def main() -> None:
     args = parser.parse_args()
     os.environ["SCENWEAVE_LLM_LOG"] = "0"
 
-    from ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
     classes = tuple(c for c in args.classes.split(",") if c)
     rows = []

@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 def measure(raw: Path, out: Path) -> dict:
     """Ingest ``raw`` into ``out`` and extract params of every record; time and memory."""
-    from ingest import extract_params, ingest_directory, load_records
+    from scenweave.ingest import extract_params, ingest_directory, load_records
 
     start = time.perf_counter()
     report = ingest_directory(raw, out)
@@ -49,7 +49,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(measure(Path(args.child[0]), Path(args.child[1]))))
         return
-    from ingest.samples import write_highway_samples
+    from scenweave.ingest.samples import write_highway_samples
 
     with tempfile.TemporaryDirectory() as tmp:
         raw = Path(tmp) / "raw"

@@ -54,7 +54,7 @@ def measure(raw: Path, out: Path) -> dict:
 
 def quality_check(run_dir: Path) -> tuple[int, int]:
     """Files checked and issues the ASAM quality checker reports over a run."""
-    from schemas import run_asam_qc
+    from scenweave.schemas import run_asam_qc
 
     files = sorted(run_dir.glob("*/scenario.xosc"))
     return len(files), sum(len(run_asam_qc(path)) for path in files)
@@ -71,7 +71,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(measure(Path(args.child[0]), Path(args.child[1]))))
         return
-    from ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
     urban_per_class = max(1, round(args.records * URBAN_SHARE / 5))
     highway_per_class = max(1, round((args.records - 5 * urban_per_class) / 12))

@@ -39,7 +39,8 @@ CLI = [sys.executable, "-m", "scenweave.cli"]
 
 def make_scenarios(raw: Path, out: Path, per_class: int) -> list[Path]:
     """Sample data (seed 7) and ``scenweave run --no-llm --no-replay`` on it: the .xosc files."""
-    from ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
+
     from scenweave.inputs import InputSelection
     from scenweave.pipeline import PipelineSettings
     from scenweave.runner import run_batch
@@ -53,8 +54,8 @@ def make_scenarios(raw: Path, out: Path, per_class: int) -> list[Path]:
 
 def replay_all(files: list[Path], whole_map: bool) -> list[dict]:
     """Replay each file (this process should be pinned); one record per scenario."""
-    from player import ReplaySettings, replay_file
-    from spawn_db import DEFAULT_MAP_PATH
+    from scenweave.player import ReplaySettings, replay_file
+    from scenweave.spawn_db import DEFAULT_MAP_PATH
 
     settings = ReplaySettings()
     if whole_map:

@@ -19,8 +19,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-import corpus  # noqa: E402
-from corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic  # noqa: E402
+from scenweave.corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic  # noqa: E402
+
+from scenweave import corpus  # noqa: E402
 
 #: free-text query -> the script a driving engineer would expect
 QUERIES: dict[str, str] = {
@@ -95,8 +96,8 @@ def main() -> None:
         for miss in misses:
             print(f"    miss: {miss}")
 
-    from corpus import retrieval
-    from corpus.embedding import encoder
+    from scenweave.corpus import retrieval
+    from scenweave.corpus.embedding import encoder
 
     encoder.cache_clear()
     start = time.perf_counter()

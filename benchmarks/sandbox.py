@@ -51,8 +51,8 @@ def _measure(box, code: str, params: dict, runs: int, pause_s: float) -> dict[st
 def _engine(backend: str, stack) -> str | None:
     if backend != "docker":
         return None
-    from sandbox import SandboxSettings
-    from sandbox.engine import engine_answers, start_podman_service
+    from scenweave.sandbox import SandboxSettings
+    from scenweave.sandbox.engine import engine_answers, start_podman_service
 
     url = SandboxSettings().engine_url()
     if engine_answers(url):
@@ -71,8 +71,9 @@ def main() -> None:
     parser.add_argument("--backend", action="append", choices=["bwrap", "docker"])
     args = parser.parse_args()
 
-    from corpus import list_scripts
-    from sandbox import SandboxSettings, get_sandbox
+    from scenweave.corpus import list_scripts
+    from scenweave.sandbox import SandboxSettings, get_sandbox
+
     from tests.corpus.params_examples import example_params
 
     brake = next(p for p in list_scripts() if p.name == "gen_hw_brake.py").read_text()

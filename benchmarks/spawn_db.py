@@ -34,10 +34,10 @@ def main() -> None:
     parser.add_argument("--records-per-class", type=int, default=20)
     args = parser.parse_args()
 
-    from ingest import IngestReport, extract_params, iter_raw_records
-    from ingest.samples import write_highway_samples, write_urban_samples
-    from spawn_db import DEFAULT_MAP_PATH, SpawnMatcher, build_database, load_opendrive
-    from spawn_db.database import write_database
+    from scenweave.ingest import IngestReport, extract_params, iter_raw_records
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.spawn_db import DEFAULT_MAP_PATH, SpawnMatcher, build_database, load_opendrive
+    from scenweave.spawn_db.database import write_database
 
     _, parse_s = _timed(lambda: load_opendrive(DEFAULT_MAP_PATH))
     print(f"parse Town04.xodr ({DEFAULT_MAP_PATH.stat().st_size / 1e6:.1f} MB): {parse_s:.2f} s")

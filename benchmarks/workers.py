@@ -81,7 +81,7 @@ def main() -> None:
     parser.add_argument("--sandbox", default="auto", choices=("auto", "docker", "bwrap"))
     args = parser.parse_args()
 
-    from ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
     with tempfile.TemporaryDirectory() as tmp, \
             FakeOllama(reply="NO CHANGES", delay_s=args.latency_ms / 1000) as llm:

@@ -5,8 +5,8 @@
 ``list_scripts()`` lists them. Scenario layout: ``docs/scenario-conventions.md``.
 """
 
-from corpus.errors import CorpusError, ParamsError
-from corpus.retrieval import MANEUVER_TAGS, Retrieval, generate, list_scripts, retrieve
+from scenweave.corpus.errors import CorpusError, ParamsError
+from scenweave.corpus.retrieval import MANEUVER_TAGS, Retrieval, generate, list_scripts, retrieve
 
 __all__ = ["MANEUVER_TAGS", "CorpusError", "ParamsError", "Retrieval", "generate", "list_scripts",
            "retrieve"]

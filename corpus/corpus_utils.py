@@ -23,8 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from scenariogeneration import xosc
-
-from corpus.kinematics import (
+from scenweave.corpus.kinematics import (
     MAX_PLAYABLE_DECELERATION_MS2,
     SAFETY_GAP_M,
     YELLOW_PHASE_S,

@@ -9,7 +9,7 @@ keeps or changes its speed as recorded; once the record ends, the merger keeps i
 
 from pathlib import Path
 
-from corpus.corpus_utils import (
+from scenweave.corpus.corpus_utils import (
     hero,
     highway_npc,
     keep_distance_after_record,

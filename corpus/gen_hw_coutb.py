@@ -9,7 +9,7 @@ recorded.
 
 from pathlib import Path
 
-from corpus.corpus_utils import (
+from scenweave.corpus.corpus_utils import (
     hero,
     highway_npc,
     lane_position,

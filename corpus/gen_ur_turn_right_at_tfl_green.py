@@ -9,7 +9,7 @@ the other way when the record had them.
 
 from pathlib import Path
 
-from corpus.corpus_utils import (
+from scenweave.corpus.corpus_utils import (
     HERO,
     drive_to,
     hero,

@@ -23,8 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from corpus.errors import CorpusError, ParamsError
+from scenweave.corpus.errors import CorpusError, ParamsError
 
 CORPUS_DIR = Path(__file__).resolve().parent
 
@@ -100,7 +99,7 @@ def generate(params: Mapping[str, Any], out_path: str | os.PathLike[str]) -> Pat
     Params the script cannot use raise ``ParamsError`` naming the scenario, script and key.
     """
     script = retrieve(params).script_path
-    module = importlib.import_module(f"corpus.{script.stem}")
+    module = importlib.import_module(f"scenweave.corpus.{script.stem}")
     try:
         return Path(module.generate(dict(params), out_path))
     except KeyError as err:
@@ -164,7 +163,7 @@ def prose(text: str) -> str:
 
 def retrieve_semantic(query: str) -> Retrieval:
     """The script whose docstring is most similar to ``query`` (cosine, all-MiniLM-L6-v2)."""
-    from corpus.embedding import encoder
+    from scenweave.corpus.embedding import encoder
 
     scripts, matrix = _docstring_embeddings()
     scores = matrix @ encoder().encode([query])[0]
@@ -181,7 +180,7 @@ def _docstring_embeddings() -> tuple[list[Path], np.ndarray]:
     cache_file = _cache_dir() / f"corpus-docstrings-{_digest(texts)}.npy"
     if cache_file.exists():
         return scripts, np.load(cache_file)
-    from corpus.embedding import encoder
+    from scenweave.corpus.embedding import encoder
 
     matrix = encoder().encode(texts)
     _save_atomically(cache_file, matrix)
@@ -194,7 +193,7 @@ def _cache_dir() -> Path:
 
 
 def _digest(texts: list[str]) -> str:
-    from corpus.embedding import model_dir
+    from scenweave.corpus.embedding import model_dir
 
     weights = model_dir() / "model.safetensors"
     key = "\0".join([str(weights.stat().st_size), *texts])

@@ -5,13 +5,13 @@ Public API: ``ingest_directory``, ``iter_raw_records``, ``load_records``, ``extr
 ``load_layouts``, sample data in ``ingest.samples``.
 """
 
-from ingest.batch import ingest_directory, iter_raw_records
-from ingest.extract import extract_params
-from ingest.issues import IngestError, IngestReport, Issue, LayoutError
-from ingest.layouts import load_layouts
-from ingest.playable import check_playable
-from ingest.records import check_record, load_records
-from ingest.variants import extract_with_variants
+from scenweave.ingest.batch import ingest_directory, iter_raw_records
+from scenweave.ingest.extract import extract_params
+from scenweave.ingest.issues import IngestError, IngestReport, Issue, LayoutError
+from scenweave.ingest.layouts import load_layouts
+from scenweave.ingest.playable import check_playable
+from scenweave.ingest.records import check_record, load_records
+from scenweave.ingest.variants import extract_with_variants
 
 __all__ = [
     "IngestError", "IngestReport", "Issue", "LayoutError", "check_playable", "check_record",

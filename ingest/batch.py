@@ -11,17 +11,17 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from ingest.atomic import write_json_atomic
-from ingest.highway import (
+from scenweave.ingest.atomic import write_json_atomic
+from scenweave.ingest.highway import (
     DEFAULT_BINNING,
     HighwayFileResult,
     canonicalize_highway_file,
     iter_highway_files,
 )
-from ingest.issues import IngestError, IngestReport, Issue, RecordIssue, unexpected_issue
-from ingest.layouts import HighwayLayouts, load_layouts
-from ingest.records import check_record
-from ingest.urban import canonicalize_urban_file, iter_urban_files
+from scenweave.ingest.issues import IngestError, IngestReport, Issue, RecordIssue, unexpected_issue
+from scenweave.ingest.layouts import HighwayLayouts, load_layouts
+from scenweave.ingest.records import check_record
+from scenweave.ingest.urban import canonicalize_urban_file, iter_urban_files
 
 REPORT_NAME = "ingest_report.json"
 

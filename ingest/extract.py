@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from corpus.corpus_utils import reference_gap_m
-from ingest.freeride import SLOTS, slot_params
-from ingest.issues import RecordIssue
-from ingest.layouts import FAMILY_OF_CLASS, default_layouts
+from scenweave.corpus.corpus_utils import reference_gap_m
+from scenweave.ingest.freeride import SLOTS, slot_params
+from scenweave.ingest.issues import RecordIssue
+from scenweave.ingest.layouts import FAMILY_OF_CLASS, default_layouts
 
 KMH = 3.6
 HIGHWAY_MANEUVER_START_S = 2.0

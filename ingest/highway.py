@@ -13,11 +13,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from ingest.freeride import SLOTS, slot_present
-from ingest.issues import Issue
-from ingest.layouts import ClassLayout, Column, HighwayLayouts
-from ingest.npy import load_npy
+from scenweave.ingest.freeride import SLOTS, slot_present
+from scenweave.ingest.issues import Issue
+from scenweave.ingest.layouts import ClassLayout, Column, HighwayLayouts
+from scenweave.ingest.npy import load_npy
 
 SCHEMA_VERSION = "phase1.v1"
 DEFAULT_BINNING = "B0"

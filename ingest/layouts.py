@@ -12,7 +12,7 @@ from functools import cache, cached_property
 from pathlib import Path
 from typing import Any
 
-from ingest.issues import LayoutError
+from scenweave.ingest.issues import LayoutError
 
 DEFAULT_LAYOUT_PATH = Path(__file__).resolve().parent.parent / "schemas" / "highway_layouts.json"
 

@@ -10,10 +10,10 @@ whose replay shows a collision or a gap the record never had.
 
 from __future__ import annotations
 
-from corpus.corpus_utils import clearance_m
-from corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2, SpeedProfile, min_gap_m
-from ingest.issues import RecordIssue
-from schemas.replay import GAP_TOL_M
+from scenweave.corpus.corpus_utils import clearance_m
+from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2, SpeedProfile, min_gap_m
+from scenweave.ingest.issues import RecordIssue
+from scenweave.schemas.replay import GAP_TOL_M
 
 #: the NPC that shares the ego's lane from t = 0 to the record's end: class -> (params prefix,
 #: the file's column of its start gap)

@@ -8,9 +8,8 @@ from functools import cache
 from pathlib import Path
 
 import fastjsonschema
-
-from ingest.issues import IngestError, RecordIssue
-from schemas import load_json_schema
+from scenweave.ingest.issues import IngestError, RecordIssue
+from scenweave.schemas import load_json_schema
 
 SCHEMA_OF_DOMAIN = {"highway": "highway_record", "urban": "urban_record"}
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from corpus.retrieval import CLASS_TAGS
+from scenweave.corpus.retrieval import CLASS_TAGS
 
 URBAN_TAGS = {code: tag for code, tag in CLASS_TAGS.items() if code.startswith("U")}
 

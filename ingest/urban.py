@@ -14,9 +14,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from ingest.codes import TRAFFIC_LIGHT_STATES, decode
-from ingest.issues import Issue, RecordIssue, unexpected_issue
-from ingest.tags import URBAN_NAMES, URBAN_TAGS
+from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES, decode
+from scenweave.ingest.issues import Issue, RecordIssue, unexpected_issue
+from scenweave.ingest.tags import URBAN_NAMES, URBAN_TAGS
 
 RECORD_VERSION = "urban.v1"
 REGULAR_STEP_TOLERANCE = 0.1  # steps within 10 % of the median count as regular

@@ -5,9 +5,8 @@ from __future__ import annotations
 import zlib
 
 import numpy as np
-
-from ingest.extract import extract_params, finish
-from ingest.urban import DEFAULT_PERTURBATION
+from scenweave.ingest.extract import extract_params, finish
+from scenweave.ingest.urban import DEFAULT_PERTURBATION
 
 DERIVED_ONLY_FOR = {  # keys ``finish`` recomputes from the perturbed ones
     "init_speed_ms": lambda p: True,

@@ -12,12 +12,12 @@ Judging a playback against the record lives with the other checks (``schemas.rep
 
 from __future__ import annotations
 
-from player.errors import PlayerError, PlayerUnavailable
-from player.locate import EsminiInstall, find_esmini
-from player.playback import Box, Playback, StoryboardChange
-from player.replay import REPLAY_NAME, player_status, replay_file, scenario_duration_s
-from player.settings import ReplaySettings
-from player.translate import TranslationError
+from scenweave.player.errors import PlayerError, PlayerUnavailable
+from scenweave.player.locate import EsminiInstall, find_esmini
+from scenweave.player.playback import Box, Playback, StoryboardChange
+from scenweave.player.replay import REPLAY_NAME, player_status, replay_file, scenario_duration_s
+from scenweave.player.settings import ReplaySettings
+from scenweave.player.translate import TranslationError
 
 __all__ = ["REPLAY_NAME", "Box", "EsminiInstall", "Playback", "PlayerError", "PlayerUnavailable",
            "ReplaySettings", "StoryboardChange", "TranslationError", "find_esmini",

@@ -32,9 +32,9 @@ import time
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from player.locate import find_esmini
-from player.playback import Playback, StoryboardChange
-from player.scratch import scratch_folder
+from scenweave.player.locate import find_esmini
+from scenweave.player.playback import Playback, StoryboardChange
+from scenweave.player.scratch import scratch_folder
 
 #: esmini's StoryBoardElement::ElementType and ::State (esminiLib.hpp's public enum values)
 ELEMENT_TYPES = {1: "storyboard", 2: "story", 3: "act", 4: "maneuver_group", 5: "maneuver",
@@ -55,7 +55,7 @@ import sys, types
 package = types.ModuleType("player")
 package.__path__ = [sys.argv[1]]
 sys.modules["player"] = package
-from player.engine import serve
+from scenweave.player.engine import serve
 serve()
 """
 

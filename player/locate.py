@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-from player.errors import PlayerUnavailable
+from scenweave.player.errors import PlayerUnavailable
 
 LIBRARY = "libesminiLib.so"
 #: where scripts/setup.d/10-esmini.sh installs a build made from a source or release archive

@@ -54,8 +54,7 @@ from pathlib import Path
 
 import numpy as np
 from lxml import etree
-
-from player.scratch import scratch_folder
+from scenweave.player.scratch import scratch_folder
 
 #: a WorldPosition starts an entity on every road passing this close (m)
 SEED_NEAR_M = 20.0
@@ -330,7 +329,7 @@ def _s_rate(road, s: np.ndarray, curvature: np.ndarray) -> float:
 
 
 def _sample_reference_lines(index: MapIndex) -> None:
-    import spawn_db
+    from scenweave import spawn_db
 
     network = spawn_db.road_network(index.identity[0])
     xy, hdg, ss, which = [], [], [], []

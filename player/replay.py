@@ -6,14 +6,13 @@ import time
 from pathlib import Path
 
 from lxml import etree
-
-from player import maps
-from player.engine import TIMEOUT_MESSAGE, play_xml, warm_up
-from player.errors import PlayerUnavailable
-from player.locate import find_esmini
-from player.playback import Playback
-from player.settings import ReplaySettings
-from player.translate import TranslationError, translate
+from scenweave.player import maps
+from scenweave.player.engine import TIMEOUT_MESSAGE, play_xml, warm_up
+from scenweave.player.errors import PlayerUnavailable
+from scenweave.player.locate import find_esmini
+from scenweave.player.playback import Playback
+from scenweave.player.settings import ReplaySettings
+from scenweave.player.translate import TranslationError, translate
 
 #: the playback's file in a scenario folder
 REPLAY_NAME = "replay.json"
@@ -98,7 +97,7 @@ def _lights_of(map_path: Path) -> dict[str, tuple[float, float]]:
     """``spawn_db.traffic_lights_carla`` of the map, once per process and file version."""
     key = maps.map_identity(map_path)
     if key not in _lights:
-        import spawn_db
+        from scenweave import spawn_db
 
         _lights[key] = spawn_db.traffic_lights_carla(map_path)
     return _lights[key]

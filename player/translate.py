@@ -18,8 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lxml import etree
-
-from player.errors import PlayerError
+from scenweave.player.errors import PlayerError
 
 #: CARLA light colour -> esmini lamp modes of a three-lamp light (red; yellow; green)
 LAMP_MODES = {"green": "off;off;on", "yellow": "off;on;off", "red": "on;off;off",

@@ -6,10 +6,10 @@ returns an :class:`ExecResult`; infrastructure failures raise :class:`SandboxErr
 
 from __future__ import annotations
 
-from sandbox.base import Sandbox
-from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
-from sandbox.result import ExecResult
-from sandbox.settings import BACKENDS, SandboxSettings
+from scenweave.sandbox.base import Sandbox
+from scenweave.sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from scenweave.sandbox.result import ExecResult
+from scenweave.sandbox.settings import BACKENDS, SandboxSettings
 
 __all__ = ["ExecResult", "ImageNotFound", "Sandbox", "SandboxError", "SandboxSettings",
            "SandboxUnavailable", "backend_names", "check_backends", "get_sandbox"]
@@ -22,10 +22,10 @@ def backend_names() -> tuple[str, ...]:
 
 def _make(name: str, settings: SandboxSettings) -> Sandbox:
     if name == "docker":
-        from sandbox.container import DockerSandbox  # the docker SDK loads only when used
+        from scenweave.sandbox.container import DockerSandbox  # the docker SDK loads only when used
 
         return DockerSandbox(settings)
-    from sandbox.bwrap import BwrapSandbox
+    from scenweave.sandbox.bwrap import BwrapSandbox
 
     return BwrapSandbox(settings)
 

@@ -10,9 +10,9 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from sandbox.errors import SandboxError
-from sandbox.result import ExecResult, Report, ReportInvalid, read_report, write_files
-from sandbox.settings import SandboxSettings
+from scenweave.sandbox.errors import SandboxError
+from scenweave.sandbox.result import ExecResult, Report, ReportInvalid, read_report, write_files
+from scenweave.sandbox.settings import SandboxSettings
 
 HARNESS = Path(__file__).with_name("harness.py")
 #: the only environment a sandboxed script sees (nothing from the host)
@@ -29,7 +29,7 @@ SANDBOX_ENV = {
 #: paths inside the sandbox (the harness hard-codes the same ones)
 JOB_MOUNT = "/sandbox/job"
 RESULT_MOUNT = "/sandbox/result.json"
-CORPUS_MOUNT = "/sandbox/lib/corpus"
+CORPUS_MOUNT = "/sandbox/lib/scenweave/corpus"
 OUT_MOUNT = "/out"
 
 

@@ -7,10 +7,10 @@ from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Any
 
-from sandbox.attempt import Attempt, RawRun, params_to_json
-from sandbox.pool import WarmPool
-from sandbox.result import ExecResult
-from sandbox.settings import SandboxSettings
+from scenweave.sandbox.attempt import Attempt, RawRun, params_to_json
+from scenweave.sandbox.pool import WarmPool
+from scenweave.sandbox.result import ExecResult
+from scenweave.sandbox.settings import SandboxSettings
 
 
 class Sandbox(ABC):

@@ -21,7 +21,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from sandbox.attempt import (
+from scenweave.sandbox.attempt import (
     CORPUS_MOUNT,
     JOB_MOUNT,
     OUT_MOUNT,
@@ -30,11 +30,11 @@ from sandbox.attempt import (
     Attempt,
     RawRun,
 )
-from sandbox.base import Sandbox
-from sandbox.capture import CappedBuffer, drain_in_background
-from sandbox.cgroups import RunCgroup
-from sandbox.errors import SandboxError, SandboxUnavailable
-from sandbox.settings import MIB
+from scenweave.sandbox.base import Sandbox
+from scenweave.sandbox.capture import CappedBuffer, drain_in_background
+from scenweave.sandbox.cgroups import RunCgroup
+from scenweave.sandbox.errors import SandboxError, SandboxUnavailable
+from scenweave.sandbox.settings import MIB
 
 #: joins the run's cgroups (as root, before dropping privileges), then execs the rest
 JOIN_CGROUPS = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'

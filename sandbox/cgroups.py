@@ -14,7 +14,7 @@ import time
 import uuid
 from pathlib import Path
 
-from sandbox.errors import SandboxUnavailable
+from scenweave.sandbox.errors import SandboxUnavailable
 
 CPU_PERIOD_US = 100_000
 

@@ -21,8 +21,7 @@ import requests
 from docker.errors import APIError, DockerException, NotFound
 from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
-
-from sandbox.attempt import (
+from scenweave.sandbox.attempt import (
     CORPUS_MOUNT,
     JOB_MOUNT,
     OUT_MOUNT,
@@ -31,10 +30,10 @@ from sandbox.attempt import (
     Attempt,
     RawRun,
 )
-from sandbox.base import Sandbox
-from sandbox.capture import CappedBuffer
-from sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
-from sandbox.settings import MIB, SandboxSettings
+from scenweave.sandbox.base import Sandbox
+from scenweave.sandbox.capture import CappedBuffer
+from scenweave.sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from scenweave.sandbox.settings import MIB, SandboxSettings
 
 SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
 LOG_MAX_SIZE = "1m"

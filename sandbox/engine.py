@@ -10,8 +10,7 @@ from pathlib import Path
 import docker
 import requests
 from docker.errors import DockerException
-
-from sandbox.errors import SandboxUnavailable
+from scenweave.sandbox.errors import SandboxUnavailable
 
 
 def engine_answers(url: str) -> bool:

@@ -11,8 +11,8 @@ import logging
 import threading
 from typing import Any, Protocol
 
-from sandbox.attempt import Attempt
-from sandbox.settings import SandboxSettings
+from scenweave.sandbox.attempt import Attempt
+from scenweave.sandbox.settings import SandboxSettings
 
 log = logging.getLogger(__name__)
 Slot = tuple[Attempt, Any]

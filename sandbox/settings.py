@@ -67,7 +67,8 @@ class SandboxSettings:
         """The folder of the ``corpus`` package, mounted read-only into the sandbox."""
         if self.corpus_dir is not None:
             return Path(self.corpus_dir)
-        spec = importlib.util.find_spec("corpus")  # located, not imported: no upward dependency
+        # located, not imported: no upward dependency
+        spec = importlib.util.find_spec("scenweave.corpus")
         if spec is None or not spec.submodule_search_locations:
             return None
         return Path(next(iter(spec.submodule_search_locations)))

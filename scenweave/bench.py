@@ -20,7 +20,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from ingest.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
+from scenweave.ingest.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.progress import progress
@@ -109,7 +109,7 @@ def agent_settings_for(llm: str, replay: Any = None,
         if model == REFERENCE:
             return PipelineSettings(no_llm=True, replay=replay)
         try:
-            from agent import AgentSettings
+            from scenweave.agent import AgentSettings
         except ImportError as err:
             raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
                              f"({err}); benchmark --models {REFERENCE} only") from err
@@ -124,7 +124,7 @@ def agent_settings_for(llm: str, replay: Any = None,
 
 def sample_records(root: Path, settings: BenchSettings) -> Path:
     """Seeded MOOVE-format sample data for the benchmark (made once, reused on resume)."""
-    from ingest.samples import write_highway_samples, write_urban_samples
+    from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
     data = root / "data"
     if not data.exists():

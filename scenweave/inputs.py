@@ -6,7 +6,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ingest import (
+from scenweave.ingest import (
     IngestReport,
     Issue,
     check_playable,
@@ -16,7 +16,7 @@ from ingest import (
     load_layouts,
     load_records,
 )
-from ingest.issues import IngestError, RecordIssue
+from scenweave.ingest.issues import IngestError, RecordIssue
 
 
 @dataclass

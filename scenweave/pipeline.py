@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
+from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
 
 __all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
            "process_scenario"]
@@ -78,9 +78,9 @@ def is_infrastructure_error(err: BaseException) -> bool:
 
 def _loaded_infrastructure_types() -> tuple[type[BaseException], ...]:
     found = []
-    for module, name in (("sandbox", "SandboxError"), ("player", "PlayerError"),
+    for module, name in (("scenweave.sandbox", "SandboxError"), ("scenweave.player", "PlayerError"),
                          ("redis.exceptions", "RedisError"),
-                         ("httpx", "TransportError"), ("agent", "LLMUnavailable")):
+                         ("httpx", "TransportError"), ("scenweave.agent", "LLMUnavailable")):
         err_type = getattr(sys.modules.get(module), name, None)
         if isinstance(err_type, type) and issubclass(err_type, BaseException):
             found.append(err_type)
@@ -101,15 +101,15 @@ def base_outcome(params: dict) -> dict:
 def write_playback(result: Any, out_dir: Path) -> None:
     """Write the validation's playback (if the scenario was played) as ``replay.json``."""
     if getattr(result, "playback", None) is not None:
-        from player import REPLAY_NAME
+        from scenweave.player import REPLAY_NAME
 
         result.playback.write(out_dir / REPLAY_NAME)
 
 
 def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
                         timings: dict, trace: Trace) -> dict:
-    import corpus
-    from schemas import failure_category, validate_xosc
+    from scenweave import corpus
+    from scenweave.schemas import failure_category, validate_xosc
 
     retrieval = _timed(timings, "retrieve", lambda: corpus.retrieve(params))
     trace.event("retrieve", script=retrieval.script_path.name, method=retrieval.method)
@@ -138,7 +138,7 @@ def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
 
 def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
                     timings: dict, trace: Trace) -> dict:
-    import agent
+    from scenweave import agent
 
     result = _timed(timings, "agent",
                     lambda: agent.run_scenario(params, out_dir, settings.agent, trace))

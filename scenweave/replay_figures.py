@@ -35,9 +35,9 @@ from typing import Any
 
 import numpy as np
 
-from ingest.atomic import write_bytes_atomic
-from player import REPLAY_NAME, Playback
-from schemas.replay import GAP_AT_END_CLASSES, GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
+from scenweave.ingest.atomic import write_bytes_atomic
+from scenweave.player import REPLAY_NAME, Playback
+from scenweave.schemas.replay import GAP_AT_END_CLASSES, GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
 FIGURE_NAME = "replay.png"
 #: figure size (inches) and resolution: FIGURE_PX pixels, the same for every replay
@@ -160,7 +160,7 @@ def _read_json(path: Path) -> dict:
 def _scenario_doc(path: Path) -> Any:
     from lxml import etree
 
-    from schemas.scenario_doc import ScenarioDoc
+    from scenweave.schemas.scenario_doc import ScenarioDoc
 
     try:
         return ScenarioDoc(etree.parse(str(path)))
@@ -275,7 +275,7 @@ def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from schemas.fidelity import placed_actors
+    from scenweave.schemas.fidelity import placed_actors
 
     start, duration = facts.number("maneuver_start_s"), facts.number("duration_s")
     handles = []
@@ -306,7 +306,7 @@ def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str
 
 def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, target speed, when it should be reached) of every scripted speed change."""
-    from schemas.fidelity import expected_speed_changes
+    from scenweave.schemas.fidelity import expected_speed_changes
 
     changes = []
     if facts.doc is not None:
@@ -352,7 +352,7 @@ def _gaps(playback: Playback, entity: str, times: list[float], map_path: Any) ->
 
 def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, gap, time) of every gap the record has, as the judge compares them."""
-    from schemas.fidelity import placed_actors
+    from scenweave.schemas.fidelity import placed_actors
 
     start = facts.number("maneuver_start_s")
     if start is None:
@@ -559,7 +559,7 @@ def _draw_lanes(axes: Any, map_path: Any, box: tuple[float, float, float, float]
 
 
 def _network(map_path: Any) -> Any:
-    import spawn_db
+    from scenweave import spawn_db
 
     return spawn_db.road_network(map_path)
 
@@ -569,7 +569,7 @@ def _lane_borders(network: Any) -> list[tuple[tuple[float, float, float, float],
                                               np.ndarray]]:
     """(x0, x1, y0, y1), in a junction, (n, 2) points of each border of every drivable lane,
     sampled every ~2 m along the road (as spawn_db's map picture does). Once per map."""
-    from spawn_db.lanes import lane_border_offsets, section_samples
+    from scenweave.spawn_db.lanes import lane_border_offsets, section_samples
 
     found = []
     for key in network.drivable_lanes():

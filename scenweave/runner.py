@@ -48,7 +48,7 @@ class RunResult:
 
 def default_matcher() -> Any:
     """The Town04 spawn matcher (imported here so ``scenweave --help`` stays fast)."""
-    from spawn_db import SpawnMatcher
+    from scenweave.spawn_db import SpawnMatcher
 
     return SpawnMatcher()
 

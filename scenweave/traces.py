@@ -11,7 +11,7 @@ import sqlite3
 from contextlib import closing
 from pathlib import Path
 
-from agent.trace import CHECKPOINTS_NAME, TRACE_NAME
+from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME
 from scenweave.run_folder import STATUS_FILE, safe_name
 
 PREVIEW_LINES = 12

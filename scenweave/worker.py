@@ -71,7 +71,8 @@ class WorkerOptions:
     maintenance_interval_s: int = 60
     preload_matcher: str | None = DEFAULT_MATCHER
     #: imported once in the worker so each forked work horse starts warm (~1 s per job saved)
-    preload_modules: tuple[str, ...] = ("corpus", "corpus.corpus_utils", "schemas", "agent")
+    preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.corpus.corpus_utils",
+                                       "scenweave.schemas", "scenweave.agent")
 
 
 @dataclass

@@ -7,9 +7,9 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from schemas.findings import Finding, ValidationResult, failure_category
-from schemas.qc import run_asam_qc
-from schemas.validate_xosc import validate_tree, validate_xosc
+from scenweave.schemas.findings import Finding, ValidationResult, failure_category
+from scenweave.schemas.qc import run_asam_qc
+from scenweave.schemas.validate_xosc import validate_tree, validate_xosc
 
 __all__ = ["Finding", "ValidationResult", "failure_category", "load_json_schema", "run_asam_qc",
            "validate_tree", "validate_xosc"]

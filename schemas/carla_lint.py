@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import re
 
-from schemas.findings import Finding
-from schemas.scenario_doc import ScenarioDoc
+from scenweave.schemas.findings import Finding
+from scenweave.schemas.scenario_doc import ScenarioDoc
 
 SUPPORTED_ACTIONS = {
     # PrivateAction

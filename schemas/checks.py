@@ -10,11 +10,10 @@ import math
 import re
 
 from lxml import etree
-
-from corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
-from schemas.fidelity import SPEED_TOL_MS
-from schemas.findings import Finding
-from schemas.scenario_doc import ScenarioDoc, number
+from scenweave.corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
+from scenweave.schemas.fidelity import SPEED_TOL_MS
+from scenweave.schemas.findings import Finding
+from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))
@@ -263,7 +262,7 @@ def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
     if None in keys or target is None:
         return []
     ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
-    import spawn_db  # here: the map loads once, and only for scenarios that need it
+    from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
 
     try:
         road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance)

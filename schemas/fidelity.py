@@ -11,8 +11,7 @@ import math
 from dataclasses import dataclass
 
 from lxml import etree
-
-from corpus.kinematics import (
+from scenweave.corpus.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
@@ -23,8 +22,8 @@ from corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
-from schemas.findings import Finding
-from schemas.scenario_doc import ScenarioDoc, number
+from scenweave.schemas.findings import Finding
+from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 SPEED_TOL_MS = 0.01
 TIME_TOL_S = 0.01
@@ -175,7 +174,7 @@ def _walk_back(position: etree._Element, metres: float) -> tuple[str, float] | N
     lane, s = number(position, "laneId"), number(position, "s")
     if lane is None or s is None:
         return None
-    import spawn_db  # here: the map loads once, and only for scenarios that need it
+    from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
 
     try:
         road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s,

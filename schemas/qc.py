@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from schemas.findings import Finding
+from scenweave.schemas.findings import Finding
 
 
 def run_asam_qc(path: Path | str) -> list[Finding]:

@@ -13,10 +13,10 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from corpus.kinematics import STOP_LINE_MARGIN_M
-from schemas.fidelity import LANE_CHANGE_ACTOR, expected_speed_changes, placed_actors
-from schemas.findings import Finding
-from schemas.scenario_doc import ScenarioDoc
+from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
+from scenweave.schemas.fidelity import LANE_CHANGE_ACTOR, expected_speed_changes, placed_actors
+from scenweave.schemas.findings import Finding
+from scenweave.schemas.scenario_doc import ScenarioDoc
 
 #: a speed of the replay may differ this much from the record (m/s)
 SPEED_TOL_MS = 0.5
@@ -107,7 +107,7 @@ def _start_poses(judge: _Judge) -> None:
     name it: inside a junction, connecting roads overlap and esmini may report any of them.
     Otherwise it is the lane esmini found the vehicle on.
     """
-    import spawn_db
+    from scenweave import spawn_db
 
     network = spawn_db.road_network(judge.map_path)
     planned = {entity: prefix for entity, prefix in placed_actors(judge.params)}
@@ -357,7 +357,7 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
     ``time_s`` (positive ahead). The ego's position is carried sideways onto that lane at its
     own ``s``: the entity's lane id on a shared road, else the ego's lane or the lane beside it
     on either side (lane ids change across road ends, the chain of lanes does not)."""
-    import spawn_db
+    from scenweave import spawn_db
 
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[ego], playback.tracks[entity]
@@ -378,7 +378,7 @@ def _lanes_beside(road, ego_lane: int, shared_lane: int | None, s: float,
                   map_path) -> list[int]:
     """Lane ids on the ego's road to measure from: the other's own (same road), the ego's,
     and the same-direction lanes left and right of it."""
-    import spawn_db
+    from scenweave import spawn_db
 
     lanes = [lane for lane in (shared_lane, ego_lane) if lane]
     network = spawn_db.road_network(map_path)

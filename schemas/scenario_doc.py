@@ -6,8 +6,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from lxml import etree
-
-from corpus.kinematics import SpeedProfile
+from scenweave.corpus.kinematics import SpeedProfile
 
 EGO_NAMES = ("hero", "ego")
 
@@ -109,7 +108,9 @@ class ScenarioDoc:
         if None in values:
             return None
         ego_s, lane, other_s = values
-        import spawn_db  # here: the map loads once, and only for scenarios that need it
+        from scenweave import (
+            spawn_db,  # here: the map loads once, and only for scenarios that need it
+        )
 
         try:
             return spawn_db.distance_along_lane(ego.get("roadId"), int(lane), ego_s,

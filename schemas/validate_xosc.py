@@ -12,15 +12,14 @@ import tempfile
 from pathlib import Path
 
 from lxml import etree
-
-from schemas.autofix import apply_fixes
-from schemas.carla_lint import carla_lint
-from schemas.checks import detect_domain, semantics, structural
-from schemas.fidelity import fidelity
-from schemas.findings import Finding, ValidationResult
-from schemas.replay import judge_replay
-from schemas.scenario_doc import ScenarioDoc
-from schemas.xsd import xsd_findings
+from scenweave.schemas.autofix import apply_fixes
+from scenweave.schemas.carla_lint import carla_lint
+from scenweave.schemas.checks import detect_domain, semantics, structural
+from scenweave.schemas.fidelity import fidelity
+from scenweave.schemas.findings import Finding, ValidationResult
+from scenweave.schemas.replay import judge_replay
+from scenweave.schemas.scenario_doc import ScenarioDoc
+from scenweave.schemas.xsd import xsd_findings
 
 DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
 
@@ -60,8 +59,7 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
 
 def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._ElementTree,
                       params: dict, settings, map_path: Path | None) -> None:
-    import player
-    import spawn_db
+    from scenweave import player, spawn_db
 
     map_path = map_path or spawn_db.DEFAULT_MAP_PATH
     playback = player.replay_file(path, map_path, settings)

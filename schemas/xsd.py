@@ -7,8 +7,7 @@ from importlib.resources import files
 from pathlib import Path
 
 from lxml import etree
-
-from schemas.findings import Finding
+from scenweave.schemas.findings import Finding
 
 
 class SchemaUnavailable(RuntimeError):

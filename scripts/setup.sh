@@ -21,10 +21,8 @@ if [ ! -x .venv/bin/python ]; then
     python3.11 -m venv .venv 2>/dev/null || python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
-# compat mode puts the checkout itself on sys.path: scenariogeneration ships a top-level
-# `schemas/` folder of XSDs that would otherwise shadow our `schemas` package.
-.venv/bin/python -m pip install -q -e ".[$(tr -d ' \n' < scripts/extras.txt)]" \
-    --config-settings editable_mode=compat
+# an editable install: scenweave.agent, scenweave.corpus, ... map to the top-level folders
+.venv/bin/python -m pip install -q -e ".[$(tr -d ' \n' < scripts/extras.txt)]"
 
 for step in scripts/setup.d/*.sh; do
     [ -e "$step" ] || continue

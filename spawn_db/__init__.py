@@ -21,15 +21,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
-from spawn_db.database import (
+from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
+from scenweave.spawn_db.database import (
     build_database,
     carry_reviews,
     load_database,
     mark_reviewed,
     write_database,
 )
-from spawn_db.errors import (
+from scenweave.spawn_db.errors import (
     LaneEndsError,
     NoSpawnFits,
     OpenDriveError,
@@ -37,10 +37,10 @@ from spawn_db.errors import (
     SpawnDatabaseError,
     SpawnDbError,
 )
-from spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
-from spawn_db.opendrive import load_opendrive
-from spawn_db.road_network import LanePoint, RoadNetwork
-from spawn_db.signals import is_traffic_light, signal_position
+from scenweave.spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
+from scenweave.spawn_db.opendrive import load_opendrive
+from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
+from scenweave.spawn_db.signals import is_traffic_light, signal_position
 
 
 def lane_position_to_world(road_id: int | str, lane_id: int, s: float, offset: float = 0.0,

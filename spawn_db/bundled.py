@@ -5,8 +5,8 @@ from __future__ import annotations
 from functools import cache
 from pathlib import Path
 
-from spawn_db.opendrive import load_opendrive
-from spawn_db.road_network import RoadNetwork
+from scenweave.spawn_db.opendrive import load_opendrive
+from scenweave.spawn_db.road_network import RoadNetwork
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 #: CARLA's Town04 OpenDRIVE map (CC-BY 4.0, see maps/ATTRIBUTION.md)

@@ -24,13 +24,12 @@ from typing import Any
 
 import jsonschema
 import numpy as np
-
-from schemas import load_json_schema
-from spawn_db.bundled import road_network
-from spawn_db.errors import LaneEndsError, SpawnDatabaseError
-from spawn_db.lanes import lane_center_offset, lane_width
-from spawn_db.road_network import LaneKey, RoadNetwork
-from spawn_db.signals import JunctionApproach, junction_approach, signal_position
+from scenweave.schemas import load_json_schema
+from scenweave.spawn_db.bundled import road_network
+from scenweave.spawn_db.errors import LaneEndsError, SpawnDatabaseError
+from scenweave.spawn_db.lanes import lane_center_offset, lane_width
+from scenweave.spawn_db.road_network import LaneKey, RoadNetwork
+from scenweave.spawn_db.signals import JunctionApproach, junction_approach, signal_position
 
 FORMAT_VERSION = 1
 #: roads whose speed record is at least this are highway (km/h)

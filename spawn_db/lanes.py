@@ -14,10 +14,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
-from spawn_db.errors import OpenDriveError
-from spawn_db.opendrive import LaneSection, Road
-from spawn_db.plan_view import GL_NODES, GL_WEIGHTS
+from scenweave.spawn_db.errors import OpenDriveError
+from scenweave.spawn_db.opendrive import LaneSection, Road
+from scenweave.spawn_db.plan_view import GL_NODES, GL_WEIGHTS
 
 #: longest piece integrated with one Gauss-Legendre rule (m)
 _PIECE_M = 10.0

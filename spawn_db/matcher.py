@@ -27,12 +27,12 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from corpus.kinematics import start_gap_m
-from spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
-from spawn_db.database import load_database
-from spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
-from spawn_db.road_network import LanePoint, RoadNetwork
-from spawn_db.signals import junction_approach
+from scenweave.corpus.kinematics import start_gap_m
+from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
+from scenweave.spawn_db.database import load_database
+from scenweave.spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
+from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
+from scenweave.spawn_db.signals import junction_approach
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
 VEHICLE_MARGIN_M = 6.0

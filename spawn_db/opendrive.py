@@ -14,9 +14,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
-from spawn_db.errors import OpenDriveError
-from spawn_db.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
+from scenweave.spawn_db.errors import OpenDriveError
+from scenweave.spawn_db.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
 
 #: lane types a car may drive on
 DRIVABLE_LANE_TYPES = frozenset(

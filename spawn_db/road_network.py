@@ -16,9 +16,8 @@ from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
-
-from spawn_db.errors import LaneEndsError, OpenDriveError
-from spawn_db.lanes import (
+from scenweave.spawn_db.errors import LaneEndsError, OpenDriveError
+from scenweave.spawn_db.lanes import (
     WorldPose,
     driving_direction,
     lane_distance,
@@ -28,7 +27,7 @@ from spawn_db.lanes import (
     point_at,
     s_after_distance,
 )
-from spawn_db.opendrive import OpenDriveMap, Road, RoadLink
+from scenweave.spawn_db.opendrive import OpenDriveMap, Road, RoadLink
 
 #: a neighbouring lane narrower than this somewhere in its section is not usable for a manoeuvre
 MIN_USABLE_WIDTH_M = 2.5

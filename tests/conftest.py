@@ -5,8 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
-from ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
 SAMPLE_SEED = 7
 
@@ -14,7 +13,7 @@ SAMPLE_SEED = 7
 @pytest.fixture(scope="session")
 def esmini() -> None:
     """Skip, loudly, where no esmini is installed (setup installs it: scripts/setup.d)."""
-    from player import PlayerUnavailable, find_esmini
+    from scenweave.player import PlayerUnavailable, find_esmini
 
     try:
         find_esmini()

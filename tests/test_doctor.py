@@ -9,12 +9,11 @@ import time
 
 import pytest
 from click.testing import CliRunner
+from scenweave.agent.llm import embedded
+from scenweave.agent.llm.base import LLMUnavailable
+from scenweave.player import locate
 
-import sandbox
-from agent.llm import embedded
-from agent.llm.base import LLMUnavailable
-from player import locate
-from scenweave import doctor
+from scenweave import doctor, sandbox
 from scenweave.cli import cli
 from scenweave.testing.fake_ollama import PULLED, FakeOllama
 

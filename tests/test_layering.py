@@ -11,15 +11,26 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent")
 BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player")
+#: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
+FOLDERS = (*UPPER, *BOTTOM)
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    dotted = ".".join(parts).removesuffix(".__init__")
+    return dotted if parts[0] == "scenweave" else f"scenweave.{dotted}"
+
+
+def layer(module: str) -> str:
+    """The folder a module lives in: ``scenweave.agent.graph`` -> agent, ``scenweave.cli``
+    -> scenweave."""
+    second = module.split(".")[1] if "." in module else ""
+    return second if second in BOTTOM or second in UPPER[1:] else "scenweave"
 
 
 def _modules() -> dict[str, Path]:
-    found = {}
-    for package in (*UPPER, *BOTTOM):
-        for path in (ROOT / package).rglob("*.py"):
-            name = ".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
-            found[name] = path
-    return found
+    return {_module_name(path): path
+            for folder in FOLDERS for path in (ROOT / folder).rglob("*.py")}
 
 
 MODULES = _modules()
@@ -32,7 +43,9 @@ def _imports(path: Path) -> set[str]:
         if isinstance(node, ast.Import):
             names = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            names = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
+            # `from scenweave import corpus` depends on scenweave.corpus, not on the shell
+            module = [] if node.module == "scenweave" else [node.module]
+            names = [*module, *(f"{node.module}.{alias.name}" for alias in node.names)]
         else:
             continue
         for name in names:
@@ -90,9 +103,9 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 @pytest.mark.parametrize("package", [*UPPER, *BOTTOM])
 def test_no_import_cycle_among_a_packages_modules(package):
-    own = {name: {target for target in targets if target.split(".")[0] == package
+    own = {name: {target for target in targets if layer(target) == package
                   and not name.startswith(target + ".")}
-           for name, targets in GRAPH.items() if name.split(".")[0] == package}
+           for name, targets in GRAPH.items() if layer(name) == package}
     assert _cycles(own) == []
 
 
@@ -103,8 +116,8 @@ def test_the_cycle_finder_finds_a_cycle():
 @pytest.mark.parametrize("package", BOTTOM)
 def test_bottom_packages_never_import_the_upper_ones(package):
     upward = sorted((name, target) for name, targets in GRAPH.items()
-                    if name.split(".")[0] == package
-                    for target in targets if target.split(".")[0] in UPPER)
+                    if layer(name) == package
+                    for target in targets if layer(target) in UPPER)
     assert upward == []
 
 
@@ -112,7 +125,7 @@ def test_bottom_packages_never_import_the_upper_ones(package):
 EXPECTED_IMPORT_ERRORS = {
     # it imports what an LLM-written script names, to suggest a correction: a module that
     # does not exist is an answer there, not a broken import of ScenWeave's
-    "agent.repair.code_corrections",
+    "scenweave.agent.repair.code_corrections",
 }
 
 
@@ -128,3 +141,18 @@ def test_no_import_error_is_swallowed():
             if catches and not any(isinstance(child, ast.Raise) for child in ast.walk(node)):
                 quiet.append(f"{name}:{node.lineno}")
     assert quiet == []
+
+
+def test_every_import_of_ours_goes_through_the_scenweave_namespace():
+    """``import agent`` works only from a checkout; installed there is only ``scenweave``."""
+    bare = []
+    for path in ROOT.rglob("*.py"):
+        if path.relative_to(ROOT).parts[0] in (".venv", "build"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import) else
+                     [node.module] if isinstance(node, ast.ImportFrom) and node.module
+                     and node.level == 0 else [])
+            bare += [f"{path.relative_to(ROOT)}:{node.lineno} {name}" for name in names
+                     if name.split(".")[0] in FOLDERS[1:]]
+    assert bare == []

@@ -10,18 +10,18 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-from agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
+from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
 
 if TYPE_CHECKING:
-    from agent.settings import AgentSettings
+    from scenweave.agent.settings import AgentSettings
 
 __all__ = ["BACKENDS", "LLM", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt", "get_llm"]
 
 #: backend name -> "module:class"
 BACKENDS = {
-    "ollama": "agent.llm.ollama:OllamaLLM",
-    "embedded": "agent.llm.embedded:EmbeddedLLM",
-    "replay": "agent.llm.replay:ReplayLLM",
+    "ollama": "scenweave.agent.llm.ollama:OllamaLLM",
+    "embedded": "scenweave.agent.llm.embedded:EmbeddedLLM",
+    "replay": "scenweave.agent.llm.replay:ReplayLLM",
 }
 
 

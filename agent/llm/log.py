@@ -12,8 +12,8 @@ from contextlib import closing
 from datetime import UTC, datetime
 from pathlib import Path
 
-from agent.home import home
-from agent.llm.messages import LLMReply, Prompt
+from scenweave.agent.home import home
+from scenweave.agent.llm.messages import LLMReply, Prompt
 
 LOG_NAME = "llm-calls.sqlite"
 SCHEMA = """

@@ -7,9 +7,8 @@ from typing import Any
 
 import httpx
 import ollama
-
-from agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
-from agent.settings import AgentSettings
+from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
+from scenweave.agent.settings import AgentSettings
 
 
 class OllamaLLM(LLM):

@@ -16,8 +16,8 @@ import threading
 from collections import Counter
 from pathlib import Path
 
-from agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
-from agent.settings import AgentSettings
+from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
+from scenweave.agent.settings import AgentSettings
 
 ANY = "*"
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from agent.repair.base import Candidate, RepairStrategy, Request
+from scenweave.agent.repair.base import Candidate, RepairStrategy, Request
 
 __all__ = ["Candidate", "RepairStrategy", "Request", "checked_repair", "get_strategy",
            "strategy_names"]
@@ -33,4 +33,4 @@ def checked_repair(name: str) -> str:
 
 def get_strategy(name: str) -> RepairStrategy:
     """The strategy called ``name`` (dashes and underscores alike); ValueError if none is."""
-    return importlib.import_module(f"agent.repair.{checked_repair(name)}").STRATEGY
+    return importlib.import_module(f"scenweave.agent.repair.{checked_repair(name)}").STRATEGY

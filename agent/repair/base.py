@@ -5,10 +5,10 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
-from agent.code import apply_corrections, extract_python_code
-from agent.llm.base import LLM, LLMReply, Prompt
-from agent.prompts import generation_prompt
-from agent.state import Attempt
+from scenweave.agent.code import apply_corrections, extract_python_code
+from scenweave.agent.llm.base import LLM, LLMReply, Prompt
+from scenweave.agent.prompts import generation_prompt
+from scenweave.agent.state import Attempt
 
 
 @dataclass

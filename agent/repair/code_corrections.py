@@ -18,9 +18,9 @@ import sys
 import textwrap
 from types import ModuleType
 
-from agent.llm.base import LLM
-from agent.repair.base import Candidate, RepairStrategy, Request
-from agent.repair.error_feedback import ErrorFeedback
+from scenweave.agent.llm.base import LLM
+from scenweave.agent.repair.base import Candidate, RepairStrategy, Request
+from scenweave.agent.repair.error_feedback import ErrorFeedback
 
 MISSING_MODULE_ATTR = re.compile(r"module '([\w.]+)' has no attribute '(\w+)'")
 MISSING_CLASS_ATTR = re.compile(r"type object '(\w+)' has no attribute '(\w+)'")

@@ -3,9 +3,9 @@ insist on reproducing the reference verbatim with only the numbers changed."""
 
 from __future__ import annotations
 
-from agent.llm.base import LLM
-from agent.prompts import error_prompt
-from agent.repair.base import Candidate, RepairStrategy, Request, ask_for_script
+from scenweave.agent.llm.base import LLM
+from scenweave.agent.prompts import error_prompt
+from scenweave.agent.repair.base import Candidate, RepairStrategy, Request, ask_for_script
 
 
 class ErrorFeedback(RepairStrategy):

@@ -7,10 +7,10 @@ A block that does not apply fails the attempt with an error the next prompt show
 
 from __future__ import annotations
 
-from agent.code import PatchError, apply_corrections, apply_edit_blocks
-from agent.llm.base import LLM, Prompt
-from agent.prompts import patch_prompt
-from agent.repair.base import Candidate, RepairStrategy, Request
+from scenweave.agent.code import PatchError, apply_corrections, apply_edit_blocks
+from scenweave.agent.llm.base import LLM, Prompt
+from scenweave.agent.prompts import patch_prompt
+from scenweave.agent.repair.base import Candidate, RepairStrategy, Request
 
 
 class Patch(RepairStrategy):

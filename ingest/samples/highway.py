@@ -11,8 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-
-from ingest.layouts import HighwayLayouts, load_layouts
+from scenweave.ingest.layouts import HighwayLayouts, load_layouts
 
 Columns = dict[str, np.ndarray]
 VEHICLE_TYPES = np.array(["Car", "Truck", "Van", "Motorcycle"], dtype=object)

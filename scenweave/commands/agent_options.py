@@ -75,9 +75,9 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
     replay_settings = replay_settings_for(replay)
     if no_llm or llm == "none":
         return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings)
-    from agent import AgentSettings
-    from agent.repair import get_strategy
-    from sandbox import SandboxSettings
+    from scenweave.agent import AgentSettings
+    from scenweave.agent.repair import get_strategy
+    from scenweave.sandbox import SandboxSettings
 
     try:
         get_strategy(repair)
@@ -98,7 +98,7 @@ def replay_settings_for(wanted: bool | None) -> Any:
     be there), or by default when esmini is found; None for ``--no-replay``."""
     if wanted is False:
         return None
-    from player import PlayerUnavailable, ReplaySettings, find_esmini
+    from scenweave.player import PlayerUnavailable, ReplaySettings, find_esmini
 
     try:
         find_esmini()

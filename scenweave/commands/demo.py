@@ -11,9 +11,9 @@ from pathlib import Path
 
 import click
 
-from ingest import ingest_directory
-from ingest.samples import write_highway_samples, write_urban_samples
 from scenweave.commands.agent_options import pipeline_settings, replay_settings_for
+from scenweave.ingest import ingest_directory
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.runner import run_batch

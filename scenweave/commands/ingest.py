@@ -7,9 +7,9 @@ from pathlib import Path
 
 import click
 
-from ingest import ingest_directory
-from ingest.batch import REPORT_NAME
-from ingest.highway import DEFAULT_BINNING
+from scenweave.ingest import ingest_directory
+from scenweave.ingest.batch import REPORT_NAME
+from scenweave.ingest.highway import DEFAULT_BINNING
 
 SHOWN_ISSUES = 20
 

@@ -15,7 +15,7 @@ import click
 @click.option("--json", "as_json", is_flag=True, help="Print the calls as a JSON list.")
 def logs(count: int, scenario: str | None, full: bool, as_json: bool) -> None:
     """List logged LLM calls: when, backend, model, scenario, tokens, latency, reply."""
-    from agent.llm.log import log_path, recent_calls
+    from scenweave.agent.llm.log import log_path, recent_calls
 
     calls = recent_calls(count, scenario)
     if as_json:

@@ -28,7 +28,7 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
            as_json: bool) -> None:
     """Play each scenario (a run folder's, or .xosc files) and say whether it replays as
     recorded."""
-    from player import ReplaySettings, find_esmini
+    from scenweave.player import ReplaySettings, find_esmini
 
     find_esmini()  # PlayerUnavailable is one line naming ESMINI_HOME
     settings = ReplaySettings(time_step_s=time_step, wall_time_s=wall_time)
@@ -61,10 +61,10 @@ def scenario_files(paths: tuple[Path, ...]) -> list[Path]:
 
 def replay_one(xosc: Path, settings, figures: bool) -> dict:
     """Play ``xosc``; judge it against its folder's params.json when there is one."""
-    from player import REPLAY_NAME, replay_file
-    from schemas import validate_xosc
-    from schemas.replay import judge_collisions_only
-    from spawn_db import DEFAULT_MAP_PATH
+    from scenweave.player import REPLAY_NAME, replay_file
+    from scenweave.schemas import validate_xosc
+    from scenweave.schemas.replay import judge_collisions_only
+    from scenweave.spawn_db import DEFAULT_MAP_PATH
 
     params_path = xosc.parent / "params.json"
     if params_path.is_file():

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import click
 
-from ingest.layouts import load_layouts
-from ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.ingest.layouts import load_layouts
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
 
 @click.command("sample-data")

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from sandbox import SandboxSettings, check_backends
+from scenweave.sandbox import SandboxSettings, check_backends
 
 
 @click.group("sandbox")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from spawn_db import (
+from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
     DEFAULT_MAP_PATH,
     build_database,
@@ -57,7 +57,7 @@ def build(map_path: Path, out_path: Path, keep_reviews: bool) -> None:
               help="Also print the spawn points as JSON lines (id, context, place, review).")
 def show(db_path: Path, map_path: Path, out_path: Path, as_json: bool) -> None:
     """Draw the map and its spawn points (by context and priority) into a PNG for review."""
-    from spawn_db.map_plot import plot_spawn_points  # matplotlib only when drawing
+    from scenweave.spawn_db.map_plot import plot_spawn_points  # matplotlib only when drawing
 
     database = load_database(db_path)
     plot_spawn_points(road_network(map_path), database, out_path)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from schemas import validate_xosc
+from scenweave.schemas import validate_xosc
 
 
 @click.command("validate")

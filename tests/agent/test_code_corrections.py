@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from scenweave.agent.repair.code_corrections import allowed_modules, deterministic_fix
 
-from agent.repair.code_corrections import allowed_modules, deterministic_fix
 from tests.agent.conftest import reference_source
 
 REPO = Path(__file__).resolve().parents[2]
@@ -24,7 +24,7 @@ def fix(code: str, message: str) -> tuple[str, str]:
 
 def test_the_allow_list_is_the_reference_s_imports_and_scenariogeneration():
     assert set(allowed_modules(reference_source("BRAKE"))) == {
-        "corpus.corpus_utils", "pathlib", "scenariogeneration"}
+        "scenweave.corpus.corpus_utils", "pathlib", "scenariogeneration"}
 
 
 @pytest.mark.parametrize("code, message, fixed", [

@@ -9,15 +9,15 @@ from pathlib import Path
 
 import pytest
 from langgraph.runtime import Runtime
+from scenweave.agent import AgentSettings, LLMTimeout, LLMUnavailable, run_scenario
+from scenweave.agent.context import AgentContext
+from scenweave.agent.graph import after_execute, after_generation, after_validate, build_graph
+from scenweave.agent.repair import get_strategy
+from scenweave.agent.run import CHECKPOINTS_NAME
+from scenweave.sandbox import SandboxSettings
+from scenweave.schemas import validate_xosc
 
-from agent import AgentSettings, LLMTimeout, LLMUnavailable, run_scenario
-from agent.context import AgentContext
-from agent.graph import after_execute, after_generation, after_validate, build_graph
-from agent.repair import get_strategy
-from agent.run import CHECKPOINTS_NAME
-from sandbox import SandboxSettings
 from scenweave.pipeline import is_infrastructure_error
-from schemas import validate_xosc
 from tests.agent.conftest import fenced, reference_source
 from tests.corpus.params_examples import example_params
 
@@ -204,7 +204,7 @@ def test_every_node_is_checkpointed_in_the_scenario_thread(replay, tmp_path):
 
 
 def test_a_past_trace_replays_to_the_same_outcome(replay, tmp_path, sandbox_settings):
-    from agent import AgentSettings
+    from scenweave.agent import AgentSettings
 
     reference = reference_source("BRAKE")
     first, out = run("BRAKE", replay(["no code at all, sorry", fenced(reference)]), tmp_path)

@@ -6,11 +6,11 @@ from __future__ import annotations
 import json
 
 import pytest
+from scenweave.agent import run_scenario
+from scenweave.player import ReplaySettings
+from scenweave.spawn_db import SpawnMatcher
 
-from agent import run_scenario
-from player import ReplaySettings
 from scenweave.inputs import InputSelection, load_input
-from spawn_db import SpawnMatcher
 from tests.agent.conftest import fenced
 from tests.agent.test_graph import events, nodes_in_trace
 
@@ -51,7 +51,7 @@ def _run(params: dict, settings, tmp_path):
 
 def test_a_replay_failure_is_repaired_with_what_the_engine_showed(replay, stop_at_red,
                                                                   tmp_path):
-    import corpus
+    from scenweave import corpus
 
     reference = corpus.retrieve(stop_at_red).source
     settings = replay([fenced(reference + RISING_EDGES), fenced(reference)],
@@ -71,8 +71,7 @@ def test_a_replay_failure_is_repaired_with_what_the_engine_showed(replay, stop_a
 
 def test_a_fallback_that_fails_the_replay_ends_failed_with_taxonomy_replay(
         replay, stop_at_red_record, tmp_path, monkeypatch):
-    import corpus
-    import corpus.corpus_utils
+    from scenweave import corpus
 
     # the fallback (the reference, run in this process) with a slow lead that never gets out
     # of the way: valid and faithful, and the ego runs into it when played

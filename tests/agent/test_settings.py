@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import pytest
-
-from agent import AgentSettings
-from agent.repair import strategy_names
+from scenweave.agent import AgentSettings
+from scenweave.agent.repair import strategy_names
 
 
 @pytest.mark.parametrize("given, kept", [("patch", "patch"),

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import pytest
-
-from agent.taxonomy import classify_exception
-from schemas import failure_category
+from scenweave.agent.taxonomy import classify_exception
+from scenweave.schemas import failure_category
 
 
 def _finding(code: str, severity: str = "error") -> dict:

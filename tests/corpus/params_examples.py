@@ -11,8 +11,9 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-import spawn_db
-from corpus.retrieval import CLASS_TAGS as TAGS  # checked against docs/params.md
+from scenweave.corpus.retrieval import CLASS_TAGS as TAGS  # checked against docs/params.md
+
+from scenweave import spawn_db
 
 EGO_S = 100.0
 START_S = 2.0

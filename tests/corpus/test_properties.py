@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-import corpus
+from scenweave import corpus
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 from tests.corpus.params_examples import TAGS, example_params
 

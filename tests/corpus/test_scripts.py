@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 from lxml import etree
 from scenariogeneration import xosc
+from scenweave.corpus import CorpusError
 
-import corpus
-from corpus import CorpusError
+from scenweave import corpus
 from tests.corpus.conventions import (
     action_named,
     assert_entities_match,
@@ -137,7 +137,7 @@ def test_scripts_import_only_corpus_utils(script):
     modules = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     modules |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
                 for alias in node.names}
-    assert modules <= {"corpus.corpus_utils", "pathlib"}
+    assert modules <= {"scenweave.corpus.corpus_utils", "pathlib"}
     assert ast.get_docstring(tree)
     assert any(isinstance(n, ast.FunctionDef) and n.name == "generate" for n in tree.body)
 
@@ -145,11 +145,11 @@ def test_scripts_import_only_corpus_utils(script):
 def test_corpus_utils_imports_nothing_else_from_scenweave():
     source = Path(corpus.__file__).with_name("corpus_utils.py").read_text(encoding="utf-8")
     tree = ast.parse(source)
-    roots = {(node.module or "").split(".")[0] for node in ast.walk(tree)
-             if isinstance(node, ast.ImportFrom)}
-    roots |= {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
-              for alias in node.names}
-    assert not roots & {"scenweave", "ingest", "agent", "sandbox", "schemas", "spawn_db"}
+    modules = {node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    modules |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
+                for alias in node.names}
+    ours = {name for name in modules if name.split(".")[0] == "scenweave"}
+    assert ours and all(name.startswith("scenweave.corpus.") for name in ours), ours
 
 
 def test_there_are_sixteen_scripts_covering_every_class():
@@ -175,29 +175,36 @@ def test_nan_speed_is_refused(tmp_path):
 
 
 SANDBOX_RUN = """
-import importlib.abc, json, sys
-OURS = {"scenweave", "ingest", "agent", "sandbox", "schemas", "spawn_db", "tests"}
-class Forbid(importlib.abc.MetaPathFinder):
+import importlib.abc, importlib.machinery, json, sys
+LIB = sys.argv[1]
+OTHERS = {"ingest", "agent", "sandbox", "schemas", "spawn_db", "player", "tests"}
+class OnlyTheCorpus(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path, target=None):
-        if name.split(".")[0] in OURS:
+        if name == "scenweave":  # as in the sandbox: a namespace that holds only the corpus
+            spec = importlib.machinery.ModuleSpec(name, None, is_package=True)
+            spec.submodule_search_locations = [LIB + "/scenweave"]
+            return spec
+        inside = name.startswith("scenweave.") and not name.startswith("scenweave.corpus")
+        if inside or name.split(".")[0] in OTHERS:
             raise ImportError(f"the sandbox has no {name}")
-sys.meta_path.insert(0, Forbid())
-import corpus, importlib
-assert corpus.__file__.startswith(sys.argv[1]), corpus.__file__
-script = importlib.import_module("corpus." + sys.argv[2])
+sys.meta_path.insert(0, OnlyTheCorpus())
+import importlib
+from scenweave import corpus
+assert corpus.__file__.startswith(LIB), corpus.__file__
+script = importlib.import_module("scenweave.corpus." + sys.argv[2])
 print(script.generate(json.loads(sys.argv[3]), sys.argv[4]))
 """
 
 
 @pytest.mark.parametrize("code", ["CINF", "FRB", "U4_4"])
 def test_a_copy_of_the_corpus_folder_runs_alone(code, tmp_path, xsd_1_0):
-    """As in the sandbox: only the ``corpus`` folder and scenariogeneration are there."""
+    """As in the sandbox: only ``scenweave/corpus`` and scenariogeneration are there."""
     import json
     import shutil
     import subprocess
     import sys
 
-    shutil.copytree(Path(corpus.__file__).parent, tmp_path / "corpus",
+    shutil.copytree(Path(corpus.__file__).parent, tmp_path / "scenweave" / "corpus",
                     ignore=shutil.ignore_patterns("__pycache__"))
     script = corpus.retrieve(code).script_path.stem
     out = tmp_path / "out" / "s.xosc"

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from scenweave.ingest import ingest_directory
 
-from ingest import ingest_directory
 from scenweave.cli import cli
 from tests.ingest.builders import obstacle, scene, write_npy, write_scene
 
@@ -147,7 +147,9 @@ def test_strict_turns_errors_into_a_failing_exit_and_output_is_never_half_writte
 
 
 def test_custom_layout_file_is_checked_and_used(tmp_path):
-    layout = json.loads((__import__("ingest").layouts.DEFAULT_LAYOUT_PATH).read_text())
+    from scenweave.ingest.layouts import DEFAULT_LAYOUT_PATH
+
+    layout = json.loads(DEFAULT_LAYOUT_PATH.read_text())
     columns = layout["classes"]["LCF"]["columns"]
     columns[0], columns[1] = columns[1], columns[0]  # this lab stores end speed first
     custom = tmp_path / "layout.json"
@@ -225,16 +227,16 @@ def test_null_and_boolean_climate_flags_are_accepted(tmp_path):
 def test_an_unforeseen_error_in_one_file_is_an_issue_naming_it_and_the_batch_goes_on(
         tmp_path, monkeypatch):
     # stands in for a bug no check foresaw: the TTC scan fails on the second file only
-    import ingest.urban
+    from scenweave.ingest import urban
 
-    real_min_ttc = ingest.urban._min_ttc
+    real_min_ttc = urban._min_ttc
 
     def failing_on_second(frames):
         if frames[0]["time"] == 2.0:
             raise ZeroDivisionError("float division by zero")
         return real_min_ttc(frames)
 
-    monkeypatch.setattr(ingest.urban, "_min_ttc", failing_on_second)
+    monkeypatch.setattr(urban, "_min_ttc", failing_on_second)
     raw = tmp_path / "raw"
     for begin in (1.0, 2.0, 3.0):
         data = scene("U1_1", [36] * 3, [begin, begin + 1, begin + 2], [0, 10, 20])

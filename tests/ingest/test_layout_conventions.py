@@ -11,9 +11,15 @@ import json
 import shutil
 
 import pytest
+from scenweave.ingest import (
+    LayoutError,
+    extract_params,
+    ingest_directory,
+    load_layouts,
+    load_records,
+)
+from scenweave.ingest.layouts import DEFAULT_LAYOUT_PATH
 
-from ingest import LayoutError, extract_params, ingest_directory, load_layouts, load_records
-from ingest.layouts import DEFAULT_LAYOUT_PATH
 from tests.ingest.builders import write_npy
 
 DEFAULT = json.loads(DEFAULT_LAYOUT_PATH.read_text())

@@ -6,9 +6,8 @@ import json
 
 import numpy as np
 import pytest
-
-from ingest import ingest_directory, load_records
-from ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.ingest import ingest_directory, load_records
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
 
 @pytest.fixture(scope="module")

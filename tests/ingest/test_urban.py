@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
+from scenweave.ingest import check_record, extract_params
+from scenweave.ingest.urban import canonicalize_scene
 
-from ingest import check_record, extract_params
-from ingest.urban import canonicalize_scene
 from tests.ingest.builders import obstacle, scene
 
 REGULAR = [100.0, 101.0, 102.0, 103.0, 104.0]
@@ -206,7 +206,7 @@ def test_straight_on_green_light_beyond_the_segment_uses_the_start_speed():
 
 
 def test_urban_init_and_final_speed_follow_the_ego_speeds_in_variants():
-    from ingest import extract_with_variants
+    from scenweave.ingest import extract_with_variants
 
     data = scene("U4_2", [36, 36, 36, 30.6], REGULAR[:4], [0, 10, 20, 29], light=(40.0, 167))
     record = canonicalize_scene(data, "U4_2/x.json")

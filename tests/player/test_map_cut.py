@@ -14,15 +14,14 @@ from pathlib import Path
 
 import pytest
 from lxml import etree
+from scenweave.player import Playback, ReplaySettings, find_esmini, maps, replay_file
+from scenweave.player.errors import PlayerUnavailable
+from scenweave.player.replay import _lights_of
+from scenweave.player.translate import translate
+from scenweave.spawn_db import SpawnMatcher
 
-import corpus
-import spawn_db
-from player import Playback, ReplaySettings, find_esmini, maps, replay_file
-from player.errors import PlayerUnavailable
-from player.replay import _lights_of
-from player.translate import translate
+from scenweave import corpus, spawn_db
 from scenweave.inputs import InputSelection, load_input
-from spawn_db import SpawnMatcher
 
 MAP = spawn_db.DEFAULT_MAP_PATH
 CLASSES = ("LCF", "CINB", "U4_4")
@@ -140,7 +139,7 @@ def test_a_replay_that_leaves_the_cut_is_played_again_on_the_whole_map(scenarios
 
 
 def _played(scenario: etree._Element, cut: maps.MapCut) -> tuple[Playback, float]:
-    from player.replay import _play
+    from scenweave.player.replay import _play
 
     stop = max(float(c.get("value")) for c in
                scenario.iterfind("Storyboard/StopTrigger//SimulationTimeCondition"))

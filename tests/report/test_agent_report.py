@@ -14,9 +14,9 @@ from urllib.request import url2pathname
 
 import lxml.html
 import pytest
+from scenweave.agent import AgentSettings
+from scenweave.sandbox import SandboxSettings
 
-from agent import AgentSettings
-from sandbox import SandboxSettings
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.report import REPORT_FILE

@@ -13,9 +13,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-
-from sandbox import Sandbox, SandboxSettings, SandboxUnavailable, get_sandbox
-from sandbox.engine import engine_answers, start_podman_service
+from scenweave.sandbox import Sandbox, SandboxSettings, SandboxUnavailable, get_sandbox
+from scenweave.sandbox.engine import engine_answers, start_podman_service
 
 #: short limits keep the attack suite quick; the limits themselves are what is under test
 FAST = {"wall_time_s": 4.0, "memory_mb": 256, "pids": 32, "output_max_bytes": 1024 * 1024,

@@ -16,7 +16,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import TypeVar
 
-from sandbox import ExecResult
+from scenweave.sandbox import ExecResult
 
 T = TypeVar("T")
 

@@ -16,7 +16,8 @@ import subprocess
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from sandbox.settings import MIB
+from scenweave.sandbox.settings import MIB
+
 from tests.sandbox.evidence import (
     Listener,
     file_size,

@@ -7,8 +7,8 @@ import shutil
 
 import pytest
 from click.testing import CliRunner
+from scenweave.player import ReplaySettings
 
-from player import ReplaySettings
 from scenweave.cli import cli
 from scenweave.commands.agent_options import replay_settings_for
 from scenweave.inputs import InputSelection

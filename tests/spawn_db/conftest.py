@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import pytest
-
-from spawn_db import DEFAULT_DB_PATH, load_database, road_network
-from spawn_db.road_network import RoadNetwork
+from scenweave.spawn_db import DEFAULT_DB_PATH, load_database, road_network
+from scenweave.spawn_db.road_network import RoadNetwork
 
 
 @pytest.fixture(scope="session")

@@ -8,8 +8,7 @@ import shutil
 
 import numpy as np
 import pytest
-
-from spawn_db import (
+from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
     DEFAULT_MAP_PATH,
     SpawnDatabaseError,
@@ -19,9 +18,9 @@ from spawn_db import (
     mark_reviewed,
     write_database,
 )
-from spawn_db.database import validate_database
-from spawn_db.lanes import lane_border_offsets
-from spawn_db.signals import is_traffic_light, signal_position
+from scenweave.spawn_db.database import validate_database
+from scenweave.spawn_db.lanes import lane_border_offsets
+from scenweave.spawn_db.signals import is_traffic_light, signal_position
 
 
 @pytest.fixture(scope="module")
@@ -141,7 +140,8 @@ def test_invalid_database_names_the_field(tmp_path):
 
 
 def test_any_map_builds_and_matches(tmp_path):
-    from spawn_db import SpawnMatcher
+    from scenweave.spawn_db import SpawnMatcher
+
     from tests.spawn_db.contract_params import highway
     from tests.spawn_db.synthetic_maps import two_road_chain, write
 

@@ -6,9 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from scenweave.spawn_db.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
 from scipy.integrate import quad
-
-from spawn_db.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
 
 
 def _integrated_clothoid(k0: float, rate: float, ds: float) -> tuple[float, float]:

@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from scenweave.spawn_db import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
+from scenweave.spawn_db.road_network import LanePoint
 
-from spawn_db import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
-from spawn_db.road_network import LanePoint
 from tests.spawn_db.synthetic_maps import two_road_chain, write
 
 
@@ -114,7 +114,11 @@ def test_heading_of_a_widening_lane_follows_its_centre_line(chain):
 def test_closed_form_lane_distance_equals_the_quadrature_on_town04(town04):
     # where a lane keeps its offset on a line or arc, lane_distance takes a closed form; it
     # must agree with the Gauss-Legendre integral it replaces (and be used somewhere)
-    from spawn_db.lanes import _constant_centre_offset, integrated_lane_distance, lane_distance
+    from scenweave.spawn_db.lanes import (
+        _constant_centre_offset,
+        integrated_lane_distance,
+        lane_distance,
+    )
 
     closed_form = 0
     for key in list(town04.drivable_lanes())[::7]:

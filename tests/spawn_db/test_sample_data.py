@@ -9,12 +9,11 @@ import math
 from collections import Counter
 
 import pytest
-
-from ingest import IngestReport, extract_params, iter_raw_records
-from ingest.samples import write_highway_samples, write_urban_samples
-from spawn_db import SpawnMatcher, traffic_lights_carla
-from spawn_db.road_network import LanePoint
-from spawn_db.signals import junction_approach
+from scenweave.ingest import IngestReport, extract_params, iter_raw_records
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.spawn_db import SpawnMatcher, traffic_lights_carla
+from scenweave.spawn_db.road_network import LanePoint
+from scenweave.spawn_db.signals import junction_approach
 
 PER_CLASS = 12
 

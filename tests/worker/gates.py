@@ -15,8 +15,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from scenweave.spawn_db import SpawnMatcher
+
 from scenweave.run_folder import safe_name
-from spawn_db import SpawnMatcher
 
 GATES_ENV = "SCENWEAVE_TEST_GATES"
 

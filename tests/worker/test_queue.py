@@ -187,9 +187,8 @@ def test_infrastructure_errors_are_told_from_scenario_errors(error, infrastructu
 
 def test_sandbox_and_redis_errors_are_infrastructure_spawn_errors_are_not():
     from redis.exceptions import ConnectionError as RedisConnectionError
-
-    from sandbox import SandboxUnavailable
-    from spawn_db.errors import NoSpawnFits
+    from scenweave.sandbox import SandboxUnavailable
+    from scenweave.spawn_db.errors import NoSpawnFits
 
     assert is_infrastructure_error(SandboxUnavailable("no engine"))
     assert is_infrastructure_error(RedisConnectionError("gone"))

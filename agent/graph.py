@@ -14,6 +14,7 @@ from typing import Literal
 
 from langgraph.graph import END, START, StateGraph
 from langgraph.runtime import Runtime
+
 from scenweave.agent.context import AgentContext
 from scenweave.agent.nodes import execute, fallback, generate, repair, retrieve, validate
 from scenweave.agent.state import AgentState

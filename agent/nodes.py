@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from langgraph.runtime import Runtime
+
 from scenweave.agent.code import diff_to_reference, static_check
 from scenweave.agent.context import AgentContext
 from scenweave.agent.llm.base import LLMTimeout, LLMUnavailable
@@ -113,9 +114,8 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 @node
 def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Out of attempts: run the reference script directly (trusted code, in-process)."""
-    from scenweave.schemas import validate_xosc
-
     from scenweave import corpus
+    from scenweave.schemas import validate_xosc
 
     out_dir = Path(state["out_dir"])
     xosc = out_dir / XOSC_NAME

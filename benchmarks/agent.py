@@ -30,11 +30,10 @@ def run_strategy(raw: Path, out: Path, classes: tuple[str, ...], repair: str,
                  max_attempts: int, sandbox: str) -> tuple[list[dict], float]:
     """All selected records through the agent with ``repair``; outcomes and wall time."""
     from scenweave.agent import AgentSettings
-    from scenweave.sandbox import SandboxSettings
-
     from scenweave.inputs import InputSelection
     from scenweave.pipeline import PipelineSettings
     from scenweave.runner import run_batch
+    from scenweave.sandbox import SandboxSettings
 
     settings = PipelineSettings(no_llm=False, agent=AgentSettings(
         llm="embedded", repair=repair, max_attempts=max_attempts,

@@ -40,7 +40,6 @@ CLI = [sys.executable, "-m", "scenweave.cli"]
 def make_scenarios(raw: Path, out: Path, per_class: int) -> list[Path]:
     """Sample data (seed 7) and ``scenweave run --no-llm --no-replay`` on it: the .xosc files."""
     from scenweave.ingest.samples import write_highway_samples, write_urban_samples
-
     from scenweave.inputs import InputSelection
     from scenweave.pipeline import PipelineSettings
     from scenweave.runner import run_batch

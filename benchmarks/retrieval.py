@@ -19,9 +19,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 os.environ.setdefault("HF_HUB_OFFLINE", "1")
 
-from scenweave.corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic  # noqa: E402
-
 from scenweave import corpus  # noqa: E402
+from scenweave.corpus.retrieval import class_tags, retrieve_semantic, tag_scripts  # noqa: E402
 
 #: free-text query -> the script a driving engineer would expect
 QUERIES: dict[str, str] = {
@@ -78,13 +77,13 @@ def recall_at_1(pairs: list[tuple[str, str]], find) -> tuple[float, list[str]]:
 
 def expected_for_class(code: str) -> str:
     """The script docs/params.md assigns to a class code."""
-    return MANEUVER_TAGS[CLASS_TAGS[code]]
+    return tag_scripts()[class_tags()[code]].name
 
 
 def main() -> None:
     """Print the figures."""
-    codes = [(code, expected_for_class(code)) for code in CLASS_TAGS]
-    tags = list(MANEUVER_TAGS.items())
+    codes = [(code, expected_for_class(code)) for code in class_tags()]
+    tags = [(tag, path.name) for tag, path in tag_scripts().items()]
     for label, pairs, find in [("class codes", codes, corpus.retrieve),
                                ("tags", tags, corpus.retrieve),
                                ("semantic fallback, free text", list(QUERIES.items()),

@@ -73,7 +73,6 @@ def main() -> None:
 
     from scenweave.corpus import list_scripts
     from scenweave.sandbox import SandboxSettings, get_sandbox
-
     from tests.corpus.params_examples import example_params
 
     brake = next(p for p in list_scripts() if p.name == "gen_hw_brake.py").read_text()

@@ -3,10 +3,24 @@
 ``retrieve(params_or_query)`` picks a script (keyword, tag table, semantic fallback),
 ``generate(params, out_path)`` runs it in-process (the deterministic ``--no-llm`` path),
 ``list_scripts()`` lists them. Scenario layout: ``docs/scenario-conventions.md``.
+
+The names below load on first use: inside the sandbox only this folder exists, and a script
+importing ``scenweave.corpus.corpus_utils`` must not pull in retrieval (and the registry).
 """
 
-from scenweave.corpus.errors import CorpusError, ParamsError
-from scenweave.corpus.retrieval import MANEUVER_TAGS, Retrieval, generate, list_scripts, retrieve
+from __future__ import annotations
 
-__all__ = ["MANEUVER_TAGS", "CorpusError", "ParamsError", "Retrieval", "generate", "list_scripts",
-           "retrieve"]
+import importlib
+from typing import Any
+
+from scenweave.corpus.errors import CorpusError, ParamsError
+
+_RETRIEVAL = ("Retrieval", "generate", "list_scripts", "retrieve")
+
+__all__ = ["CorpusError", "ParamsError", *_RETRIEVAL]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _RETRIEVAL:
+        raise AttributeError(f"module 'scenweave.corpus' has no attribute {name!r}")
+    return getattr(importlib.import_module("scenweave.corpus.retrieval"), name)

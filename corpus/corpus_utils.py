@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from scenariogeneration import xosc
+
 from scenweave.corpus.kinematics import (
     MAX_PLAYABLE_DECELERATION_MS2,
     SAFETY_GAP_M,
@@ -282,21 +283,24 @@ def urban_traffic(params: Mapping[str, Any]) -> list[Actor]:
     return traffic
 
 
-def lead_keeps_ahead(params: Mapping[str, Any]) -> list[StoryEvent]:
-    """The urban lead's ``lead_speed_change`` when the ego, driving as recorded, would catch
-    it up before ``timeout_s`` (``corpus.kinematics.lead_stays_ahead``); none otherwise."""
+def lead_keeps_ahead(params: Mapping[str, Any],
+                     ego_stops_at_line: bool = False) -> list[StoryEvent]:
+    """The urban lead's ``lead_speed_change`` when the ego, driving as recorded (stopping at
+    the line if ``ego_stops_at_line``), would catch it up before ``timeout_s``
+    (``corpus.kinematics.lead_stays_ahead``); none otherwise."""
     if not params.get("lead_present"):
         return []
     clearance = clearance_m(params.get("lead_vehicle_type"))
-    profile = lead_stays_ahead(number(params, "lead_speed_ms"), urban_hero_profile(params),
+    hero = urban_hero_profile(params, ego_stops_at_line)
+    profile = lead_stays_ahead(number(params, "lead_speed_ms"), hero,
                                number(params, "lead_distance_m"), number(params, "timeout_s"),
                                clearance)
     return [] if profile is None else [_profile_change("lead", profile)]
 
 
-def urban_hero_profile(params: Mapping[str, Any]) -> SpeedProfile:
-    """How the urban ego drives: the stop at the line (U4_1) or its recorded speed change."""
-    if params.get("maneuver_class") == "U4_1":
+def urban_hero_profile(params: Mapping[str, Any], stops_at_line: bool) -> SpeedProfile:
+    """How the urban ego drives: the stop at the line or its recorded speed change."""
+    if stops_at_line:
         return stop_at_line(number(params, "ego_speed_ms"), number(params, "brake_time_s"),
                             stop_line_m(params))
     duration, start = manoeuvre_timing(params)

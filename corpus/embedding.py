@@ -15,6 +15,7 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+
 from scenweave.corpus.errors import CorpusError
 
 SETUP_HINT = ("install the 'semantic' extra and the model: `bash scripts/setup.sh` "

@@ -29,5 +29,5 @@ def generate(params: dict, out_path: str) -> Path:
     ego = hero(world_position(params, "ego"), params["ego_speed_ms"])
     events = [hero_stops_at_line(params), *red_light_for_stop(params)]
     scenario = make_scenario(params, TAG, actors=[ego, *urban_traffic(params)],
-                             events=[*events, *lead_keeps_ahead(params)])
+                             events=[*events, *lead_keeps_ahead(params, ego_stops_at_line=True)])
     return write_scenario(scenario, out_path)

@@ -3,7 +3,7 @@
 Thesis Table 5.4, with a real embedding model for the last level:
 1. keyword: the lower-cased ``maneuver_class`` is a substring of exactly one script name
    (``CINF`` -> ``gen_hw_cinf.py``);
-2. tag: ``MANEUVER_TAGS`` maps ``maneuver_tag`` to a script (``BR_BK`` has tag ``brake``);
+2. tag: the manoeuvre registry names each tag's script (``BR_BK`` has tag ``brake``);
 3. semantic: cosine similarity between the query and the scripts' docstrings, embedded with
    all-MiniLM-L6-v2 (see ``corpus.embedding``; the docstring embeddings are cached).
 """
@@ -13,48 +13,43 @@ from __future__ import annotations
 import ast
 import hashlib
 import importlib
+import importlib.util
 import os
 import re
+import sys
 import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
+
+from scenweave import maneuvers
 from scenweave.corpus.errors import CorpusError, ParamsError
 
 CORPUS_DIR = Path(__file__).resolve().parent
 
-#: maneuver_tag -> reference script (docs/params.md, "Corpus tags")
-MANEUVER_TAGS: dict[str, str] = {
-    "brake": "gen_hw_brake.py",
-    "cut_in_front": "gen_hw_cinf.py",
-    "cut_in_behind": "gen_hw_cinb.py",
-    "cut_out_front": "gen_hw_coutf.py",
-    "cut_out_behind": "gen_hw_coutb.py",
-    "lane_change_front": "gen_hw_lcf.py",
-    "lane_change_behind": "gen_hw_lcb.py",
-    "follow_front": "gen_hw_flf.py",
-    "follow_behind": "gen_hw_flb.py",
-    "free_ride_front": "gen_hw_frf.py",
-    "free_ride_behind": "gen_hw_frb.py",
-    "in_lane_driving": "gen_ur_in_lane_driving.py",
-    "stop_at_tfl_red": "gen_ur_stop_at_tfl_red.py",
-    "pass_tfl_green_or_orange": "gen_ur_pass_tfl_green_or_orange.py",
-    "straight_tfl_green": "gen_ur_straight_tfl_green.py",
-    "turn_right_at_tfl_green": "gen_ur_turn_right_at_tfl_green.py",
-}
-#: maneuver_class -> maneuver_tag (docs/params.md), for queries that give only a class code
-CLASS_TAGS: dict[str, str] = {
-    "BRAKE": "brake", "BR_BK": "brake", "CINF": "cut_in_front", "CINB": "cut_in_behind",
-    "COUTF": "cut_out_front", "COUTB": "cut_out_behind", "LCF": "lane_change_front",
-    "LCB": "lane_change_behind", "FLF": "follow_front", "FLB": "follow_behind",
-    "FRF": "free_ride_front", "FRB": "free_ride_behind", "U1_1": "in_lane_driving",
-    "U4_1": "stop_at_tfl_red", "U4_2": "pass_tfl_green_or_orange",
-    "U4_3": "straight_tfl_green", "U4_4": "turn_right_at_tfl_green",
-}
+def class_tags() -> dict[str, str]:
+    """maneuver_class -> maneuver_tag (docs/params.md), for queries that give only a code."""
+    return {m.code: m.tag for m in maneuvers.maneuvers()}
+
+
+def tag_scripts() -> dict[str, Path]:
+    """maneuver_tag -> reference script (docs/params.md, "Corpus tags"); the first class of
+    a tag by code names it (``BR_BK`` shares ``brake`` with ``BRAKE``)."""
+    found: dict[str, Path] = {}
+    for maneuver in maneuvers.maneuvers():
+        found.setdefault(maneuver.tag, script_path(maneuver))
+    return found
+
+
+def script_path(maneuver: maneuvers.Maneuver) -> Path:
+    """A class's reference script: a name in the corpus folder, or a plugin's own file."""
+    path = Path(maneuver.script)
+    return path if path.is_absolute() else CORPUS_DIR / path
 
 
 @dataclass(frozen=True)
@@ -72,20 +67,27 @@ def list_scripts() -> list[Path]:
     return list(_scripts())
 
 
-@cache
 def _scripts() -> tuple[Path, ...]:
+    """The corpus folder's scripts, and those of plugin classes kept elsewhere."""
+    added = {script_path(m) for m in maneuvers.maneuvers()}
+    return tuple(sorted({*_corpus_scripts(), *added}, key=lambda path: path.name))
+
+
+@cache
+def _corpus_scripts() -> tuple[Path, ...]:
     return tuple(sorted(CORPUS_DIR.glob("gen_*.py")))
 
 
 def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
     """The reference script for a params dict or for a class code, tag or free-text query."""
+    tags = class_tags()
     if isinstance(params_or_query, str):
         query = params_or_query.strip()
-        code = query if query.upper() in CLASS_TAGS else ""  # free text is never a keyword
-        tag = CLASS_TAGS.get(query.upper(), query)
+        code = query if query.upper() in tags else ""  # free text is never a keyword
+        tag = tags.get(query.upper(), query)
     else:
         code = str(params_or_query.get("maneuver_class") or "")
-        tag = str(params_or_query.get("maneuver_tag") or CLASS_TAGS.get(code.upper(), ""))
+        tag = str(params_or_query.get("maneuver_tag") or tags.get(code.upper(), ""))
         query = _params_query(params_or_query)
     found = _by_keyword(code) or _by_tag(tag)
     if found is not None:
@@ -99,13 +101,27 @@ def generate(params: Mapping[str, Any], out_path: str | os.PathLike[str]) -> Pat
     Params the script cannot use raise ``ParamsError`` naming the scenario, script and key.
     """
     script = retrieve(params).script_path
-    module = importlib.import_module(f"scenweave.corpus.{script.stem}")
+    module = _load_script(script)
     try:
         return Path(module.generate(dict(params), out_path))
     except KeyError as err:
         raise ParamsError(f"{_who(params, script)}: missing params key {err.args[0]!r}") from err
     except (TypeError, ValueError) as err:
         raise ParamsError(f"{_who(params, script)}: {err}") from err
+
+
+def _load_script(script: Path) -> ModuleType:
+    if script.parent == CORPUS_DIR:
+        return importlib.import_module(f"scenweave.corpus.{script.stem}")
+    name = f"scenweave_reference_{script.stem}"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, script)
+        if spec is None or spec.loader is None:
+            raise CorpusError(f"reference script {script} cannot be loaded")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return sys.modules[name]
 
 
 def _who(params: Mapping[str, Any], script: Path) -> str:
@@ -132,8 +148,8 @@ def _by_keyword(code: str) -> Retrieval | None:
 
 
 def _by_tag(tag: str) -> Retrieval | None:
-    name = MANEUVER_TAGS.get(tag.lower())
-    return _read(CORPUS_DIR / name, "tag", 1.0) if name else None
+    path = tag_scripts().get(tag.lower())
+    return _read(path, "tag", 1.0) if path else None
 
 
 def _params_query(params: Mapping[str, Any]) -> str:

@@ -6,17 +6,15 @@ from them (end speeds, timeout, the spawn footprint), so perturbed variants stay
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
+from scenweave import maneuvers
 from scenweave.corpus.corpus_utils import reference_gap_m
-from scenweave.ingest.freeride import SLOTS, slot_params
 from scenweave.ingest.issues import RecordIssue
-from scenweave.ingest.layouts import FAMILY_OF_CLASS, default_layouts
+from scenweave.ingest.layouts import default_layouts
+from scenweave.maneuvers.free_ride import SLOTS
+from scenweave.maneuvers.sampling import RecordFieldError
 
-KMH = 3.6
 HIGHWAY_MANEUVER_START_S = 2.0
 TIMEOUT_FACTOR = 2.5
-COUTF_EGO_SPEEDUP = 1.05
 YELLOW_DELAY_BOUNDS_S = (1.0, 8.0)
 YELLOW_POINT_BEFORE_LIGHT_M = 5.0
 STOPPED_BELOW_MS = 0.1
@@ -39,9 +37,10 @@ def extract_params(record: dict) -> dict:
 
 def _extract_highway(record: dict) -> dict:
     code = record["maneuver_class"]
-    family = FAMILY_OF_CLASS.get(code)
-    if family is None:
-        raise RecordIssue(f"unknown highway class {code!r}", field="maneuver_class")
+    maneuver = maneuvers.find(code)
+    if maneuver is None or maneuver.domain != "highway":
+        raise RecordIssue(f"unknown highway class {code!r} (known: "
+                          f"{', '.join(maneuvers.codes('highway'))})", field="maneuver_class")
     raw = record["params"]
     conventions = record_conventions(record)
     base = {
@@ -57,9 +56,11 @@ def _extract_highway(record: dict) -> dict:
         "npc_position": record["npc_position"],
     }
     try:
-        base.update(HIGHWAY_EXTRACTORS[family](raw, code, conventions))
+        base.update(maneuver.extract(raw, code, conventions))
     except KeyError as err:
         raise RecordIssue("missing in params", field=f"params.{err.args[0]}") from err
+    except RecordFieldError as err:
+        raise RecordIssue(str(err), field=err.field) from err
     if conventions.get("gaps_between", "reference_points") == "bumpers":
         _gaps_to_reference_points(base)
     base.update(dict.fromkeys(SPAWN_KEYS))
@@ -87,76 +88,6 @@ def record_conventions(record: dict) -> dict:
         return conventions
     layout = default_layouts().classes.get(record["maneuver_class"])
     return layout.conventions if layout else {}
-
-
-def _brake(raw: dict, code: str, conventions: dict) -> dict:
-    return {
-        "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
-        "npc_speed_ms": raw["lead_vel_kmh"] / KMH,
-        "delta_speed_ms": raw["delta_vel_kmh"] / KMH,
-        "npc_distance_m": raw["npc_distance_m"],
-        "brake_intensity": raw["brake_intensity"],
-        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
-    }
-
-
-def _cut(raw: dict, code: str, conventions: dict) -> dict:
-    try:
-        sign = float(conventions["relative_speed_sign"])
-    except KeyError as err:
-        raise RecordIssue("the layout gives no relative_speed_sign for this class",
-                          field="conventions.relative_speed_sign") from err
-    return {
-        "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
-        "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
-        "delta_speed_ms": raw["delta_vel_kmh"] / KMH,
-        "npc_distance_m": raw["npc_distance_m"],
-        "lane_change_direction": raw["direction"].lower(),
-        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
-    }
-
-
-def _lane_change(raw: dict, code: str, conventions: dict) -> dict:
-    return {
-        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
-        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
-        "lane_change_direction": raw["direction"].lower(),
-    }
-
-
-def _follow(raw: dict, code: str, conventions: dict) -> dict:
-    sign = -1.0 if code == "FLB" else 1.0
-    return {
-        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
-        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
-        "npc_speed_ms": raw["lead_vel_begin_kmh"] / KMH,
-        "npc_end_speed_ms": raw["lead_vel_end_kmh"] / KMH,
-        "npc_distance_m": sign * abs(raw["npc_distance_begin_m"]),
-        "npc_distance_end_m": sign * abs(raw["npc_distance_end_m"]),
-        "npc_dist_traveled_m": raw["lead_dist_traveled_m"],
-        "behavior_type": raw["behavior_type"],
-        "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
-    }
-
-
-def _free_ride(raw: dict, code: str, conventions: dict) -> dict:
-    params: dict = {
-        "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
-        "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
-        "ego_dist_traveled_m": raw["ego_dist_traveled_m"],
-    }
-    if code == "FRF":
-        params["driving_side"] = str(raw.get("driving_side", "Right")).lower()
-    sign = -1.0 if code == "FRB" else 1.0
-    sentinels = conventions.get("sentinels", {})
-    for slot in SLOTS:
-        params.update(slot_params(raw, slot, sign, sentinels))
-    return params
-
-
-HIGHWAY_EXTRACTORS: dict[str, Callable[[dict, str, dict], dict]] = {
-    "BRAKE": _brake, "CUT": _cut, "LC": _lane_change, "FL": _follow, "FR": _free_ride,
-}
 
 
 # -- urban -------------------------------------------------------------------------------------
@@ -188,7 +119,7 @@ def _extract_urban(record: dict) -> dict:
         "drive_distance_m": ds[-1] - ds[0],
         "tfl_ds_m": tfl_ds,
         "tfl_state": light["light_state"] if light else None,
-        "turn": "right" if record["maneuver_class"] == "U4_4" else "straight",
+        "turn": maneuvers.get(record["maneuver_class"]).turn,
         "speed_limit_kmh": env["speed_limit_kmh"],
         "lane_count": env["lane_count"],
         "lane_width_m": env["lane_width_m"],
@@ -246,33 +177,20 @@ def finish(params: dict) -> dict:
     """Fill the values that follow from the primary ones; returns ``params`` (changed in place)."""
     if "delta_speed_ms" in params:
         params["npc_end_speed_ms"] = max(params["npc_speed_ms"] + params["delta_speed_ms"], 0.0)
-    if params["maneuver_class"] in ("BRAKE", "BR_BK", "CINF", "CINB", "COUTB"):
-        params["ego_end_speed_ms"] = params["ego_speed_ms"]
-    elif params["maneuver_class"] == "COUTF":
-        params["ego_end_speed_ms"] = params["ego_speed_ms"] * COUTF_EGO_SPEEDUP
+    maneuver = maneuvers.get(params["maneuver_class"])
+    if maneuver.ego_end_speed_factor is not None:
+        params["ego_end_speed_ms"] = params["ego_speed_ms"] * maneuver.ego_end_speed_factor
     if params["domain"] == "urban":  # thesis Table 5.1 names, same values (docs/params.md)
         params["init_speed_ms"] = params["ego_speed_ms"]
         params["final_speed_ms"] = params["ego_end_speed_ms"]
     params["timeout_s"] = TIMEOUT_FACTOR * (params["maneuver_start_s"] + params["duration_s"])
-    params["required_lane_sides"] = _required_lane_sides(params)
+    params["required_lane_sides"] = maneuver.lane_sides(params)
     speeds = [v for k, v in params.items() if k.endswith("speed_ms") and isinstance(v, float)]
     params["max_speed_ms"] = max(speeds, default=0.0)
     gaps = _start_gaps(params)
     params["gap_ahead_m"] = max([g for g in gaps if g > 0], default=0.0)
     params["gap_behind_m"] = max([-g for g in gaps if g < 0], default=0.0)
     return params
-
-
-def _required_lane_sides(params: dict) -> list[str]:
-    code = params["maneuver_class"]
-    move = params.get("lane_change_direction")
-    if code in ("CINF", "CINB"):
-        return ["right" if move == "left" else "left"]
-    if code in ("COUTF", "COUTB", "LCF", "LCB"):
-        return [move]
-    if code in ("FRF", "FRB"):
-        return [side for side in ("left", "right") if params[f"{side}_present"]]
-    return []
 
 
 def _start_gaps(params: dict) -> list[float]:

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scenweave.ingest.freeride import SLOTS, slot_present
+
 from scenweave.ingest.issues import Issue
 from scenweave.ingest.layouts import ClassLayout, Column, HighwayLayouts
 from scenweave.ingest.npy import load_npy
+from scenweave.maneuvers.free_ride import SLOTS, slot_present
 
 SCHEMA_VERSION = "phase1.v1"
 DEFAULT_BINNING = "B0"
@@ -152,21 +153,24 @@ def _record(layout: ClassLayout, params: dict, row: int, stem: str, file: str,
         "npc_position": npc_position,
         "binning_version": binning,
         "source": {"file": file, "row_index": row},
-        "behavior_type": params.get("behavior_type") if layout.family == "FL" else None,
+        "behavior_type": params.get("behavior_type"),
         "params": params,
         "conventions": layout.conventions,
     }
 
 
 def _npc_presence(layout: ClassLayout, params: dict) -> tuple[bool, str | None]:
-    if layout.family == "LC":
-        return False, None
-    if layout.family == "FR":
+    """Whether the record has an NPC, and where it starts: a signed ``npc_distance_m`` says
+    (a cut-in from behind is negative), else the class's position."""
+    if layout.maneuver.surrounding_slots:
         sentinels = layout.conventions.get("sentinels", {})
         present = any(slot_present(params, slot, sentinels) for slot in SLOTS)
         return present, layout.npc_position if present else None
-    if layout.family == "CUT":
-        return True, "front" if params["npc_distance_m"] >= 0 else "behind"
+    if layout.npc_position is None:
+        return False, None
+    distance = params.get("npc_distance_m")
+    if isinstance(distance, float | int):
+        return True, "front" if distance >= 0 else "behind"
     return True, layout.npc_position
 
 

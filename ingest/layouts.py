@@ -12,33 +12,10 @@ from functools import cache, cached_property
 from pathlib import Path
 from typing import Any
 
+from scenweave import maneuvers
 from scenweave.ingest.issues import LayoutError
 
 DEFAULT_LAYOUT_PATH = Path(__file__).resolve().parent.parent / "schemas" / "highway_layouts.json"
-
-#: the fields extraction needs per class family; a custom layout must keep these names
-REQUIRED_FIELDS: dict[str, tuple[str, ...]] = {
-    "BRAKE": ("ego_vel_kmh", "lead_vel_kmh", "duration_s", "delta_vel_kmh", "npc_distance_m",
-              "brake_intensity", "other_dir_traffic", "lead_vehicle_type"),
-    "CUT": ("ego_vel_kmh", "cutter_vel_kmh", "delta_vel_kmh", "duration_s", "npc_distance_m",
-            "other_dir_traffic", "direction", "lead_vehicle_type"),
-    "LC": ("ego_vel_begin_kmh", "ego_vel_end_kmh", "duration_s", "other_dir_traffic",
-           "direction"),
-    "FL": ("ego_vel_begin_kmh", "ego_vel_end_kmh", "lead_vel_begin_kmh", "lead_vel_end_kmh",
-           "npc_distance_begin_m", "npc_distance_end_m", "lead_dist_traveled_m", "duration_s",
-           "other_dir_traffic", "behavior_type", "lead_vehicle_type"),
-    "FR": ("ego_vel_begin_kmh", "ego_vel_end_kmh", "ego_dist_traveled_m", "duration_s",
-           *(f"{slot}_{what}" for slot in ("center", "right", "left")
-             for what in ("posx_begin_m", "posx_end_m", "vel_begin_ms", "vel_end_ms",
-                          "vehicle_type"))),
-}
-
-FAMILY_OF_CLASS = {
-    "BRAKE": "BRAKE", "BR_BK": "BRAKE",
-    "CINF": "CUT", "CINB": "CUT", "COUTF": "CUT", "COUTB": "CUT",
-    "LCF": "LC", "LCB": "LC", "FLF": "FL", "FLB": "FL", "FRF": "FR", "FRB": "FR",
-}
-
 
 @dataclass(frozen=True)
 class Column:
@@ -65,8 +42,8 @@ class ClassLayout:
     gaps_between: str | None = None
 
     @property
-    def family(self) -> str:
-        return FAMILY_OF_CLASS[self.code]
+    def maneuver(self) -> maneuvers.Maneuver:
+        return maneuvers.get(self.code)
 
     @cached_property
     def names(self) -> tuple[str, ...]:
@@ -83,7 +60,7 @@ class ClassLayout:
         read with: the relative-speed sign (cut classes), where its gaps are measured
         (``gaps_between``) and each column's sentinels."""
         found: dict = {}
-        if self.family == "CUT":
+        if self.maneuver.relative_speed:
             found["relative_speed_sign"] = self.relative_speed_sign
         if self.gaps_between is not None:
             found["gaps_between"] = self.gaps_between
@@ -118,6 +95,10 @@ def load_layouts(path: Path | str | None = None) -> HighwayLayouts:
     classes = _require(doc, "classes", dict, where)
     layouts = {code: _class_layout(code, spec, f"{where}: classes.{code}")
                for code, spec in classes.items()}
+    for maneuver in maneuvers.maneuvers("highway"):  # a plugin class brings its own layout
+        if maneuver.code not in layouts and maneuver.layout is not None:
+            layouts[maneuver.code] = _class_layout(maneuver.code, dict(maneuver.layout),
+                                                   f"manoeuvre {maneuver.code}: layout")
     return HighwayLayouts(version=str(doc.get("layout_version", "custom")), classes=layouts,
                           source=where)
 
@@ -129,8 +110,10 @@ def default_layouts() -> HighwayLayouts:
 
 
 def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
-    if code not in FAMILY_OF_CLASS:
-        raise LayoutError(f"{where}: unknown class {code!r} (known: {', '.join(FAMILY_OF_CLASS)})")
+    maneuver = maneuvers.find(code)
+    if maneuver is None or maneuver.domain != "highway":
+        raise LayoutError(f"{where}: unknown class {code!r} "
+                          f"(known: {', '.join(maneuvers.codes('highway'))})")
     if not isinstance(spec, dict):
         raise LayoutError(f"{where}: must be an object")
     columns = tuple(_column(c, f"{where}.columns[{i}]")
@@ -138,23 +121,31 @@ def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
     names = [c.name for c in columns]
     if len(set(names)) != len(names):
         raise LayoutError(f"{where}.columns: duplicate column names")
-    missing = [f for f in REQUIRED_FIELDS[FAMILY_OF_CLASS[code]] if f not in names]
+    missing = [f for f in maneuver.layout_fields if f not in names]
     if missing:
         raise LayoutError(f"{where}.columns: missing required field(s) {', '.join(missing)}")
     sign = spec.get("relative_speed_sign")
-    if FAMILY_OF_CLASS[code] == "CUT" and (isinstance(sign, bool) or sign not in (1, -1)):
+    if maneuver.relative_speed and (isinstance(sign, bool) or sign not in (1, -1)):
         raise LayoutError(f"{where}.relative_speed_sign: must be 1 or -1, got {sign!r}")
-    npc_position = spec.get("npc_position")
-    if npc_position not in ("front", "behind", None):
-        raise LayoutError(f"{where}.npc_position: must be 'front', 'behind' or null")
     gaps_between = spec.get("gaps_between")
     if gaps_between not in (*GAP_CONVENTIONS, None):
         raise LayoutError(f"{where}.gaps_between: must be one of {', '.join(GAP_CONVENTIONS)} "
                           f"or absent, got {gaps_between!r}")
-    return ClassLayout(code=code, tag=str(_require(spec, "tag", str, where)),
-                       npc_position=npc_position, columns=columns,
+    return ClassLayout(code=code, tag=_class_fact(spec, "tag", maneuver.tag, where),
+                       npc_position=_class_fact(spec, "npc_position", maneuver.npc_position,
+                                                where),
+                       columns=columns,
                        relative_speed_sign=int(sign) if sign in (1, -1) else None,
                        gaps_between=gaps_between)
+
+
+def _class_fact(spec: dict, key: str, known: Any, where: str) -> Any:
+    """``tag`` and ``npc_position`` are the class's (its :class:`Maneuver`); a layout may
+    repeat them, but not contradict them."""
+    if key in spec and spec[key] != known:
+        raise LayoutError(f"{where}.{key}: the class's {key} is {known!r} (its manoeuvre "
+                          f"definition), the layout says {spec[key]!r}")
+    return known
 
 
 def _column(spec: Any, where: str) -> Column:

@@ -10,34 +10,27 @@ whose replay shows a collision or a gap the record never had.
 
 from __future__ import annotations
 
+from scenweave import maneuvers
 from scenweave.corpus.corpus_utils import clearance_m
 from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2, SpeedProfile, min_gap_m
 from scenweave.ingest.issues import RecordIssue
+from scenweave.maneuvers import SameLane
 from scenweave.schemas.replay import GAP_TOL_M
-
-#: the NPC that shares the ego's lane from t = 0 to the record's end: class -> (params prefix,
-#: the file's column of its start gap)
-SAME_LANE_ALL_ALONG = {"FLF": ("npc", "npc_distance_begin_m"),
-                       "FLB": ("npc", "npc_distance_begin_m"),
-                       "FRF": ("center", "center_posx_begin_m"),
-                       "FRB": ("center", "center_posx_begin_m")}
-#: the NPC that shares it at t = 0 only (it brakes, the ego reacting, or it leaves the lane)
-SAME_LANE_AT_START = {"BRAKE": ("npc", "npc_distance_m"), "BR_BK": ("npc", "npc_distance_m"),
-                      "COUTF": ("npc", "npc_distance_m"), "COUTB": ("npc", "npc_distance_m")}
 
 
 def check_playable(params: dict) -> None:
     """Raise ``RecordIssue`` (naming the file's field) when no replay can show ``params``."""
     if params.get("domain") != "highway":
         return
-    code = params["maneuver_class"]
-    if code in ("BRAKE", "BR_BK"):
+    maneuver = maneuvers.get(params["maneuver_class"])
+    if maneuver.lead_brakes:
         _brakes_as_a_car_can(params)
-    if code in ("FLF", "FLB"):
+    if maneuver.gap_at_end:
         _end_gap_follows_from_speeds(params)
-    if code == "CINB":
+    if maneuver.npc_ends_in_ego_lane and maneuver.npc_position == "behind":
         _merges_behind(params)
-    _cars_in_one_lane_stay_apart(params)
+    if maneuver.same_lane is not None:
+        _cars_in_one_lane_stay_apart(params, maneuver.same_lane)
 
 
 def _profile(params: dict, prefix: str) -> SpeedProfile:
@@ -85,16 +78,15 @@ def _merges_behind(params: dict) -> None:
             field="npc_distance_m")
 
 
-def _cars_in_one_lane_stay_apart(params: dict) -> None:
+def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
     """Two cars of one lane never come closer than their safety distance: at t = 0, and for a
     car that stays in the lane, while both change speed over the record (a slower car ahead
     that speeds up only later is run into half way, whatever the end gap says)."""
-    code = params["maneuver_class"]
-    prefix, column = SAME_LANE_ALL_ALONG.get(code) or SAME_LANE_AT_START.get(code, (None, None))
-    if prefix is None or (prefix != "npc" and not params.get(f"{prefix}_present")):
+    prefix, column = same_lane.prefix, same_lane.gap_column
+    if prefix != "npc" and not params.get(f"{prefix}_present"):
         return
     gap, kind = params[f"{prefix}_distance_m"], params.get(f"{prefix}_vehicle_type")
-    until = params["duration_s"] if code in SAME_LANE_ALL_ALONG else 0.0
+    until = params["duration_s"] if same_lane.span == "all_along" else 0.0
     ego, other = _profile(params, "ego"), _profile(params, prefix)
     lead, follower = (other, ego) if gap >= 0 else (ego, other)
     closest = min_gap_m(lead, follower, abs(gap), until)

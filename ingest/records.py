@@ -8,26 +8,42 @@ from functools import cache
 from pathlib import Path
 
 import fastjsonschema
+
+from scenweave import maneuvers
 from scenweave.ingest.issues import IngestError, RecordIssue
+from scenweave.maneuvers import Domain
 from scenweave.schemas import load_json_schema
 
 SCHEMA_OF_DOMAIN = {"highway": "highway_record", "urban": "urban_record"}
 
 
+def record_schema(domain: Domain) -> dict:
+    """The JSON Schema of a domain's records, its ``maneuver_class`` limited to the classes
+    registered for that domain."""
+    schema = load_json_schema(SCHEMA_OF_DOMAIN[domain])
+    schema["properties"]["maneuver_class"]["enum"] = maneuvers.codes(domain)
+    return schema
+
+
 @cache
-def _compiled(name: str) -> Callable[[dict], dict]:
-    return fastjsonschema.compile(load_json_schema(name))
+def _compiled(domain: Domain, known: tuple[str, ...]) -> Callable[[dict], dict]:
+    return fastjsonschema.compile(record_schema(domain))
+
+
+def record_domain(record: dict) -> Domain:
+    return "highway" if record.get("domain") == "highway" else "urban"
 
 
 def schema_name(record: dict) -> str:
     """Which JSON Schema a record answers to."""
-    return SCHEMA_OF_DOMAIN["highway" if record.get("domain") == "highway" else "urban"]
+    return SCHEMA_OF_DOMAIN[record_domain(record)]
 
 
 def check_record(record: dict) -> None:
     """Raise RecordIssue naming the field when ``record`` breaks its JSON Schema."""
+    domain = record_domain(record)
     try:
-        _compiled(schema_name(record))(record)
+        _compiled(domain, tuple(maneuvers.codes(domain)))(record)
     except fastjsonschema.JsonSchemaValueException as err:
         field = err.name.removeprefix("data.").removeprefix("data") or None
         raise RecordIssue(f"record breaks {schema_name(record)}.schema.json: {err.message}",

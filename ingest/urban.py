@@ -14,9 +14,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from scenweave import maneuvers
 from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES, decode
 from scenweave.ingest.issues import Issue, RecordIssue, unexpected_issue
-from scenweave.ingest.tags import URBAN_NAMES, URBAN_TAGS
 
 RECORD_VERSION = "urban.v1"
 REGULAR_STEP_TOLERANCE = 0.1  # steps within 10 % of the median count as regular
@@ -43,7 +43,7 @@ def iter_urban_files(folder: Path) -> Iterator[Path]:
     for base in (folder, folder / "urban"):
         if base.is_dir():
             for sub in sorted(p for p in base.iterdir() if p.is_dir()):
-                if re.fullmatch(r"U\d+_\d+", sub.name) or sub.name in URBAN_TAGS:
+                if re.fullmatch(r"U\d+_\d+", sub.name) or sub.name in maneuvers.codes("urban"):
                     yield from sorted(sub.glob("*.json"))
 
 
@@ -79,10 +79,11 @@ def _read_json(path: Path) -> dict:
 def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None) -> dict:
     """Turn one parsed ADScene object into a canonical urban record (RecordIssue if bad)."""
     code = _get(scene, "scenario_code", str)
-    if code not in URBAN_TAGS:
-        raise RecordIssue(f"unknown urban class {code!r} (known: {', '.join(URBAN_TAGS)})",
-                          field="scenario_code")
-    if folder_code and folder_code in URBAN_TAGS and folder_code != code:
+    maneuver = maneuvers.find(code)
+    if maneuver is None or maneuver.domain != "urban":
+        raise RecordIssue(f"unknown urban class {code!r} "
+                          f"(known: {', '.join(maneuvers.codes('urban'))})", field="scenario_code")
+    if folder_code in maneuvers.codes("urban") and folder_code != code:
         raise RecordIssue(f"file is in folder {folder_code} but says {code}",
                           field="scenario_code")
     segment = _get(scene, "segment", dict)
@@ -97,10 +98,10 @@ def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None)
         "version": RECORD_VERSION,
         "scenario_id": _scenario_id(code, segment, source),
         "maneuver_class": code,
-        "maneuver_tag": URBAN_TAGS[code],
+        "maneuver_tag": maneuver.tag,
         "domain": _slug(environment["road_type"]),
         "semantics": {
-            "main_maneuver": URBAN_TAGS[code],
+            "main_maneuver": maneuver.tag,
             "description": "",
             "tags": _tags(code, environment, actors_start),
             "criticality_metric": {"min_ttc_s": min_ttc, "source": "obstacles.time_to_collision"},
@@ -411,7 +412,7 @@ def _summary(ego: dict) -> dict:
 
 
 def _tags(code: str, environment: dict, actors: list[dict]) -> list[str]:
-    tags = [URBAN_TAGS[code], environment["weather_key"].lower()]
+    tags = [maneuvers.get(code).tag, environment["weather_key"].lower()]
     tags += sorted({a["role"] for a in actors if a["role"] != "background"})
     return tags
 
@@ -430,15 +431,14 @@ def describe(record: dict) -> str:
     light = lights[0] if lights else None
     road = env["road_type"].split("/")[0].strip().lower()
     weather = env["weather_key"].replace("_", ", ").lower()
-    if light and code != "U1_1":
-        verb = {"U4_1": "stops before", "U4_2": "passes", "U4_3": "drives straight through",
-                "U4_4": "turns right at"}[code]
-        action = (f"{verb} the {light['light_state']} traffic light "
+    maneuver = maneuvers.get(code)
+    if light and maneuver.light is not None:
+        action = (f"{maneuver.verb} the {light['light_state']} traffic light "
                   f"{light['position_m']:.0f} m ahead")
     else:
         action = "keeps its lane"
     article = "an" if road[:1] in "aeiou" else "a"
-    first = (f"{URBAN_NAMES[code]} on {article} {road} ({weather}): the ego starts at "
+    first = (f"{maneuver.name} on {article} {road} ({weather}): the ego starts at "
              f"{v0:.0f} km/h and {action}.")
     return f"{first} {_actors_sentence(record['initial_state']['actors'])}"
 

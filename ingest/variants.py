@@ -5,6 +5,8 @@ from __future__ import annotations
 import zlib
 
 import numpy as np
+
+from scenweave import maneuvers
 from scenweave.ingest.extract import extract_params, finish
 from scenweave.ingest.urban import DEFAULT_PERTURBATION
 
@@ -12,8 +14,8 @@ DERIVED_ONLY_FOR = {  # keys ``finish`` recomputes from the perturbed ones
     "init_speed_ms": lambda p: True,
     "final_speed_ms": lambda p: True,
     "npc_end_speed_ms": lambda p: "delta_speed_ms" in p,
-    "ego_end_speed_ms": lambda p: p["maneuver_class"] in ("BRAKE", "BR_BK", "CINF", "CINB",
-                                                          "COUTF", "COUTB"),
+    "ego_end_speed_ms": lambda p: maneuvers.get(p["maneuver_class"]).ego_end_speed_factor
+    is not None,
 }
 TIME_KEYS = ("duration_s", "brake_time_s", "yellow_delay_s")
 MIN_DURATION_S = 0.1

@@ -54,6 +54,7 @@ from pathlib import Path
 
 import numpy as np
 from lxml import etree
+
 from scenweave.player.scratch import scratch_folder
 
 #: a WorldPosition starts an entity on every road passing this close (m)

@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from lxml import etree
+
 from scenweave.player import maps
 from scenweave.player.engine import TIMEOUT_MESSAGE, play_xml, warm_up
 from scenweave.player.errors import PlayerUnavailable

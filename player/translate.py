@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lxml import etree
+
 from scenweave.player.errors import PlayerError
 
 #: CARLA light colour -> esmini lamp modes of a three-lamp light (red; yellow; green)

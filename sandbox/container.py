@@ -21,6 +21,7 @@ import requests
 from docker.errors import APIError, DockerException, NotFound
 from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
+
 from scenweave.sandbox.attempt import (
     CORPUS_MOUNT,
     JOB_MOUNT,

@@ -10,6 +10,7 @@ from pathlib import Path
 import docker
 import requests
 from docker.errors import DockerException
+
 from scenweave.sandbox.errors import SandboxUnavailable
 
 

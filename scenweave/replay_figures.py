@@ -37,7 +37,7 @@ import numpy as np
 
 from scenweave.ingest.atomic import write_bytes_atomic
 from scenweave.player import REPLAY_NAME, Playback
-from scenweave.schemas.replay import GAP_AT_END_CLASSES, GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
+from scenweave.schemas.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
 FIGURE_NAME = "replay.png"
 #: figure size (inches) and resolution: FIGURE_PX pixels, the same for every replay
@@ -352,14 +352,14 @@ def _gaps(playback: Playback, entity: str, times: list[float], map_path: Any) ->
 
 def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, gap, time) of every gap the record has, as the judge compares them."""
-    from scenweave.schemas.fidelity import placed_actors
+    from scenweave.schemas.fidelity import class_of, placed_actors
 
     start = facts.number("maneuver_start_s")
     if start is None:
         return []
     found = [(name, facts.number(f"{prefix}_distance_m"), start)
              for name, prefix in placed_actors(facts.params) if name != EGO]
-    if facts.maneuver_class in GAP_AT_END_CLASSES:
+    if class_of(facts.params).gap_at_end:
         found.append(("npc", facts.number("npc_distance_end_m"),
                       start + (facts.number("duration_s") or 0.0)))
     return [(name, gap, at_s) for name, gap, at_s in found if gap is not None]

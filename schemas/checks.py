@@ -10,21 +10,17 @@ import math
 import re
 
 from lxml import etree
+
+from scenweave import maneuvers
 from scenweave.corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
+from scenweave.maneuvers import Maneuver
 from scenweave.schemas.fidelity import SPEED_TOL_MS
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))
-NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
-NPC_LANE_CHANGE_CLASSES = {"CINF", "CINB", "COUTF", "COUTB"}
-CUT_IN_CLASSES = {"CINF", "CINB"}
-BRAKE_CLASSES = {"BRAKE", "BR_BK"}
-#: a cutter that ends up in front of the ego: it shares the ego's lane from its cut-in on
-FRONT_CUT_IN_CLASSES = {"CINF"}
 STOPPING_LIGHT_STATES = {"yellow", "orange", "red"}
-EGO_LANE_CHANGE_CLASSES = {"LCF", "LCB"}
 LIGHT_NAME = re.compile(r"^pos=(-?\d+(\.\d+)?),(-?\d+(\.\d+)?)$")
 SPEED_TOLERANCE = 1e-6
 TURN_HEADING_TOL_DEG = 45.0
@@ -62,7 +58,7 @@ def structural(doc: ScenarioDoc, domain: str, maneuver_class: str | None) -> lis
         if len(groups) > 1 and len(doc.entities) < 2:
             found.append(Finding("NPC_MISSING", f"{len(groups)} ManeuverGroups but only one "
                                  "ScenarioObject", "error", line(groups[1])))
-    elif maneuver_class != "U1_1" and root.find(".//TrafficSignalStateAction") is None:
+    elif _meets_a_light(maneuver_class) and root.find(".//TrafficSignalStateAction") is None:
         found.append(Finding("NO_TFL_ACTION", "urban scenario without TrafficSignalStateAction",
                              "error"))
     return found
@@ -143,15 +139,22 @@ def _overwrites(doc: ScenarioDoc) -> list[Finding]:
     return found
 
 
+def _meets_a_light(maneuver_class: str | None) -> bool:
+    maneuver = maneuvers.find(maneuver_class)
+    return maneuver is None or maneuver.light is not None
+
+
 # -- manoeuvre semantics --------------------------------------------------------------------
 
 def semantics(doc: ScenarioDoc, maneuver_class: str | None, params: dict | None) -> list[Finding]:
-    """What a scenario of this class must (not) contain; empty when the class is unknown."""
-    if not maneuver_class:
+    """What a scenario of this class must (not) contain (its :class:`Maneuver` says); empty
+    when the class is unknown."""
+    maneuver = maneuvers.find(maneuver_class)
+    if maneuver is None:
         return []
-    if maneuver_class.startswith("U"):
-        return _urban_semantics(doc, maneuver_class, params)
-    return _highway_semantics(doc, maneuver_class, params)
+    if maneuver.domain == "urban":
+        return _urban_semantics(doc, maneuver, params)
+    return _highway_semantics(doc, maneuver, params)
 
 
 def _lane_changes(doc: ScenarioDoc) -> list[tuple[etree._Element, tuple[str, ...]]]:
@@ -159,15 +162,17 @@ def _lane_changes(doc: ScenarioDoc) -> list[tuple[etree._Element, tuple[str, ...
             if e.action.find(".//LaneChangeAction") is not None]
 
 
-def _highway_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[Finding]:
+def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
+                       params: dict | None) -> list[Finding]:
+    code = maneuver.code
     found = []
     ego = doc.ego_name
     others = [e for e in doc.entities if e != ego]
-    if code in NPC_CLASSES and not others:
+    if maneuver.npc_speed_change and not others:
         found.append(Finding("SEM_NO_NPC", f"{code} needs an NPC, the scenario has only the ego"))
     changes = _lane_changes(doc)
-    if code in NPC_LANE_CHANGE_CLASSES | EGO_LANE_CHANGE_CLASSES:
-        wanted = ego if code in EGO_LANE_CHANGE_CLASSES else None
+    if maneuver.lane_change is not None:
+        wanted = ego if maneuver.lane_change == "hero" else None
         if not any((ego in actors) == (wanted == ego) for _, actors in changes):
             who = "the ego" if wanted else "the NPC"
             found.append(Finding("SEM_NO_LANE_CHANGE", f"{code} needs a LaneChangeAction of {who}"))
@@ -175,19 +180,19 @@ def _highway_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list
         found.append(Finding("SEM_UNEXPECTED_LANE_CHANGE",
                              f"{code} has no lane change, the scenario has one",
                              line=line(changes[0][0])))
-    if code in ("BRAKE", "BR_BK") and others:
+    if maneuver.lead_brakes and others:
         braking = params is None or params.get("npc_end_speed_ms", 0) < params.get(
             "npc_speed_ms", 0) - SPEED_TOLERANCE
         if braking and not _slows_down(doc, others):
             found.append(Finding("SEM_NO_BRAKE", f"{code}: no NPC SpeedAction slows the lead down"))
-    if code in BRAKE_CLASSES | FRONT_CUT_IN_CLASSES and params and "npc" in others:
-        found += _rear_end(doc, code, params)
-    if code in NPC_LANE_CHANGE_CLASSES and params:
-        found += _cut_lanes(doc, code, params)
+    if maneuver.ego_reacts is not None and params and "npc" in others:
+        found += _rear_end(doc, maneuver, params)
+    if maneuver.lane_change == "npc" and params:
+        found += _cut_lanes(doc, maneuver, params)
     return found
 
 
-def _rear_end(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
+def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Finding]:
     """The ego must not run into the NPC in front: a braking lead (from t = 0) or a cutter
     (from its cut-in on). Both speed profiles come from the file, the gap at t = 0 from where
     the file places the two cars (along the lane, :func:`_start_gap`).
@@ -201,7 +206,7 @@ def _rear_end(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
     timeout = doc.stop_time
     if None in (ego, lead, gap, timeout, *lengths) or _other_start_speeds(params, ego, lead):
         return []
-    cut_in = code in FRONT_CUT_IN_CLASSES
+    cut_in = maneuver.ego_reacts == "from_cut_in"
     change = doc.events.get("npc_lane_change")
     from_s = (change.start_s if change is not None else None) if cut_in else 0.0
     if from_s is None:
@@ -210,9 +215,9 @@ def _rear_end(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
     touching = sum(lengths) / 2
     if closest < touching:
         what = "the car that cut in ahead" if cut_in else "the braking lead"
-        return [Finding("SEM_COLLISION", f"{code}: the ego runs into {what}: their centres "
-                        f"come {closest:.1f} m close, {touching:.1f} m is bumper to bumper (the "
-                        "ego must slow down when the car ahead ends slower)")]
+        return [Finding("SEM_COLLISION", f"{maneuver.code}: the ego runs into {what}: their "
+                        f"centres come {closest:.1f} m close, {touching:.1f} m is bumper to "
+                        "bumper (the ego must slow down when the car ahead ends slower)")]
     return []
 
 
@@ -248,7 +253,7 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     return gap + moved
 
 
-def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
+def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Finding]:
     """A cut-in starts in the lane next to the ego's and ends in it; a cut-out starts in it.
 
     The ego's lane is followed along the map (``spawn_db.advance_along_lane``) to where the
@@ -272,11 +277,12 @@ def _cut_lanes(doc: ScenarioDoc, code: str, params: dict) -> list[Finding]:
         return []
     npc_lane = int(npc_lane)
     ends_in = npc_lane + int(target) if npc_lane < 0 else npc_lane - int(target)
-    if code in CUT_IN_CLASSES and (npc_lane == lane or ends_in != lane):
+    code, cut_in = maneuver.code, maneuver.npc_ends_in_ego_lane
+    if cut_in and (npc_lane == lane or ends_in != lane):
         return [Finding("SEM_CUT_IN_LANE", f"{code}: the NPC starts in lane {npc_lane} and "
                         f"changes to lane {ends_in}; the ego's lane there is {lane} (a cut-in "
                         "starts next to it and ends in it)", line=line(change.action))]
-    if code not in CUT_IN_CLASSES and npc_lane != lane:
+    if not cut_in and npc_lane != lane:
         return [Finding("SEM_CUT_OUT_LANE", f"{code}: the NPC starts in lane {npc_lane}, not "
                         f"in the ego's lane {lane} (a cut-out leaves the ego's lane)")]
     return []
@@ -302,7 +308,9 @@ def _light_events(doc: ScenarioDoc) -> list[tuple[float | None, etree._Element]]
     return sorted(lights, key=lambda item: item[0] if item[0] is not None else math.inf)
 
 
-def _urban_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[Finding]:
+def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
+                     params: dict | None) -> list[Finding]:
+    code = maneuver.code
     found = []
     lights = _light_events(doc)
     for _, action in lights:
@@ -311,24 +319,31 @@ def _urban_semantics(doc: ScenarioDoc, code: str, params: dict | None) -> list[F
                                  f"{action.get('name')!r} is not 'pos=x,y': the light cannot be "
                                  "tied to the map", line=line(action)))
     states = [(t, (a.get("state") or "").lower()) for t, a in lights]
-    if code == "U4_1":
+    if maneuver.stops_at_line:
         if not any(s in STOPPING_LIGHT_STATES for _, s in states):
-            found.append(Finding("URB_LIGHT_NOT_RED", "U4_1: the light never turns yellow or red"))
+            found.append(Finding("URB_LIGHT_NOT_RED",
+                                 f"{code}: the light never turns yellow or red"))
         if not _ego_stops(doc):
-            found.append(Finding("URB_NO_STOP", "U4_1: no SpeedAction brings the ego to 0 m/s"))
+            found.append(Finding("URB_NO_STOP",
+                                 f"{code}: no SpeedAction brings the ego to 0 m/s"))
         else:
             found += _stop(doc, states, params)
-    if code in ("U4_2", "U4_3", "U4_4") and states and states[0][1] != "green":
+    passes = maneuver.light in ("green", "green_or_orange")
+    if passes and states and states[0][1] != "green":
         found.append(Finding("URB_LIGHT_START", f"{code}: the light starts {states[0][1]!r}, "
                              "the ego passes on green"))
-    if code in ("U4_3", "U4_4") and any(s == "red" for _, s in states):
+    if maneuver.light == "green" and any(s == "red" for _, s in states):
         found.append(Finding("URB_RED_ON_GREEN", f"{code}: a green-light class turns the light "
                              "red"))
-    if code == "U4_2" and params:
+    if maneuver.light == "green_or_orange" and params:
         found += _pass_timing(doc, states, params)
-    if code == "U4_4":
+    if maneuver.turn == "right":
         found += _right_turn(doc, params)
     return found
+
+
+def _code(params: dict | None) -> str:
+    return str((params or {}).get("maneuver_class") or "the class")
 
 
 def _ego_stops(doc: ScenarioDoc) -> bool:
@@ -347,28 +362,31 @@ def _state_at(states: list[tuple[float | None, str]], t: float) -> str | None:
 
 def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
           params: dict | None) -> list[Finding]:
-    """U4_1: the ego brakes only once the light is no longer green, and (with the spawn's
-    stop line in params) comes to rest at or before the stop line."""
+    """A class that stops at the line: the ego brakes only once the light is no longer green,
+    and (with the spawn's stop line in params) comes to rest at or before the stop line."""
+    code = _code(params)
     ego = doc.speed_profile(doc.ego_name)
     if ego is None:
         return []
     found = []
     braking = _state_at(states, ego.start_s + 1e-6)
     if braking == "green":
-        found.append(Finding("URB_BRAKE_ON_GREEN", f"U4_1: the ego starts braking at "
+        found.append(Finding("URB_BRAKE_ON_GREEN", f"{code}: the ego starts braking at "
                              f"{ego.start_s:.2f} s while the light is still green"))
     stop_line = (params or {}).get("spawn_stop_line_distance_m")
     stopping = ego.distance(ego.end_s)
     if stop_line is not None and stopping > stop_line + 1e-3:
-        found.append(Finding("URB_STOP_PAST_LINE", f"U4_1: the ego comes to rest {stopping:.1f} m "
-                             f"from its start, past the stop line {stop_line:.1f} m ahead"))
+        found.append(Finding("URB_STOP_PAST_LINE", f"{code}: the ego comes to rest "
+                             f"{stopping:.1f} m from its start, past the stop line "
+                             f"{stop_line:.1f} m ahead"))
     return found
 
 
 def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
                  params: dict) -> list[Finding]:
-    """U4_2: the ego crosses the stop line before the light is red; on an orange record,
-    after it turned yellow (else it passes on green)."""
+    """A class that passes on green or orange: the ego crosses the stop line before the light
+    is red; on an orange record, after it turned yellow (else it passes on green)."""
+    code = _code(params)
     stop_line = params.get("spawn_stop_line_distance_m")
     ego = doc.speed_profile(doc.ego_name) if doc.ego_name else None
     if stop_line is None or ego is None:
@@ -376,28 +394,29 @@ def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
     passes_at = ego.time_to_cover(stop_line)
     state = _state_at(states, passes_at)
     if state == "red":
-        return [Finding("URB_RED_BEFORE_PASS", f"U4_2: the light is red when the ego reaches "
+        return [Finding("URB_RED_BEFORE_PASS", f"{code}: the light is red when the ego reaches "
                         f"the stop line ({passes_at:.2f} s)")]
     if params.get("tfl_state") == "orange" and state == "green":
-        return [Finding("URB_PASS_ON_GREEN", f"U4_2: the record passed on orange, but the light "
+        return [Finding("URB_PASS_ON_GREEN", f"{code}: the record passed on orange, but the light "
                         f"is still green when the ego reaches the stop line ({passes_at:.2f} s)")]
     return []
 
 
 def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
-    """U4_4: the ego is routed somewhere. When params carry the map's exit of the right
+    """A right turn: the ego is routed somewhere. When params carry the map's exit of the right
     movement (``turn_exit_*``), FIDELITY_TURN compares the target with it: the approach may
     curve before the junction, so where the exit lies seen from the spawn says little.
     Without it, the target must lie on the ego's right, facing right (a right turn ends about
     90 degrees clockwise of the start) and, with the spawn's stop line in params, past that
     stop line: a point before it is reached without turning at all."""
+    code = _code(params)
     ego = doc.ego_name
     spawn = doc.spawn_position(ego) if ego else None
     targets = [e.action.find(".//AcquirePositionAction/Position/WorldPosition")
                for e in doc.events.values() if ego in e.actors]
     targets = [t for t in targets if t is not None]
     if not targets or spawn is None or spawn.tag != "WorldPosition":
-        return [Finding("URB_NO_TURN", "U4_4: no AcquirePositionAction takes the ego anywhere")]
+        return [Finding("URB_NO_TURN", f"{code}: no AcquirePositionAction takes the ego anywhere")]
     if (params or {}).get("turn_exit_x") is not None:
         return []
     target = targets[0]
@@ -405,16 +424,16 @@ def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
     dx = (number(target, "x") or 0.0) - (number(spawn, "x") or 0.0)
     dy = (number(target, "y") or 0.0) - (number(spawn, "y") or 0.0)
     if dx * math.sin(h) - dy * math.cos(h) <= 0:
-        return [Finding("URB_TURN_NOT_RIGHT", "U4_4: the ego's target lies to the left of its "
+        return [Finding("URB_TURN_NOT_RIGHT", f"{code}: the ego's target lies to the left of its "
                         "heading", line=line(target))]
     turn = math.degrees(math.remainder((number(target, "h") or 0.0) - h, math.tau))
     if not -90 - TURN_HEADING_TOL_DEG <= turn <= -90 + TURN_HEADING_TOL_DEG:
-        return [Finding("URB_TURN_HEADING", f"U4_4: the target heading is {turn:+.0f} degrees "
+        return [Finding("URB_TURN_HEADING", f"{code}: the target heading is {turn:+.0f} degrees "
                         "from the ego's; a right turn ends near -90", line=line(target))]
     stop_line = (params or {}).get("spawn_stop_line_distance_m")
     ahead = dx * math.cos(h) + dy * math.sin(h)
     if stop_line is not None and ahead <= stop_line:
-        return [Finding("URB_TURN_BEFORE_LINE", f"U4_4: the target is {ahead:.1f} m ahead, "
+        return [Finding("URB_TURN_BEFORE_LINE", f"{code}: the target is {ahead:.1f} m ahead, "
                         f"before the stop line {stop_line:.1f} m ahead: the ego turns before "
                         "the junction", line=line(target))]
     return []

@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass
 
 from lxml import etree
+
+from scenweave import maneuvers
 from scenweave.corpus.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
@@ -22,6 +24,7 @@ from scenweave.corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
+from scenweave.maneuvers import Maneuver
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
@@ -33,13 +36,13 @@ HEADING_TOL_RAD = 1e-3
 TURN_EXIT_TOL_M = 0.5
 TURN_EXIT_HEADING_TOL_RAD = 0.05
 SLOTS = ("center", "right", "left")
-NPC_SPEED_CHANGE_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
-#: classes whose ego reacts to an NPC that ends up in front slower; the cut-in watches the
-#: distance only from the cut-in on
-REACTION_CLASSES = {"BRAKE", "BR_BK", "CINF"}
-CUT_IN_REACTION = {"CINF"}
-LANE_CHANGE_ACTOR = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
-                     "LCF": "hero", "LCB": "hero"}
+#: what an unknown class must show: nothing beyond what every scenario shows
+NO_CLASS = Maneuver(code="", tag="", domain="urban", name="", script="")
+
+
+def class_of(params: dict) -> Maneuver:
+    """The params' class definition (``NO_CLASS`` for a code nobody registered)."""
+    return maneuvers.find(params.get("maneuver_class")) or NO_CLASS
 
 
 @dataclass
@@ -98,7 +101,7 @@ def placed_actors(params: dict) -> list[tuple[str, str]]:
     """(entity, params prefix) of every actor the scenario must place, ego first."""
     actors = [("hero", "ego")]
     if params.get("domain") == "highway":
-        if params.get("has_npc") and params.get("maneuver_class") not in ("FRF", "FRB"):
+        if params.get("has_npc") and not class_of(params).surrounding_slots:
             actors.append(("npc", "npc"))
         actors += [(f"npc_{slot}", slot) for slot in SLOTS if params.get(f"{slot}_present")]
     else:
@@ -236,34 +239,36 @@ SpeedChange = tuple[str, float | None, float | None, float | None]
 
 def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
     """(action name, end speed, duration, start) of every speed change the class must contain."""
-    code = params.get("maneuver_class")
+    maneuver = class_of(params)
     duration, start = params.get("duration_s"), params.get("maneuver_start_s")
-    hero = _stop_at_line(params) if code == "U4_1" else _npc_reaction(doc, params) \
-        if code in REACTION_CLASSES else None
+    hero = _stop_at_line(params) if maneuver.stops_at_line else _npc_reaction(doc, params) \
+        if maneuver.ego_reacts else None
     if hero is not None:
         changes = [("hero_speed_change", hero.end_speed, hero.duration_s, hero.start_s)]
-    elif code == "U4_1":  # without the spawn's stop line only the target is known
+    elif maneuver.stops_at_line:  # without the spawn's stop line only the target is known
         changes = [("hero_speed_change", 0.0, None, None)]
     else:
         changes = [("hero_speed_change", params.get("ego_end_speed_ms"), duration, start)]
-    if code in NPC_SPEED_CHANGE_CLASSES:
+    if maneuver.npc_speed_change:
         changes.append(("npc_speed_change", params.get("npc_end_speed_ms"), duration, start))
-    if code in ("FRF", "FRB"):
+    if maneuver.surrounding_slots:
         changes += [(f"npc_{slot}_speed_change", params.get(f"{slot}_end_speed_ms"), duration,
                      start) for slot in SLOTS if params.get(f"{slot}_present")]
     return changes
 
 
 def _stop_at_line(params: dict) -> SpeedProfile | None:
-    """U4_1: the ego's braking that ends before the spawn's stop line (conventions)."""
+    """A stop at the light: the ego's braking that ends before the spawn's stop line
+    (conventions)."""
     keys = [_value(params, k) for k in ("ego_speed_ms", "brake_time_s",
                                         "spawn_stop_line_distance_m")]
     return None if None in keys else stop_at_line(*keys)
 
 
 def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
-    """BRAKE, CINF: the ego slows to the NPC's end speed after a reaction time, if the NPC
-    (braking lead, cutter) ends slower than the ego's recorded end speed (conventions)."""
+    """A reacting class (BRAKE, CINF): the ego slows to the NPC's end speed after a reaction
+    time, if the NPC (braking lead, cutter) ends slower than the ego's recorded end speed
+    (conventions)."""
     keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
                                         "npc_end_speed_ms", "duration_s", "maneuver_start_s",
                                         "npc_distance_m", "timeout_s")]
@@ -274,7 +279,7 @@ def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
     profile = SpeedProfile(lead, lead_end, start, duration)
     clearance = sum(lengths) / 2 + SAFETY_GAP_M
     return lead_reaction(ego, ego_end, profile, start_gap_m(distance, lead, ego, start), timeout,
-                         clearance, cut_in=params.get("maneuver_class") in CUT_IN_REACTION)
+                         clearance, cut_in=class_of(params).ego_reacts == "from_cut_in")
 
 
 def _events(check: _Check) -> None:
@@ -292,7 +297,7 @@ def _events(check: _Check) -> None:
                     TIME_TOL_S, dynamics)
         check.close("FIDELITY_TRIGGER", f"{name} start time", event.start_s, start, TIME_TOL_S,
                     event.action)
-    actor = LANE_CHANGE_ACTOR.get(params.get("maneuver_class"))
+    actor = class_of(params).lane_change
     if actor:
         _lane_change(check, actor)
 
@@ -325,14 +330,15 @@ def _lane_change(check: _Check, actor: str) -> None:
 
 def _lights(check: _Check) -> None:
     params = check.params
-    if params.get("domain") != "urban" or params.get("maneuver_class") == "U1_1":
+    if params.get("domain") != "urban" or (class_of(params) is not NO_CLASS
+                                            and class_of(params).light is None):
         return
     x, y = params.get("tfl_x_carla"), params.get("tfl_y_carla")
     wanted = f"pos={x:.3f},{y:.3f}" if x is not None and y is not None else None
     events = check.doc.events
     initial, yellow = _light_plan(params)
     timing = {"traffic_light_initial": (0.0, initial)}
-    if params.get("maneuver_class") == "U4_1" or params.get("tfl_state") == "orange":
+    if class_of(params).stops_at_line or params.get("tfl_state") == "orange":
         timing["traffic_light_yellow"] = (yellow, "yellow")
         timing["traffic_light_red"] = (None if yellow is None else yellow + YELLOW_PHASE_S, "red")
     for name, (start, state) in timing.items():
@@ -355,11 +361,12 @@ def _lights(check: _Check) -> None:
 
 
 def _turn_exit(check: _Check) -> None:
-    """U4_4: the ego is routed to the exit the spawn stage found on the map (``turn_exit_*``:
-    into the lane the junction's right movement leads to), not to a point nearby."""
+    """A right turn: the ego is routed to the exit the spawn stage found on the map
+    (``turn_exit_*``: into the lane the junction's right movement leads to), not to a point
+    nearby."""
     params = check.params
     want = _pose(params, "turn_exit")
-    if params.get("maneuver_class") != "U4_4" or want is None:
+    if class_of(params).turn != "right" or want is None:
         return
     event = check.doc.events.get("hero_turn_right")
     target = None if event is None else event.action.find(
@@ -380,7 +387,7 @@ def _turn_exit(check: _Check) -> None:
 
 def _light_plan(params: dict) -> tuple[str, float | None]:
     """(state at t = 0, time the light turns yellow) the class's light follows (conventions)."""
-    if params.get("maneuver_class") == "U4_1":
+    if class_of(params).stops_at_line:
         stop = _stop_at_line(params)
         return ("green", None) if stop is None else red_light_timing(stop)
     keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s",

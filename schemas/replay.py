@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
-from scenweave.schemas.fidelity import LANE_CHANGE_ACTOR, expected_speed_changes, placed_actors
+from scenweave.schemas.fidelity import class_of, expected_speed_changes, placed_actors
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.scenario_doc import ScenarioDoc
 
@@ -43,10 +43,6 @@ RIGHT_TURN_MIN_RAD = math.radians(45)
 TURN_HEADING_TOL_RAD = math.radians(20)
 #: the turning ego passes this close to the spawn stage's exit point (m)
 TURN_EXIT_REACH_M = 3.0
-#: classes whose NPC's gap is recorded ``duration_s`` after the manoeuvre start as well
-GAP_AT_END_CLASSES = {"FLF", "FLB"}
-#: cut-ins end with the NPC in the ego's lane, cut-outs out of it
-ENDS_IN_EGO_LANE = {"CINF": True, "CINB": True, "COUTF": False, "COUTB": False}
 
 
 @dataclass
@@ -193,11 +189,10 @@ def _speed_changes(judge: _Judge) -> None:
 def _gaps(judge: _Judge) -> None:
     """The recorded gap holds at the manoeuvre start (and, for FL, ``duration_s`` later)."""
     params = judge.params
-    code = params.get("maneuver_class")
     start = _number(params, "maneuver_start_s")
     wanted = [(entity, _number(params, f"{prefix}_distance_m"), start)
               for entity, prefix in placed_actors(params) if entity != "hero"]
-    if code in GAP_AT_END_CLASSES and start is not None:
+    if class_of(params).gap_at_end and start is not None:
         wanted.append(("npc", _number(params, "npc_distance_end_m"),
                        start + (_number(params, "duration_s") or 0.0)))
     for entity, gap, at_s in wanted:
@@ -215,8 +210,8 @@ def _gaps(judge: _Judge) -> None:
 
 def _lane_changes(judge: _Judge) -> None:
     params = judge.params
-    code = params.get("maneuver_class")
-    actor = LANE_CHANGE_ACTOR.get(code)
+    maneuver = class_of(params)
+    actor = maneuver.lane_change
     start, duration = _number(params, "maneuver_start_s"), _number(params, "duration_s")
     if actor is None or actor not in judge.playback.tracks or None in (start, duration):
         return
@@ -236,14 +231,14 @@ def _lane_changes(judge: _Judge) -> None:
                                                        LANE_CHANGE_TOL_REL * duration):
         judge.fail("REPLAY_LANE_CHANGE", f"{actor}'s lane change takes {took:.2f} s, the record "
                    f"says {duration:.2f} s", crossed_s)
-    if code in ENDS_IN_EGO_LANE:
+    cut_in = maneuver.npc_ends_in_ego_lane
+    if actor == "npc" and cut_in is not None:
         end = judge.playback.duration_s
         same = _same_lane(judge.playback, "npc", "hero", end)
-        if same is not None and same != ENDS_IN_EGO_LANE[code]:
+        if same is not None and same != cut_in:
             judge.fail("REPLAY_LANE_CHANGE", "the NPC ends " + ("in" if same else "out of")
-                       + " the ego's lane; a " + ("cut-in" if ENDS_IN_EGO_LANE[code] else
-                                                  "cut-out") + " ends " +
-                       ("in it" if ENDS_IN_EGO_LANE[code] else "out of it"), end)
+                       + " the ego's lane; a " + ("cut-in" if cut_in else "cut-out")
+                       + " ends " + ("in it" if cut_in else "out of it"), end)
 
 
 def _events_fired(judge: _Judge) -> None:
@@ -264,10 +259,9 @@ def _lights(judge: _Judge) -> None:
     params = judge.params
     if not judge.playback.lights or _number(params, "spawn_stop_line_distance_m") is None:
         return
-    code = params.get("maneuver_class")
     stop_line = _number(params, "spawn_stop_line_distance_m")
     reached = _time_travelled(judge.playback, "hero", stop_line)
-    if code == "U4_1":
+    if class_of(params).stops_at_line:
         stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
         colour = light_state(judge.playback, stopped if stopped is not None else
                              judge.playback.duration_s)
@@ -289,10 +283,10 @@ def _lights(judge: _Judge) -> None:
 
 def _stop_or_pass(judge: _Judge) -> None:
     params = judge.params
-    code, stop_line = params.get("maneuver_class"), _number(params, "spawn_stop_line_distance_m")
-    if params.get("domain") != "urban" or code == "U1_1" or stop_line is None:
+    maneuver, stop_line = class_of(params), _number(params, "spawn_stop_line_distance_m")
+    if params.get("domain") != "urban" or maneuver.light is None or stop_line is None:
         return
-    if code == "U4_1":
+    if maneuver.stops_at_line:
         stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
         if stopped is None:
             judge.fail("REPLAY_NO_STOP", f"the ego never stops (record: it stops before the "
@@ -312,11 +306,11 @@ def _stop_or_pass(judge: _Judge) -> None:
 
 
 def _right_turn(judge: _Judge) -> None:
-    """U4_4 reaches the exit the spawn stage found for the junction's right movement, turned
-    the way that movement turns (roads may bend on afterwards); without the exit in params,
-    the whole drive must turn right."""
+    """A right turn (U4_4) reaches the exit the spawn stage found for the junction's right
+    movement, turned the way that movement turns (roads may bend on afterwards); without the
+    exit in params, the whole drive must turn right."""
     params = judge.params
-    if params.get("maneuver_class") != "U4_4":
+    if class_of(params).turn != "right":
         return
     track = judge.playback.tracks["hero"]
     exit_pose = [_number(params, f"turn_exit_{k}") for k in "xyh"]

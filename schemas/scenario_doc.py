@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from lxml import etree
+
 from scenweave.corpus.kinematics import SpeedProfile
 
 EGO_NAMES = ("hero", "ego")

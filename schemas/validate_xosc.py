@@ -12,6 +12,7 @@ import tempfile
 from pathlib import Path
 
 from lxml import etree
+
 from scenweave.schemas.autofix import apply_fixes
 from scenweave.schemas.carla_lint import carla_lint
 from scenweave.schemas.checks import detect_domain, semantics, structural

@@ -7,6 +7,7 @@ from importlib.resources import files
 from pathlib import Path
 
 from lxml import etree
+
 from scenweave.schemas.findings import Finding
 
 

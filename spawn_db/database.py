@@ -24,6 +24,7 @@ from typing import Any
 
 import jsonschema
 import numpy as np
+
 from scenweave.schemas import load_json_schema
 from scenweave.spawn_db.bundled import road_network
 from scenweave.spawn_db.errors import LaneEndsError, SpawnDatabaseError

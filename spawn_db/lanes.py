@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from scenweave.spawn_db.errors import OpenDriveError
 from scenweave.spawn_db.opendrive import LaneSection, Road
 from scenweave.spawn_db.plan_view import GL_NODES, GL_WEIGHTS

@@ -27,6 +27,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+from scenweave import maneuvers
 from scenweave.corpus.kinematics import start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import load_database
@@ -54,9 +55,6 @@ TURN_EXIT_KEYS = tuple(f"turn_exit_{key}" for key in ("x", "y", "z", "h", "road_
 NEEDS_POINTS_MAX = {"highway": 20.0, "urban": 20.0 + 30.0 + 15.0}
 #: free-ride slots and the lane each stands in relative to the ego
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
-CUT_IN_CLASSES = ("CINF", "CINB")
-#: free-ride classes place their NPCs by slot, not as one ``npc``
-FREE_RIDE_CLASSES = ("FRF", "FRB")
 
 
 @dataclass(frozen=True)
@@ -480,9 +478,11 @@ def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]
     if params.get("domain") != "highway":
         return []
     placed = []
-    if params.get("has_npc") and params.get("maneuver_class") not in FREE_RIDE_CLASSES:
+    maneuver = maneuvers.find(params.get("maneuver_class"))
+    by_slot = maneuver is not None and maneuver.surrounding_slots
+    if params.get("has_npc") and not by_slot:
         side = None
-        if params.get("maneuver_class") in CUT_IN_CLASSES:
+        if maneuver is not None and maneuver.npc_starts_beside:
             sides = params.get("required_lane_sides") or []
             side = sides[0] if sides else None
         placed.append(("npc", side, _start_distance(params, "npc")))

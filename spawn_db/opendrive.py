@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
 from scenweave.spawn_db.errors import OpenDriveError
 from scenweave.spawn_db.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
 

@@ -16,6 +16,7 @@ from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
+
 from scenweave.spawn_db.errors import LaneEndsError, OpenDriveError
 from scenweave.spawn_db.lanes import (
     WorldPose,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
 SAMPLE_SEED = 7

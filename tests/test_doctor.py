@@ -9,12 +9,12 @@ import time
 
 import pytest
 from click.testing import CliRunner
-from scenweave.agent.llm import embedded
-from scenweave.agent.llm.base import LLMUnavailable
-from scenweave.player import locate
 
 from scenweave import doctor, sandbox
+from scenweave.agent.llm import embedded
+from scenweave.agent.llm.base import LLMUnavailable
 from scenweave.cli import cli
+from scenweave.player import locate
 from scenweave.testing.fake_ollama import PULLED, FakeOllama
 
 PARTS = ["player", "sandbox", "embedded_llm", "ollama", "redis"]

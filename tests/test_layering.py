@@ -10,7 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent")
-BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player")
+BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 

@@ -7,6 +7,7 @@ from typing import Any
 
 import httpx
 import ollama
+
 from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
 from scenweave.agent.settings import AgentSettings
 

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-URBAN_CODES = ("U1_1", "U4_1", "U4_2", "U4_3", "U4_4")
+from scenweave import maneuvers
+
 GREEN, ORANGE, RED = 167, 170, 172
 METRES_PER_DEG_LAT = 111_320.0
 
@@ -35,7 +36,8 @@ class EgoProfile:
 def write_urban_samples(out_dir: Path, seed: int, per_class: int) -> list[Path]:
     """Write ``per_class`` ADScene files for each urban class under ``out_dir/<CODE>/``."""
     paths = []
-    for offset, code in enumerate(URBAN_CODES):
+    for offset, maneuver in enumerate(maneuvers.seeding_order("urban")):
+        code = maneuver.code
         rng = np.random.default_rng([seed, 100 + offset])
         folder = out_dir / code
         folder.mkdir(parents=True, exist_ok=True)
@@ -52,14 +54,15 @@ def write_urban_samples(out_dir: Path, seed: int, per_class: int) -> list[Path]:
 def make_scene(code: str, rng: np.random.Generator, taken: set[float] | None = None) -> dict:
     """One ADScene instance of class ``code``; its begin_time (the file name) is not one of
     ``taken``: a drawn time already used moves on by 0.1 s until it is free."""
-    profile = _ego_profile(code, rng)
+    maneuver = maneuvers.get(code)
+    profile = _ego_profile(maneuver, rng)
     night = rng.random() < 0.2
     rain = rng.random() < 0.2
     begin = round(float(rng.uniform(60, 7200)), 1)
     while begin in (taken or ()):
         begin = round(begin + 0.1, 1)
     t_abs = begin + profile.t
-    actors = _actors(code, rng, profile)
+    actors = _actors(maneuver, rng, profile)
     frames = [_frame(i, profile, actors, rng, night, rain) for i in range(len(profile.t))]
     for frame, t in zip(frames, t_abs, strict=True):
         frame["time"] = round(float(t), 3)
@@ -96,21 +99,21 @@ def _times(rng: np.random.Generator, duration: float) -> np.ndarray:
     return np.round(t[t <= duration + 1e-9], 3)
 
 
-def _ego_profile(code: str, rng: np.random.Generator) -> EgoProfile:
-    if code == "U1_1":
+def _ego_profile(maneuver: maneuvers.Maneuver, rng: np.random.Generator) -> EgoProfile:
+    if maneuver.light is None:
         v0 = rng.uniform(30, 70) / 3.6
         t = _times(rng, float(rng.uniform(8, 15)))
         v = v0 + 0.3 * np.sin(t * rng.uniform(0.2, 0.6))
         return EgoProfile(t, v, _integrate(t, v), None, None)
     light_at = float(rng.uniform(45, 90))
-    if code == "U4_1":
+    if maneuver.stops_at_line:
         return _stop_profile(rng, light_at)
-    if code == "U4_4":
+    if maneuver.turn == "right":
         return _turn_profile(rng, light_at)
     v0 = rng.uniform(35, 65) / 3.6
     t = _times(rng, (light_at + 25) / v0)
     v = np.full_like(t, v0) + rng.normal(0, 0.05, len(t))
-    code_seen = GREEN if code == "U4_3" or rng.random() < 0.6 else ORANGE
+    code_seen = GREEN if maneuver.light == "green" or rng.random() < 0.6 else ORANGE
     return EgoProfile(t, v, _integrate(t, v), light_at, code_seen)
 
 
@@ -146,9 +149,10 @@ def _integrate(t: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.diff(t) * (v[1:] + v[:-1]) / 2)])
 
 
-def _actors(code: str, rng: np.random.Generator, profile: EgoProfile) -> list[dict]:
+def _actors(maneuver: maneuvers.Maneuver, rng: np.random.Generator,
+            profile: EgoProfile) -> list[dict]:
     actors = []
-    if code in ("U1_1", "U4_2", "U4_3") and rng.random() < 0.5:
+    if maneuver.lead_allowed and rng.random() < 0.5:
         actors.append({"kind": "lead", "id": int(rng.integers(100, 999)),
                        "gap": float(rng.uniform(12, 40)),
                        "v": float(profile.v[0] + rng.normal(-0.5, 1.0)), "class": 1})
@@ -156,7 +160,7 @@ def _actors(code: str, rng: np.random.Generator, profile: EgoProfile) -> list[di
         actors.append({"kind": "oncoming", "id": int(rng.integers(1000, 1999)),
                        "gap": float(rng.uniform(60, 120)), "v": float(rng.uniform(8, 14)),
                        "class": 3 if rng.random() < 0.15 else 1})
-    if code != "U1_1" and rng.random() < 0.3 and profile.light_at_m is not None:
+    if maneuver.light is not None and rng.random() < 0.3 and profile.light_at_m is not None:
         actors.append({"kind": "pedestrian", "id": int(rng.integers(2000, 2999)),
                        "gap": profile.light_at_m + 3, "v": 1.3, "class": 4,
                        "side": float(rng.choice([-1.0, 1.0]))})

@@ -8,10 +8,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-from scenweave.agent import AgentSettings
-from scenweave.sandbox import SandboxSettings
 
 from scenweave import corpus
+from scenweave.agent import AgentSettings
+from scenweave.sandbox import SandboxSettings
 from tests.corpus.params_examples import example_params
 
 

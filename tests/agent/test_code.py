@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.agent.code import (
     PatchError,
     apply_corrections,

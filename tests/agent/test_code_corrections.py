@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from scenweave.agent.repair.code_corrections import allowed_modules, deterministic_fix
 
+from scenweave.agent.repair.code_corrections import allowed_modules, deterministic_fix
 from tests.agent.conftest import reference_source
 
 REPO = Path(__file__).resolve().parents[2]

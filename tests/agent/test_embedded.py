@@ -8,10 +8,10 @@ import importlib.util
 import json
 
 import pytest
+
 from scenweave.agent import AgentSettings, run_scenario
 from scenweave.agent.llm.log import recent_calls
 from scenweave.schemas import validate_xosc
-
 from tests.corpus.params_examples import example_params
 
 pytestmark = pytest.mark.slow

@@ -11,10 +11,10 @@ import time
 import httpx
 import ollama as ollama_client
 import pytest
+
 from scenweave.agent import AgentSettings, LLMTimeout, LLMUnavailable
 from scenweave.agent.llm import Prompt, get_llm
 from scenweave.agent.llm.log import recent_calls
-
 from scenweave.testing.fake_ollama import PULLED, TOKENS_IN, TOKENS_OUT, FakeOllama
 
 
@@ -158,7 +158,6 @@ def test_live_ollama(tmp_path, sandbox_settings):
     # the whole agent on one record: whatever the model writes, the run ends with a valid
     # scenario (first try, repaired or the fallback) and every attempt is in the trace
     from scenweave.agent import run_scenario
-
     from tests.corpus.params_examples import example_params
 
     settings = AgentSettings(llm="ollama", ollama_host=host, model=model,
@@ -172,7 +171,6 @@ def test_live_ollama(tmp_path, sandbox_settings):
 
 def test_the_agent_runs_on_ollama(server, tmp_path, sandbox_settings):
     from scenweave.agent import run_scenario
-
     from tests.agent.conftest import fenced, reference_source
     from tests.corpus.params_examples import example_params
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import json
 
 import pytest
+
 from scenweave.agent import run_scenario
+from scenweave.inputs import InputSelection, load_input
 from scenweave.player import ReplaySettings
 from scenweave.spawn_db import SpawnMatcher
-
-from scenweave.inputs import InputSelection, load_input
 from tests.agent.conftest import fenced
 from tests.agent.test_graph import events, nodes_in_trace
 

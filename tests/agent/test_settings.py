@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.agent import AgentSettings
 from scenweave.agent.repair import strategy_names
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.agent.taxonomy import classify_exception
 from scenweave.schemas import failure_category
 

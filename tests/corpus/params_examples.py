@@ -11,9 +11,10 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from scenweave.corpus.retrieval import CLASS_TAGS as TAGS  # checked against docs/params.md
-
 from scenweave import spawn_db
+from scenweave.corpus.retrieval import class_tags
+
+TAGS = class_tags()  # checked against docs/params.md
 
 EGO_S = 100.0
 START_S = 2.0

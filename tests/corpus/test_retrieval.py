@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scenweave.corpus.embedding import encoder
-from scenweave.corpus.retrieval import CLASS_TAGS, MANEUVER_TAGS, retrieve_semantic
 
 from scenweave import corpus
+from scenweave.corpus.embedding import encoder
+from scenweave.corpus.retrieval import class_tags, retrieve_semantic, tag_scripts
 from tests.corpus.params_examples import example_params
 
 PARAMS_DOC = Path(__file__).resolve().parents[2] / "docs" / "params.md"
@@ -44,9 +44,10 @@ def _expected_script(code: str) -> str:
 
 def test_tables_match_the_params_contract():
     assert len(DOC_TAGS) == 17
-    assert DOC_TAGS == CLASS_TAGS
-    assert set(MANEUVER_TAGS) == set(DOC_TAGS.values())
-    assert {path.name for path in corpus.list_scripts()} == set(MANEUVER_TAGS.values())
+    assert class_tags() == DOC_TAGS
+    assert set(tag_scripts()) == set(DOC_TAGS.values())
+    assert {path.name for path in corpus.list_scripts()} == {
+        path.name for path in tag_scripts().values()}
 
 
 @pytest.mark.parametrize("code", sorted(DOC_TAGS))

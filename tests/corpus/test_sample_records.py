@@ -12,11 +12,12 @@ from pathlib import Path
 
 import pytest
 from lxml import etree
+
+from scenweave import corpus, spawn_db
+from scenweave.corpus.retrieval import class_tags
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples
 from scenweave.schemas import run_asam_qc, validate_xosc
-
-from scenweave import corpus, spawn_db
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}
@@ -56,7 +57,7 @@ def sample_params(sample_raw) -> list[dict]:
 
 
 def test_sample_data_covers_every_class(sample_params):
-    assert {p["maneuver_class"] for p in sample_params} == set(corpus.retrieval.CLASS_TAGS)
+    assert {p["maneuver_class"] for p in sample_params} == set(class_tags())
 
 
 def test_every_sample_record_becomes_a_valid_faithful_scenario(sample_params, tmp_path,
@@ -105,7 +106,7 @@ def test_asam_quality_checker_finds_nothing_in_pipeline_output(pipeline_scenario
         seen[params["maneuver_class"]] += 1
         if seen[params["maneuver_class"]] <= 2:
             assert run_asam_qc(path) == [], params["scenario_id"]
-    assert set(seen) == set(corpus.retrieval.CLASS_TAGS)
+    assert set(seen) == set(class_tags())
 
 
 @pytest.fixture(scope="module")

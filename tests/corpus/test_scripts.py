@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 from lxml import etree
 from scenariogeneration import xosc
-from scenweave.corpus import CorpusError
 
 from scenweave import corpus
+from scenweave.corpus import CorpusError
 from tests.corpus.conventions import (
     action_named,
     assert_entities_match,

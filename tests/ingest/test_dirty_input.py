@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from scenweave.ingest import ingest_directory
 
 from scenweave.cli import cli
+from scenweave.ingest import ingest_directory
 from tests.ingest.builders import obstacle, scene, write_npy, write_scene
 
 GOOD_LC = [["126", "133.2", "4", "No", "Left"], ["100.8", "97.2", "3", "Yes", "Right"]]

@@ -7,9 +7,9 @@ arithmetic written out, not taken from running the code.
 from __future__ import annotations
 
 import pytest
+
 from scenweave.ingest import IngestReport, check_playable, extract_params, iter_raw_records
 from scenweave.ingest.issues import RecordIssue
-
 from tests.ingest.builders import write_npy
 
 KMH = 3.6

@@ -11,6 +11,7 @@ import json
 import shutil
 
 import pytest
+
 from scenweave.ingest import (
     LayoutError,
     extract_params,
@@ -19,7 +20,6 @@ from scenweave.ingest import (
     load_records,
 )
 from scenweave.ingest.layouts import DEFAULT_LAYOUT_PATH
-
 from tests.ingest.builders import write_npy
 
 DEFAULT = json.loads(DEFAULT_LAYOUT_PATH.read_text())

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+
 from scenweave.corpus.corpus_utils import clearance_m, reference_gap_m
 from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.ingest import (
@@ -16,7 +17,6 @@ from scenweave.ingest import (
 )
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import load_layouts
-
 from tests.ingest.builders import write_npy
 
 LAYOUTS = load_layouts()

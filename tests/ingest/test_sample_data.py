@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+
 from scenweave.ingest import ingest_directory, load_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.ingest import check_record, extract_params
 from scenweave.ingest.urban import canonicalize_scene
-
 from tests.ingest.builders import obstacle, scene
 
 REGULAR = [100.0, 101.0, 102.0, 103.0, 104.0]

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.ingest import IngestReport, extract_params, extract_with_variants, iter_raw_records
 from scenweave.ingest.urban import canonicalize_scene
-
 from tests.ingest.builders import scene, write_npy
 
 

@@ -15,10 +15,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from scenweave.player import ReplaySettings, engine, find_esmini, replay_file
-from scenweave.player.errors import PlayerUnavailable
 
 from scenweave import spawn_db
+from scenweave.player import ReplaySettings, engine, find_esmini, replay_file
+from scenweave.player.errors import PlayerUnavailable
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = spawn_db.DEFAULT_MAP_PATH

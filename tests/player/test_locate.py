@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+
 from scenweave.player import PlayerUnavailable, find_esmini, locate, player_status
 
 REAL_LIBRARY = locate.WORKPLACE_HOME / "bin" / locate.LIBRARY

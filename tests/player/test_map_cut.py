@@ -14,14 +14,14 @@ from pathlib import Path
 
 import pytest
 from lxml import etree
+
+from scenweave import corpus, spawn_db
+from scenweave.inputs import InputSelection, load_input
 from scenweave.player import Playback, ReplaySettings, find_esmini, maps, replay_file
 from scenweave.player.errors import PlayerUnavailable
 from scenweave.player.replay import _lights_of
 from scenweave.player.translate import translate
 from scenweave.spawn_db import SpawnMatcher
-
-from scenweave import corpus, spawn_db
-from scenweave.inputs import InputSelection, load_input
 
 MAP = spawn_db.DEFAULT_MAP_PATH
 CLASSES = ("LCF", "CINB", "U4_4")

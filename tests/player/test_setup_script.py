@@ -22,6 +22,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+
 from scenweave.player import locate
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "setup.d" / "10-esmini.sh"

@@ -14,14 +14,14 @@ from urllib.request import url2pathname
 
 import lxml.html
 import pytest
-from scenweave.agent import AgentSettings
-from scenweave.sandbox import SandboxSettings
 
+from scenweave.agent import AgentSettings
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.report import REPORT_FILE
 from scenweave.run_folder import safe_name
 from scenweave.runner import run_batch
+from scenweave.sandbox import SandboxSettings
 from tests.report.chromium import dump_dom, probe
 from tests.worker.records import BRAKE, LCF, POISONED, ingest_with_poisoned_record
 

@@ -18,10 +18,10 @@ import lxml.html
 import numpy as np
 import pytest
 from matplotlib import image as mpimg
-from scenweave.player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
 
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
+from scenweave.player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
 from scenweave.replay_figures import FIGURE_NAME, FIGURE_PX, draw_replay_figure
 from scenweave.report import (
     REPORT_FILE,

@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+
 from scenweave.sandbox import Sandbox, SandboxSettings, SandboxUnavailable, get_sandbox
 from scenweave.sandbox.engine import engine_answers, start_podman_service
 

@@ -17,7 +17,6 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from scenweave.sandbox.settings import MIB
-
 from tests.sandbox.evidence import (
     Listener,
     file_size,

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 from lxml import etree
-from scenweave.corpus import list_scripts
 
+from scenweave.corpus import list_scripts
 from tests.corpus.params_examples import example_params
 
 #: one highway and one urban script: both paths through make_scenario

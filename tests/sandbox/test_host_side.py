@@ -7,10 +7,10 @@ import json
 import os
 
 import pytest
-from scenweave.sandbox.capture import CappedBuffer
-from scenweave.sandbox.result import ReportInvalid, read_report, safe_relative_name, write_files
 
 from scenweave import sandbox
+from scenweave.sandbox.capture import CappedBuffer
+from scenweave.sandbox.result import ReportInvalid, read_report, safe_relative_name, write_files
 
 
 def _report(tmp_path, payload) -> os.PathLike:

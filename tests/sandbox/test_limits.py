@@ -15,9 +15,9 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+
 from scenweave.sandbox import SandboxSettings, get_sandbox
 from scenweave.sandbox.settings import MIB
-
 from tests.sandbox.conftest import FAST
 from tests.sandbox.evidence import (
     bytes_under,

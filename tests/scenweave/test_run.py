@@ -7,12 +7,12 @@ import shutil
 
 import pytest
 from click.testing import CliRunner
-from scenweave.player import ReplaySettings
 
 from scenweave.cli import cli
 from scenweave.commands.agent_options import replay_settings_for
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
+from scenweave.player import ReplaySettings
 from scenweave.runner import default_matcher, run_batch
 
 SCENARIO_FILES = {"scenario.xosc", "scenario.py", "params.json", "status.json", "trace.jsonl"}

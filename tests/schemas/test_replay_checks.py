@@ -14,14 +14,14 @@ from pathlib import Path
 
 import pytest
 from lxml import etree
+
+from scenweave import corpus, spawn_db
+from scenweave.inputs import InputSelection, load_input
 from scenweave.player import Playback, ReplaySettings, find_esmini, replay_file
 from scenweave.schemas import validate_xosc
 from scenweave.schemas.replay import judge_collisions_only, judge_replay, lane_changes
 from scenweave.schemas.scenario_doc import ScenarioDoc
 from scenweave.spawn_db import SpawnMatcher
-
-from scenweave import corpus, spawn_db
-from scenweave.inputs import InputSelection, load_input
 from tests.corpus.params_examples import TAGS
 
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("esmini")]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+
 from scenweave.spawn_db import DEFAULT_DB_PATH, load_database, road_network
 from scenweave.spawn_db.road_network import RoadNetwork
 

@@ -6,9 +6,9 @@ import json
 import shutil
 
 from click.testing import CliRunner
-from scenweave.spawn_db import DEFAULT_DB_PATH, load_database, mark_reviewed
 
 from scenweave.cli import cli
+from scenweave.spawn_db import DEFAULT_DB_PATH, load_database, mark_reviewed
 
 
 def test_build_keeps_reviews_and_review_marks_ranges(tmp_path):

@@ -8,6 +8,7 @@ import shutil
 
 import numpy as np
 import pytest
+
 from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
     DEFAULT_MAP_PATH,
@@ -141,7 +142,6 @@ def test_invalid_database_names_the_field(tmp_path):
 
 def test_any_map_builds_and_matches(tmp_path):
     from scenweave.spawn_db import SpawnMatcher
-
     from tests.spawn_db.contract_params import highway
     from tests.spawn_db.synthetic_maps import two_road_chain, write
 

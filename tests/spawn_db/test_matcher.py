@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from scenweave.spawn_db import NoSpawnFits, ParamsError, SpawnMatcher
 
+from scenweave.spawn_db import NoSpawnFits, ParamsError, SpawnMatcher
 from tests.spawn_db.contract_params import highway, urban
 
 

@@ -7,9 +7,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+
 from scenweave.spawn_db import DEFAULT_MAP_PATH, OpenDriveError, load_opendrive
 from scenweave.spawn_db.lanes import driving_direction, lane_center_offset, lane_distance
-
 from tests.spawn_db.synthetic_maps import opendrive, road_xml, write
 
 RAW = ET.parse(DEFAULT_MAP_PATH).getroot()
@@ -152,6 +152,7 @@ def test_every_plan_view_kind_is_read_from_xml(tmp_path):
 
 def test_schema_of_the_database_is_a_valid_json_schema():
     from jsonschema import Draft202012Validator
+
     from scenweave.schemas import load_json_schema
 
     Draft202012Validator.check_schema(load_json_schema("spawn_db"))

@@ -6,8 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from scenweave.spawn_db.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
 from scipy.integrate import quad
+
+from scenweave.spawn_db.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
 
 
 def _integrated_clothoid(k0: float, rate: float, ds: float) -> tuple[float, float]:

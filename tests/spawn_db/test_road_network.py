@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
+
 from scenweave.spawn_db import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
 from scenweave.spawn_db.road_network import LanePoint
-
 from tests.spawn_db.synthetic_maps import two_road_chain, write
 
 

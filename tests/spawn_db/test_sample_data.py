@@ -9,6 +9,7 @@ import math
 from collections import Counter
 
 import pytest
+
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 from scenweave.spawn_db import SpawnMatcher, traffic_lights_carla

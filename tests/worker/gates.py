@@ -15,9 +15,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from scenweave.spawn_db import SpawnMatcher
-
 from scenweave.run_folder import safe_name
+from scenweave.spawn_db import SpawnMatcher
 
 GATES_ENV = "SCENWEAVE_TEST_GATES"
 

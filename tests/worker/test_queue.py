@@ -187,6 +187,7 @@ def test_infrastructure_errors_are_told_from_scenario_errors(error, infrastructu
 
 def test_sandbox_and_redis_errors_are_infrastructure_spawn_errors_are_not():
     from redis.exceptions import ConnectionError as RedisConnectionError
+
     from scenweave.sandbox import SandboxUnavailable
     from scenweave.spawn_db.errors import NoSpawnFits
 

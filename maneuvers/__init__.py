@@ -1,0 +1,24 @@
+"""Manoeuvre classes: one definition per class, asked by every stage.
+
+See ``docs/adding-a-manoeuvre.md``. ``get("BRAKE")`` -> :class:`Maneuver`;
+``codes("urban")``; ``maneuvers()``; a plugin adds classes through ``$SCENWEAVE_MANEUVERS``.
+This package imports nothing else of ScenWeave's.
+"""
+
+from scenweave.maneuvers.maneuver import Domain, Maneuver, SameLane, no_lane_sides
+from scenweave.maneuvers.registry import (
+    PLUGINS_ENV,
+    UnknownManeuver,
+    by_tag,
+    codes,
+    find,
+    get,
+    maneuvers,
+    register,
+    seeding_order,
+    unregister,
+)
+
+__all__ = ["PLUGINS_ENV", "Domain", "Maneuver", "SameLane", "UnknownManeuver", "by_tag",
+           "codes", "find", "get", "maneuvers", "no_lane_sides", "register", "seeding_order",
+           "unregister"]

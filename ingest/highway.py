@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scenweave import maneuvers
 from scenweave.ingest.issues import Issue
 from scenweave.ingest.layouts import ClassLayout, Column, HighwayLayouts
 from scenweave.ingest.npy import load_npy
@@ -41,7 +42,8 @@ def class_of_file(path: Path, layouts: HighwayLayouts) -> str:
         raise ValueError("file name must look like <CLASS>_BINS_VALUES.npy")
     code = match.group("code")
     if code not in layouts.classes:
-        raise ValueError(f"unknown class {code!r} (known: {', '.join(layouts.classes)})")
+        raise ValueError(f"unknown class {code!r} (known: {', '.join(sorted(layouts.classes))}; "
+                         f"a class of your own is added with ${maneuvers.PLUGINS_ENV})")
     return code
 
 

@@ -103,9 +103,14 @@ def load_layouts(path: Path | str | None = None) -> HighwayLayouts:
                           source=where)
 
 
-@cache
 def default_layouts() -> HighwayLayouts:
-    """The bundled layouts, read once (for records that carry no ``conventions``)."""
+    """The bundled layouts (for records that carry no ``conventions``), read once per set of
+    registered classes."""
+    return _default_layouts(tuple(maneuvers.codes("highway")))
+
+
+@cache
+def _default_layouts(known: tuple[str, ...]) -> HighwayLayouts:
     return load_layouts()
 
 

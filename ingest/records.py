@@ -15,6 +15,11 @@ from scenweave.maneuvers import Domain
 from scenweave.schemas import load_json_schema
 
 SCHEMA_OF_DOMAIN = {"highway": "highway_record", "urban": "urban_record"}
+#: the classes a record schema's condition names (its ``$comment``), from the registry
+CLASS_GROUPS: dict[str, Callable[[maneuvers.Maneuver], bool]] = {
+    "registry: relative_speed": lambda m: m.relative_speed,
+    "registry: behavior_type": lambda m: "behavior_type" in m.layout_fields,
+}
 
 
 def record_schema(domain: Domain) -> dict:
@@ -22,6 +27,11 @@ def record_schema(domain: Domain) -> dict:
     registered for that domain."""
     schema = load_json_schema(SCHEMA_OF_DOMAIN[domain])
     schema["properties"]["maneuver_class"]["enum"] = maneuvers.codes(domain)
+    for condition in schema.get("allOf", ()):
+        which = condition["if"]["properties"].get("maneuver_class", {})
+        if which.get("$comment") in CLASS_GROUPS:
+            which["enum"] = [m.code for m in maneuvers.maneuvers(domain)
+                             if CLASS_GROUPS[which["$comment"]](m)]
     return schema
 
 

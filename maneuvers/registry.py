@@ -23,7 +23,8 @@ BUILTIN_MODULES = ("brake", "cut", "lane_change", "follow", "free_ride", "urban"
 
 _registry: dict[str, Maneuver] = {}
 _builtin: set[str] = set()
-_loaded_plugins: set[str] = set()
+#: plugin entry ($SCENWEAVE_MANEUVERS) -> the codes it registered
+_loaded_plugins: dict[str, set[str]] = {}
 
 
 class UnknownManeuver(KeyError):
@@ -44,8 +45,13 @@ def register(maneuver: Maneuver) -> Maneuver:
 
 
 def unregister(code: str) -> None:
-    """Remove a class (tests that register a toy class clean up with this)."""
+    """Remove a class (tests that register a toy class clean up with this); a plugin whose
+    classes are all gone is loaded again when $SCENWEAVE_MANEUVERS still names it."""
     _registry.pop(code, None)
+    for entry, added in list(_loaded_plugins.items()):
+        added.discard(code)
+        if not added:
+            del _loaded_plugins[entry]
 
 
 def get(code: str) -> Maneuver:
@@ -94,20 +100,24 @@ def _load() -> None:
         _builtin.update(_registry)
     for entry in os.environ.get(PLUGINS_ENV, "").split(os.pathsep):
         if entry and entry not in _loaded_plugins:
-            _loaded_plugins.add(entry)
-            _add(_import_plugin(entry))
+            _loaded_plugins[entry] = _add(_import_plugin(entry))
 
 
-def _add(module: ModuleType) -> None:
+def _add(module: ModuleType) -> set[str]:
     found: Iterable[Maneuver] | None = getattr(module, "MANEUVERS", None)
     if found is None:
         raise ImportError(f"{module.__name__} defines no MANEUVERS (a sequence of Maneuver)")
+    added = set()
     for maneuver in found:
+        if not isinstance(maneuver, Maneuver):
+            raise TypeError(f"{module.__name__}: MANEUVERS holds {maneuver!r}, not a Maneuver")
         known = _registry.get(maneuver.code)
-        if known is not None and known != maneuver:
+        if known is not None and known.code in _builtin | set().union(*_loaded_plugins.values()):
             raise ValueError(f"{module.__name__}: manoeuvre class {maneuver.code} is already "
                              "registered")
         _registry[maneuver.code] = maneuver
+        added.add(maneuver.code)
+    return added
 
 
 def _import_plugin(entry: str) -> ModuleType:

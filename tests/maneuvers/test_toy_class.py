@@ -1,0 +1,54 @@
+"""RQ3: a new manoeuvre class needs no change to ScenWeave. The toy class ACCEL (this test's
+folder only: its definition in ``toy/accel.py``, its reference script next to it) goes from
+sample data through ingest, spawn, reference script, checks and the esmini replay to ok."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from scenweave import maneuvers
+from scenweave.cli import cli
+
+TOY = Path(__file__).parent / "toy" / "accel.py"
+
+
+@pytest.fixture
+def toy_class(monkeypatch):
+    monkeypatch.setenv(maneuvers.PLUGINS_ENV, str(TOY))
+    yield maneuvers.get("ACCEL")
+    maneuvers.unregister("ACCEL")
+
+
+def test_the_plugin_registers_the_class(toy_class):
+    assert toy_class.code in maneuvers.codes("highway")
+    assert maneuvers.by_tag("lead_accelerates") is toy_class
+
+
+def test_a_toy_class_runs_end_to_end_and_replays_as_recorded(toy_class, esmini, tmp_path):
+    runner = CliRunner()
+    made = runner.invoke(cli, ["sample-data", str(tmp_path / "raw"), "--seed", "3",
+                               "--per-class", "3"])
+    assert made.exit_code == 0, made.output
+    assert (tmp_path / "raw" / "highway" / "ACCEL_BINS_VALUES.npy").exists()
+    ran = runner.invoke(cli, ["run", str(tmp_path / "raw"), "--no-llm", "--classes", "ACCEL",
+                              "--out", str(tmp_path / "runs"), "--run-id", "toy"])
+    assert ran.exit_code == 0, ran.output
+    summary = json.loads((tmp_path / "runs" / "toy" / "summary.json").read_text())
+    outcomes = summary["scenarios"]
+    assert len(outcomes) == 3 and not summary["input_issues"]
+    assert all(o["status"] == "ok" for o in outcomes), outcomes
+    folder = tmp_path / "runs" / "toy" / outcomes[0]["scenario_id"]
+    replay = json.loads((folder / "replay.json").read_text())
+    assert replay["tracks"]["npc"], "the lead was played"
+    scenario = (folder / "scenario.xosc").read_text()
+    assert "npc_speed_change" in scenario and "ScenWeave ACCEL" in scenario
+
+
+def test_without_the_plugin_the_class_is_unknown_in_one_line(tmp_path):
+    with pytest.raises(maneuvers.UnknownManeuver, match="unknown manoeuvre class 'ACCEL'.*"
+                       "SCENWEAVE_MANEUVERS"):
+        maneuvers.get("ACCEL")

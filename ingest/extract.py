@@ -12,6 +12,7 @@ from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.sampling import RecordFieldError
+from scenweave.schemas.params import ParamsInvalid, check_params
 
 HIGHWAY_MANEUVER_START_S = 2.0
 TIMEOUT_FACTOR = 2.5
@@ -174,7 +175,8 @@ def _time_at_distance(t: list[float], ds: list[float], target: float) -> float |
 # -- derived values, shared by both domains and by variants -----------------------------------
 
 def finish(params: dict) -> dict:
-    """Fill the values that follow from the primary ones; returns ``params`` (changed in place)."""
+    """Fill the values that follow from the primary ones and check the result against the
+    params contract (``schemas.check_params``); returns ``params`` (changed in place)."""
     if "delta_speed_ms" in params:
         params["npc_end_speed_ms"] = max(params["npc_speed_ms"] + params["delta_speed_ms"], 0.0)
     maneuver = maneuvers.get(params["maneuver_class"])
@@ -190,6 +192,10 @@ def finish(params: dict) -> dict:
     gaps = _start_gaps(params)
     params["gap_ahead_m"] = max([g for g in gaps if g > 0], default=0.0)
     params["gap_behind_m"] = max([-g for g in gaps if g < 0], default=0.0)
+    try:
+        check_params(params)
+    except ParamsInvalid as err:
+        raise RecordIssue(str(err), field=err.key and f"params.{err.key}") from err
     return params
 
 

@@ -37,6 +37,7 @@ import numpy as np
 
 from scenweave.ingest.atomic import write_bytes_atomic
 from scenweave.player import REPLAY_NAME, Playback
+from scenweave.schemas.params import number as number_of
 from scenweave.schemas.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
 FIGURE_NAME = "replay.png"
@@ -144,9 +145,7 @@ class _Facts:
         return "replay FAILED" + (f": {', '.join(codes)}" if codes else ""), FAIL_COLOUR
 
     def number(self, key: str) -> float | None:
-        value = self.params.get(key)
-        ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-        return float(value) if ok else None
+        return number_of(self.params, key)
 
 
 def _read_json(path: Path) -> dict:

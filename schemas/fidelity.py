@@ -26,6 +26,7 @@ from scenweave.corpus.kinematics import (
 )
 from scenweave.maneuvers import Maneuver
 from scenweave.schemas.findings import Finding
+from scenweave.schemas.params import number as number_of
 from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 SPEED_TOL_MS = 0.01
@@ -127,15 +128,9 @@ def _spawns(check: _Check) -> None:
             _world_position(check, code, entity, _expected_world(params, prefix), position)
 
 
-def _value(params: dict, key: str) -> float | None:
-    value = params.get(key)
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    return float(value) if ok else None
-
-
 def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
     """``(x, y, z, h)`` the spawn stage gave ``prefix``, or None when a key is missing."""
-    pose = [_value(params, f"{prefix}_{axis}") for axis in "xyzh"]
+    pose = [number_of(params, f"{prefix}_{axis}") for axis in "xyzh"]
     return None if None in pose else tuple(pose)
 
 
@@ -146,7 +141,7 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
     id is not found there, walking back that far along the NPC's lane must reach the ego's
     ``s``."""
     params = check.params
-    keys = [_value(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
+    keys = [number_of(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
                                         "ego_speed_ms", "maneuver_start_s")]
     if None in keys:
         return
@@ -161,7 +156,7 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
                 f"lane, params say {gap:.2f} m at t = 0 {why}", "error", position.sourceline))
         return
     walked = _walk_back(position, gap)
-    ego_road, ego_s = params.get("ego_road_id"), _value(params, "ego_s")
+    ego_road, ego_s = params.get("ego_road_id"), number_of(params, "ego_s")
     if walked is None or ego_road is None or ego_s is None:
         return
     road, back_s = walked
@@ -260,7 +255,7 @@ def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
 def _stop_at_line(params: dict) -> SpeedProfile | None:
     """A stop at the light: the ego's braking that ends before the spawn's stop line
     (conventions)."""
-    keys = [_value(params, k) for k in ("ego_speed_ms", "brake_time_s",
+    keys = [number_of(params, k) for k in ("ego_speed_ms", "brake_time_s",
                                         "spawn_stop_line_distance_m")]
     return None if None in keys else stop_at_line(*keys)
 
@@ -269,7 +264,7 @@ def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
     """A reacting class (BRAKE, CINF): the ego slows to the NPC's end speed after a reaction
     time, if the NPC (braking lead, cutter) ends slower than the ego's recorded end speed
     (conventions)."""
-    keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
+    keys = [number_of(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
                                         "npc_end_speed_ms", "duration_s", "maneuver_start_s",
                                         "npc_distance_m", "timeout_s")]
     lengths = [doc.vehicle_length(entity) for entity in ("hero", "npc")]
@@ -390,7 +385,7 @@ def _light_plan(params: dict) -> tuple[str, float | None]:
     if class_of(params).stops_at_line:
         stop = _stop_at_line(params)
         return ("green", None) if stop is None else red_light_timing(stop)
-    keys = [_value(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s",
+    keys = [number_of(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s",
                                         "duration_s", "spawn_stop_line_distance_m")]
     if None in keys:
         return "green", None

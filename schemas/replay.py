@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
 from scenweave.schemas.fidelity import class_of, expected_speed_changes, placed_actors
 from scenweave.schemas.findings import Finding
+from scenweave.schemas.params import number as number_of
 from scenweave.schemas.scenario_doc import ScenarioDoc
 
 #: a speed of the replay may differ this much from the record (m/s)
@@ -148,7 +149,7 @@ def _actors_present(judge: _Judge) -> None:
 
 def _start_speeds(judge: _Judge) -> None:
     for entity, prefix in placed_actors(judge.params):
-        want = _number(judge.params, f"{prefix}_speed_ms")
+        want = number_of(judge.params, f"{prefix}_speed_ms")
         if want is None or entity not in judge.playback.tracks:
             continue
         got = judge.playback.tracks[entity]["speed"][0]
@@ -189,12 +190,12 @@ def _speed_changes(judge: _Judge) -> None:
 def _gaps(judge: _Judge) -> None:
     """The recorded gap holds at the manoeuvre start (and, for FL, ``duration_s`` later)."""
     params = judge.params
-    start = _number(params, "maneuver_start_s")
-    wanted = [(entity, _number(params, f"{prefix}_distance_m"), start)
+    start = number_of(params, "maneuver_start_s")
+    wanted = [(entity, number_of(params, f"{prefix}_distance_m"), start)
               for entity, prefix in placed_actors(params) if entity != "hero"]
     if class_of(params).gap_at_end and start is not None:
-        wanted.append(("npc", _number(params, "npc_distance_end_m"),
-                       start + (_number(params, "duration_s") or 0.0)))
+        wanted.append(("npc", number_of(params, "npc_distance_end_m"),
+                       start + (number_of(params, "duration_s") or 0.0)))
     for entity, gap, at_s in wanted:
         if gap is None or at_s is None or entity not in judge.playback.tracks \
                 or params.get("domain") != "highway" or at_s > judge.playback.duration_s:
@@ -212,7 +213,7 @@ def _lane_changes(judge: _Judge) -> None:
     params = judge.params
     maneuver = class_of(params)
     actor = maneuver.lane_change
-    start, duration = _number(params, "maneuver_start_s"), _number(params, "duration_s")
+    start, duration = number_of(params, "maneuver_start_s"), number_of(params, "duration_s")
     if actor is None or actor not in judge.playback.tracks or None in (start, duration):
         return
     changes = lane_changes(judge.playback, actor)
@@ -257,9 +258,9 @@ def _events_fired(judge: _Judge) -> None:
 def _lights(judge: _Judge) -> None:
     """The light shows what the class needs when the ego reaches the stop line (or stops)."""
     params = judge.params
-    if not judge.playback.lights or _number(params, "spawn_stop_line_distance_m") is None:
+    if not judge.playback.lights or number_of(params, "spawn_stop_line_distance_m") is None:
         return
-    stop_line = _number(params, "spawn_stop_line_distance_m")
+    stop_line = number_of(params, "spawn_stop_line_distance_m")
     reached = _time_travelled(judge.playback, "hero", stop_line)
     if class_of(params).stops_at_line:
         stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
@@ -269,7 +270,7 @@ def _lights(judge: _Judge) -> None:
             judge.fail("REPLAY_LIGHT", f"the light is {colour} when the ego stops; a stop at "
                        "red happens on yellow or red", stopped)
         early = _first_time(judge.playback, "hero", 0.0,
-                            lambda v: v < _number(params, "ego_speed_ms") - ONSET_MS)
+                            lambda v: v < number_of(params, "ego_speed_ms") - ONSET_MS)
         if early is not None and light_state(judge.playback, early) == "green":
             judge.fail("REPLAY_LIGHT", "the ego brakes while its light is green", early)
     elif reached is not None:
@@ -283,7 +284,7 @@ def _lights(judge: _Judge) -> None:
 
 def _stop_or_pass(judge: _Judge) -> None:
     params = judge.params
-    maneuver, stop_line = class_of(params), _number(params, "spawn_stop_line_distance_m")
+    maneuver, stop_line = class_of(params), number_of(params, "spawn_stop_line_distance_m")
     if params.get("domain") != "urban" or maneuver.light is None or stop_line is None:
         return
     if maneuver.stops_at_line:
@@ -313,7 +314,7 @@ def _right_turn(judge: _Judge) -> None:
     if class_of(params).turn != "right":
         return
     track = judge.playback.tracks["hero"]
-    exit_pose = [_number(params, f"turn_exit_{k}") for k in "xyh"]
+    exit_pose = [number_of(params, f"turn_exit_{k}") for k in "xyh"]
     if None in exit_pose:
         turned = heading_change(judge.playback, "hero")
         if turned > -RIGHT_TURN_MIN_RAD:
@@ -468,12 +469,6 @@ def _same_lane(playback, a: str, b: str, time_s: float) -> bool | None:
     if ta["road"][i] != tb["road"][i]:
         return None
     return ta["lane"][i] == tb["lane"][i]
-
-
-def _number(params: dict, key: str) -> float | None:
-    value = params.get(key)
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    return float(value) if ok else None
 
 
 def replay_codes(findings: Iterable[Finding]) -> list[str]:

@@ -19,18 +19,21 @@ import os
 import tempfile
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import Any
 
 import jsonschema
 import numpy as np
 
-from scenweave.schemas import load_json_schema
+from scenweave import maneuvers
 from scenweave.spawn_db.bundled import road_network
 from scenweave.spawn_db.errors import LaneEndsError, SpawnDatabaseError
 from scenweave.spawn_db.lanes import lane_center_offset, lane_width
 from scenweave.spawn_db.road_network import LaneKey, RoadNetwork
 from scenweave.spawn_db.signals import JunctionApproach, junction_approach, signal_position
+
+DATABASE_SCHEMA = Path(__file__).with_name("spawn_db.schema.json")
 
 FORMAT_VERSION = 1
 #: roads whose speed record is at least this are highway (km/h)
@@ -52,9 +55,6 @@ FEATURE_LOOKAHEAD_M = 100.0
 STRAIGHT_MAX_CURVATURE = 1.0 / 400.0
 #: in_lane_driving needs at least this much road ahead (m)
 URBAN_MIN_DRIVABLE_M = 50.0
-#: urban manoeuvre tags that need a light on the straight movement / on the right turn
-STRAIGHT_TFL_TAGS = ("stop_at_tfl_red", "pass_tfl_green_or_orange", "straight_tfl_green")
-RIGHT_TURN_TFL_TAGS = ("turn_right_at_tfl_green",)
 SIDES = ("left", "right")
 
 
@@ -300,14 +300,13 @@ def _traffic_lights(network: RoadNetwork, approach: JunctionApproach | None, x: 
 def _suitable_for(entry: dict[str, Any], approach: JunctionApproach | None) -> list[str]:
     if entry["context"] != "urban":
         return []
-    tags = []
-    if entry["drivable"]["ahead_m"] >= URBAN_MIN_DRIVABLE_M:
-        tags.append("in_lane_driving")
+    long_enough = entry["drivable"]["ahead_m"] >= URBAN_MIN_DRIVABLE_M
     controlled = {m.movement for m in approach.movements if m.signal is not None}
-    if "straight" in controlled:
-        tags.extend(STRAIGHT_TFL_TAGS)
-    if "right" in controlled:
-        tags.extend(RIGHT_TURN_TFL_TAGS)
+    tags: list[str] = []
+    for maneuver in maneuvers.maneuvers("urban"):  # a light class needs its movement's light
+        fits = long_enough if maneuver.light is None else maneuver.turn in controlled
+        if fits and maneuver.tag not in tags:
+            tags.append(maneuver.tag)
     return tags
 
 
@@ -382,10 +381,15 @@ def load_database(path: str | Path) -> dict[str, Any]:
     return database
 
 
+@cache
+def _database_schema() -> dict[str, Any]:
+    return json.loads(DATABASE_SCHEMA.read_text(encoding="utf-8"))
+
+
 def validate_database(database: dict[str, Any], path: Path) -> None:
-    """Check ``database`` against ``schemas/spawn_db.schema.json``; unique spawn ids."""
+    """Check ``database`` against ``spawn_db/spawn_db.schema.json``; unique spawn ids."""
     error = jsonschema.exceptions.best_match(
-        jsonschema.Draft202012Validator(load_json_schema("spawn_db")).iter_errors(database))
+        jsonschema.Draft202012Validator(_database_schema()).iter_errors(database))
     if error is not None:
         where = "/".join(str(part) for part in error.absolute_path) or "(root)"
         raise SpawnDatabaseError(f"{path}: {where}: {error.message}")

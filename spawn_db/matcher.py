@@ -37,13 +37,6 @@ from scenweave.spawn_db.signals import junction_approach
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
 VEHICLE_MARGIN_M = 6.0
-#: urban manoeuvres that need a traffic light, and the movement the light must control
-LIGHT_MOVEMENT_BY_TAG = {
-    "stop_at_tfl_red": "straight", "pass_tfl_green_or_orange": "straight",
-    "straight_tfl_green": "straight", "turn_right_at_tfl_green": "right",
-}
-#: the urban manoeuvre whose params get the right-turn exit (``turn_exit_*`` keys)
-RIGHT_TURN_TAG = "turn_right_at_tfl_green"
 #: the right turn ends this far into the lane the right movement leads to (m)
 TURN_EXIT_INTO_M = 10.0
 #: the junction a right turn crosses must start within this distance of the spawn (m)
@@ -133,6 +126,9 @@ class Requirements:
     speed_limit_kmh: float | None
     tfl_ds_m: float | None
     drive_distance_m: float | None = None
+    #: the movement whose light the manoeuvre plays with (``None``: no light needed); a right
+    #: turn also gets the exit of its movement (``turn_exit_*`` keys)
+    light_movement: str | None = None
 
     @classmethod
     def from_params(cls, params: dict[str, Any]) -> Requirements:
@@ -160,12 +156,15 @@ class Requirements:
             side_behind_m=gap_behind + VEHICLE_MARGIN_M, speed_kmh=max_speed * 3.6,
             speed_limit_kmh=number.optional("speed_limit_kmh"),
             tfl_ds_m=number.optional("tfl_ds_m"),
-            drive_distance_m=number.optional("drive_distance_m"))
+            drive_distance_m=number.optional("drive_distance_m"),
+            light_movement=_light_movement(params) if domain == "urban" else None)
 
-    @property
-    def light_movement(self) -> str | None:
-        """The movement whose light the manoeuvre plays with (``None``: no light needed)."""
-        return LIGHT_MOVEMENT_BY_TAG.get(self.tag) if self.domain == "urban" else None
+
+
+def _light_movement(params: dict[str, Any]) -> str | None:
+    maneuver = maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
+        str(params.get("maneuver_tag", "")))
+    return None if maneuver is None or maneuver.light is None else maneuver.turn
 
 
 class _NumberReader:
@@ -183,6 +182,7 @@ class _NumberReader:
         return None if value is None else self._number(key, value)
 
     def _number(self, key: str, value: Any) -> float:
+        """The spawn stage is a public API too: hand-made params get one clear error."""
         numeric = isinstance(value, int | float) and not isinstance(value, bool)
         if not numeric or not math.isfinite(value):
             raise ParamsError(f"{self.scenario_id}: {key}={value!r} is not a finite number")
@@ -285,7 +285,7 @@ class SpawnMatcher:
     def _turn_exit_keys(self, ego: LanePoint, needs: Requirements) -> dict[str, Any]:
         """``turn_exit_*``: where a right turn from the spawn ends (``None`` for other tags)."""
         keys: dict[str, Any] = dict.fromkeys(TURN_EXIT_KEYS)
-        if needs.tag != RIGHT_TURN_TAG:
+        if needs.light_movement != "right":
             return keys
         point = self.right_turn_exit(ego, needs.scenario_id)
         pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)

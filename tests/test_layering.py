@@ -121,6 +121,32 @@ def test_bottom_packages_never_import_the_upper_ones(package):
     assert upward == []
 
 
+def test_the_packages_import_each_other_without_a_cycle():
+    """Package by package, the imports form layers: shell, ingest/agent, corpus/sandbox/schemas
+    /spawn_db/player, maneuvers (schemas -> spawn_db was once also spawn_db -> schemas)."""
+    packages = {package: {layer(target) for name, targets in GRAPH.items()
+                          if layer(name) == package for target in targets} - {package}
+                for package in FOLDERS}
+    assert _cycles(packages) == []
+
+
+def test_maneuvers_is_the_bottom_layer():
+    assert {layer(target) for name, targets in GRAPH.items() if layer(name) == "maneuvers"
+            for target in targets} <= {"maneuvers"}
+
+
+def test_no_package_imports_another_packages_private_names():
+    private = []
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not (isinstance(node, ast.ImportFrom) and node.module and node.level == 0):
+                continue
+            if node.module in MODULES and layer(node.module) != layer(name):
+                private += [f"{name} imports {node.module}.{alias.name}"
+                            for alias in node.names if alias.name.startswith("_")]
+    assert private == []
+
+
 #: modules that may answer an ImportError with a value, and why
 EXPECTED_IMPORT_ERRORS = {
     # it imports what an LLM-written script names, to suggest a correction: a module that

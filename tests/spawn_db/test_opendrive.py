@@ -151,8 +151,10 @@ def test_every_plan_view_kind_is_read_from_xml(tmp_path):
 
 
 def test_schema_of_the_database_is_a_valid_json_schema():
+    import json
+
     from jsonschema import Draft202012Validator
 
-    from scenweave.schemas import load_json_schema
+    from scenweave.spawn_db.database import DATABASE_SCHEMA
 
-    Draft202012Validator.check_schema(load_json_schema("spawn_db"))
+    Draft202012Validator.check_schema(json.loads(DATABASE_SCHEMA.read_text()))

@@ -1,0 +1,208 @@
+"""The params contract (``docs/params.md``) as one typed model, its JSON Schema, and one reader.
+
+:class:`Params` names every key a stage may read and its type; ``schemas/params.schema.json``
+is generated from it (``python -m scenweave.schemas.params`` rewrites it, a test checks the two
+agree). :func:`check_params` validates a params dict once, where it is made (extraction,
+variants, the spawn stage); readers then use :func:`number` for optional numbers instead of
+each re-checking types their own way.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import types
+import typing
+from collections.abc import Callable, Mapping
+from functools import cache
+from pathlib import Path
+from typing import Any, Literal, TypedDict
+
+import fastjsonschema
+
+SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
+
+VehicleType = Literal["car", "truck", "van", "motorcycle"]
+Side = Literal["left", "right"]
+#: the actors the spawn stage places, each with a world pose and a lane position at t = 0
+PLACED_ACTORS = ("ego", "npc", "center", "right", "left", "lead", "oncoming", "turn_exit")
+#: the free-ride slots (FRF, FRB)
+SLOTS = ("center", "right", "left")
+
+
+class Params(TypedDict, total=False):
+    """One scenario's params: what ingest extracted, the spawn stage filled in and every later
+    stage reads. Units are SI unless the key says otherwise. ``docs/params.md`` explains each
+    key; the slot (``center_*``...) and spawn (``ego_x``...) families are added below."""
+
+    # -- every params dict -----------------------------------------------------------------
+    scenario_id: str
+    maneuver_class: str
+    maneuver_tag: str
+    domain: Literal["highway", "urban"]
+    weather_key: str
+    duration_s: float
+    maneuver_start_s: float
+    timeout_s: float
+    ego_speed_ms: float
+    ego_end_speed_ms: float
+    has_npc: bool
+    npc_position: Literal["front", "behind"] | None
+    required_lane_sides: list[Side]
+    max_speed_ms: float
+    gap_ahead_m: float
+    gap_behind_m: float
+    spawn_id: int | None
+    description: str
+
+    # -- highway ---------------------------------------------------------------------------
+    npc_speed_ms: float
+    npc_end_speed_ms: float
+    delta_speed_ms: float
+    npc_distance_m: float
+    npc_distance_end_m: float
+    npc_dist_traveled_m: float
+    npc_vehicle_type: VehicleType
+    brake_intensity: float
+    other_dir_traffic: bool
+    lane_change_direction: Side
+    behavior_type: Literal["B1", "B2", "B3", "B4"]
+    ego_dist_traveled_m: float
+    driving_side: Side
+
+    # -- urban -----------------------------------------------------------------------------
+    road_type: str
+    init_speed_ms: float
+    final_speed_ms: float
+    brake_time_s: float
+    yellow_delay_s: float | None
+    drive_distance_m: float
+    tfl_ds_m: float | None
+    tfl_state: Literal["green", "orange", "red"] | None
+    turn: Literal["straight", "right"]
+    speed_limit_kmh: float
+    lane_count: int
+    lane_width_m: float
+    lead_present: bool
+    lead_distance_m: float
+    lead_speed_ms: float
+    lead_vehicle_type: VehicleType | None
+    oncoming_present: bool
+    oncoming_distance_m: float
+    oncoming_speed_ms: float
+    oncoming_vehicle_type: VehicleType | None
+    pedestrian_present: bool
+    min_ttc_s: float | None
+    v_noise_std: float
+    dl_noise_std: float
+    t_noise_std: float
+    tfl_x_carla: float | None
+    tfl_y_carla: float | None
+    spawn_tfl_distance_m: float | None
+    spawn_stop_line_distance_m: float | None
+
+
+#: every params dict has these (spawn keys null until the spawn stage fills them)
+REQUIRED = ("scenario_id", "maneuver_class", "maneuver_tag", "domain", "weather_key",
+            "duration_s", "maneuver_start_s", "timeout_s", "ego_speed_ms", "ego_end_speed_ms",
+            "has_npc", "npc_position", "required_lane_sides", "max_speed_ms", "gap_ahead_m",
+            "gap_behind_m", "spawn_id")
+#: ``<slot>_<key>`` of each free-ride slot
+SLOT_KEYS: dict[str, Any] = {
+    "present": bool, "speed_ms": float, "end_speed_ms": float, "distance_m": float,
+    "end_distance_m": float, "vehicle_type": VehicleType | None}
+#: ``<actor>_<key>`` of each placed actor: world pose (OpenSCENARIO frame) and lane position
+POSE_KEYS: dict[str, Any] = {
+    "x": float | None, "y": float | None, "z": float | None, "h": float | None,
+    "road_id": int | None, "lane_id": int | None, "s": float | None}
+
+
+class ParamsInvalid(ValueError):
+    """Params that break the contract: the message names the key."""
+
+    def __init__(self, message: str, key: str | None = None) -> None:
+        super().__init__(message)
+        self.key = key
+
+
+def all_keys() -> dict[str, Any]:
+    """Every key of the contract and its type."""
+    keys = dict(typing.get_type_hints(Params))
+    keys |= {f"{slot}_{key}": kind for slot in SLOTS for key, kind in SLOT_KEYS.items()}
+    keys |= {f"{actor}_{key}": kind for actor in PLACED_ACTORS for key, kind in POSE_KEYS.items()}
+    return keys
+
+
+def json_schema() -> dict:
+    """The JSON Schema of the contract (what ``schemas/params.schema.json`` holds)."""
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "$id": "https://scenweave.local/schemas/params.schema.json",
+        "title": "ScenWeave params",
+        "description": "The params dict every stage shares (docs/params.md). Generated from "
+                       "scenweave.schemas.params.Params; do not edit by hand.",
+        "type": "object",
+        "required": list(REQUIRED),
+        "properties": {key: _json_type(kind) for key, kind in sorted(all_keys().items())},
+    }
+
+
+def _json_type(kind: Any) -> dict:
+    if kind is bool:
+        return {"type": "boolean"}
+    if kind is int:
+        return {"type": "integer"}
+    if kind is float:
+        return {"type": "number"}
+    if kind is str:
+        return {"type": "string"}
+    origin, args = typing.get_origin(kind), typing.get_args(kind)
+    if origin is Literal:
+        return {"enum": list(args)}
+    if origin is list:
+        return {"type": "array", "items": _json_type(args[0])}
+    if origin in (typing.Union, types.UnionType):
+        options = [_json_type(arg) for arg in args if arg is not type(None)]
+        nullable = type(None) in args
+        if len(options) == 1 and "enum" in options[0]:
+            return {"enum": [*options[0]["enum"], *([None] if nullable else [])]}
+        if len(options) == 1 and nullable:
+            return {"type": [options[0]["type"], "null"]}
+        return {"anyOf": [*options, *([{"type": "null"}] if nullable else [])]}
+    raise TypeError(f"no JSON Schema type for {kind!r}")
+
+
+@cache
+def _validator() -> Callable[[dict], Any]:
+    return fastjsonschema.compile(json.loads(SCHEMA_PATH.read_text(encoding="utf-8")))
+
+
+def check_params(params: Mapping[str, Any]) -> None:
+    """Raise :class:`ParamsInvalid` naming the key when ``params`` break the contract
+    (a missing key, a wrong type, a value outside its set, a NaN or infinite number)."""
+    try:
+        _validator()(dict(params))
+    except fastjsonschema.JsonSchemaValueException as err:
+        key = err.name.removeprefix("data.").removeprefix("data") or None
+        raise ParamsInvalid(f"params break docs/params.md: {err.message}", key) from err
+    for key, value in params.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ParamsInvalid(f"params key {key!r} is {value}, not a finite number", key)
+
+
+def number(params: Mapping[str, Any], key: str) -> float | None:
+    """``params[key]`` as a float, or None when it is absent or null (not yet filled)."""
+    value = params.get(key)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    return float(value) if ok else None
+
+
+def write_schema() -> None:
+    """Regenerate ``schemas/params.schema.json`` from :class:`Params`."""
+    SCHEMA_PATH.write_text(json.dumps(json_schema(), indent=1) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    write_schema()
+    sys.stdout.write(f"wrote {SCHEMA_PATH}\n")

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-UPPER = ("scenweave", "ingest", "agent")
+UPPER = ("scenweave", "ingest", "agent", "mining")
 BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)

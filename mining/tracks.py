@@ -1,0 +1,88 @@
+"""What a trajectory reader yields: :class:`Recording`, a road's worth of :class:`Track`\\ s.
+
+Every reader (CommonRoad XML, NGSIM CSV, highD CSVs) turns its format into this one model, so
+manoeuvre detection never sees a file format. Units are SI; times in seconds from the
+recording's start; ``s`` runs along the road in the direction of travel (a car driving on
+has a growing ``s``), so gaps are differences in ``s`` between two cars of one lane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Track:
+    """One vehicle over the steps it was seen."""
+
+    #: the vehicle's id in its file (unique within the recording)
+    id: str
+    #: bounding box (m)
+    length_m: float
+    width_m: float
+    #: "car", "truck", "van", "motorcycle" (the CARLA blueprint families ScenWeave knows)
+    vehicle_type: str
+    #: per step: time (s), position in the file's frame (m), heading (rad), speed (m/s)
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    heading: np.ndarray
+    speed: np.ndarray
+    #: per step: position along the road in the direction of travel (m)
+    s: np.ndarray
+    #: per step: the lane, as the file names it (a lane index or a lanelet id), as strings
+    lane: np.ndarray
+    #: per step: the lane's index counted from the road's left edge in the direction of
+    #: travel (1 = leftmost); a higher index is further right. NaN where unknown.
+    lane_index: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        for name in ("x", "y", "heading", "speed", "s", "lane"):
+            if len(getattr(self, name)) != n:
+                raise ValueError(f"track {self.id}: {name} has {len(getattr(self, name))} "
+                                 f"values for {n} steps")
+        if len(self.lane_index) not in (0, n):
+            raise ValueError(f"track {self.id}: lane_index has {len(self.lane_index)} values "
+                             f"for {n} steps")
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+
+@dataclass(frozen=True)
+class LightPhase:
+    """A traffic light's state from ``start_s`` to ``end_s``."""
+
+    start_s: float
+    end_s: float
+    state: str  # "green", "yellow", "red"
+
+
+@dataclass(frozen=True)
+class TrafficLight:
+    """A traffic light: where its stop line is along the road of the lanes it controls, and
+    its phases over the recording."""
+
+    id: str
+    lanes: tuple[str, ...]
+    stop_line_s: float | None
+    phases: tuple[LightPhase, ...]
+
+
+@dataclass
+class Recording:
+    """One file's (or one recording's) tracks, with where they came from."""
+
+    source: str
+    #: the time step of the recording (s)
+    dt: float
+    tracks: list[Track]
+    lights: list[TrafficLight] = field(default_factory=list)
+    #: the format's name ("commonroad", "ngsim-csv", "highd")
+    reader: str = ""
+    #: what the reader could not take and why (one line each)
+    warnings: list[str] = field(default_factory=list)

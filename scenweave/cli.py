@@ -17,6 +17,7 @@ from scenweave import __version__
 COMMANDS: dict[str, str] = {
     "sample-data": "scenweave.commands.sample_data:sample_data",
     "ingest": "scenweave.commands.ingest:ingest",
+    "mine": "scenweave.commands.mine:mine",
     "demo": "scenweave.commands.demo:demo",
     "run": "scenweave.commands.run:run",
     "validate": "scenweave.commands.validate:validate",

@@ -150,7 +150,7 @@ def observed_curve(run_dir: Path, outcomes: list[dict]) -> list[tuple[float, int
 
 # --- figures -------------------------------------------------------------------------------
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -159,16 +159,17 @@ def _pyplot() -> Any:
     return plt
 
 
-def _png(fig: Any) -> bytes:
+def figure_png(fig: Any) -> bytes:
+    """A matplotlib figure as PNG bytes (the figure is closed)."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
-    _pyplot().close(fig)
+    pyplot().close(fig)
     return buffer.getvalue()
 
 
 def plot_latency_vs_success(per_model: dict[str, dict]) -> bytes:
     """Fig. 6.1: mean latency against success rate, one labelled point per model."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for model, m in per_model.items():
         mean = m["latency_s"]["mean"] or 0.0
@@ -179,12 +180,12 @@ def plot_latency_vs_success(per_model: dict[str, dict]) -> bytes:
     ax.set_ylabel("success rate (%)")
     ax.set_ylim(-5, 105)
     ax.grid(alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 def plot_latency_per_class(series: dict[str, list[dict]]) -> bytes:
     """Fig. 6.2: mean latency ± standard deviation per class, one bar group per series."""
-    plt = _pyplot()
+    plt = pyplot()
     classes = sorted({o.get("maneuver_class", "?") for group in series.values() for o in group})
     fig, ax = plt.subplots(figsize=(max(6.4, 0.55 * len(classes) * max(1, len(series))), 4.2))
     width = 0.8 / max(1, len(series))
@@ -200,12 +201,12 @@ def plot_latency_per_class(series: dict[str, list[dict]]) -> bytes:
     if len(series) > 1:
         ax.legend(fontsize=8)
     ax.grid(axis="y", alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 def plot_latency_boxplot(outcomes: list[dict]) -> bytes:
     """Fig. 6.3: the distribution of latencies per class."""
-    plt = _pyplot()
+    plt = pyplot()
     grouped = by_class(outcomes)
     data = [[v for v in map(latency_s, group) if v is not None] or [0.0]
             for group in grouped.values()]
@@ -214,12 +215,12 @@ def plot_latency_boxplot(outcomes: list[dict]) -> bytes:
     ax.set_xticks(range(1, len(grouped) + 1), list(grouped), rotation=45, ha="right")
     ax.set_ylabel("latency (s/scenario)")
     ax.grid(axis="y", alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
     """Fig. 6.4: cumulative scenarios over time, one step curve per series of (time, count)."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for name, curve in series.items():
         if not curve:
@@ -230,7 +231,7 @@ def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
     ax.set_ylabel("scenarios finished")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    return _png(fig)
+    return figure_png(fig)
 
 
 # --- HTML ----------------------------------------------------------------------------------

@@ -1,0 +1,54 @@
+"""A mined :class:`Event` -> the canonical record of its class, as ingest would write it from
+a MOOVE file, plus where it was found (``provenance``) and what was recorded (``series``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from scenweave import maneuvers
+from scenweave.mining.detect import Event
+
+BINNING = "mined"
+
+
+def highway_record(event: Event, source: Path, reader: str, number: int) -> dict:
+    """The phase1.v1 record of a highway event; gaps are between bumpers, a relative speed is
+    npc minus ego (``conventions``)."""
+    maneuver = maneuvers.get(event.code)
+    has_npc, position = _npc(maneuver, event)
+    conventions: dict = {"gaps_between": "bumpers"}
+    if maneuver.relative_speed:
+        conventions["relative_speed_sign"] = 1
+    stem = _slug(source.stem)
+    return {
+        "schema_version": "phase1.v1",
+        "scenario_id": f"{event.code}_{BINNING}_{stem}_row{number:06d}",
+        "maneuver_class": event.code,
+        "maneuver_tag": maneuver.tag,
+        "domain": "highway",
+        "has_npc": has_npc,
+        "npc_position": position,
+        "binning_version": BINNING,
+        "source": {"file": source.name, "row_index": number},
+        "behavior_type": event.fields.get("behavior_type"),
+        "params": dict(event.fields),
+        "conventions": conventions,
+        "provenance": {"file": str(source), "reader": reader,
+                       "tracks": {"ego": event.ego} | ({"npc": event.npc} if event.npc else {}),
+                       "start_s": event.start_s, "end_s": event.end_s},
+        "series": event.series,
+    }
+
+
+def _npc(maneuver: maneuvers.Maneuver, event: Event) -> tuple[bool, str | None]:
+    if event.npc is None:
+        return False, None
+    distance = event.fields.get("npc_distance_m")
+    if isinstance(distance, float | int):
+        return True, "front" if distance >= 0 else "behind"
+    return True, maneuver.npc_position
+
+
+def _slug(text: str) -> str:
+    """File stems as scenario-id parts: letters, digits, dots and dashes."""
+    return "".join(c if c.isalnum() or c in ".-" else "-" for c in text)

@@ -1,0 +1,105 @@
+"""Who drives in front of and behind whom: a recording's tracks indexed by time step and lane.
+
+``Traffic.leader(i, k)`` is the car directly ahead of track ``i`` at its step ``k`` in its lane
+and the bumper gap to it; ``follower`` the one directly behind. Lanes are the tracks'
+``lane_index`` where known (it stays the same along a road), else their ``lane`` names.
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from scenweave.mining.tracks import Recording, Track
+
+
+@dataclass(frozen=True)
+class Neighbour:
+    """Another track, its step index at that moment, and the gap to it (m, bumper to bumper;
+    positive)."""
+
+    track: int
+    step: int
+    gap_m: float
+
+
+class Traffic:
+    """Neighbour queries over one recording."""
+
+    def __init__(self, recording: Recording):
+        self.recording = recording
+        self.tracks = recording.tracks
+        self.dt = recording.dt
+        rows = [self._rows(i, track) for i, track in enumerate(self.tracks)]
+        table = np.concatenate(rows, axis=1) if rows else np.empty((4, 0))
+        frame, lane, s, owner = table
+        order = np.lexsort((s, lane, frame))
+        self._frame, self._lane = frame[order], lane[order]
+        self._s, self._owner = s[order], owner[order].astype(int)
+        self._position = {(int(o), int(round(f))): k for k, (o, f) in
+                          enumerate(zip(self._owner, self._frame, strict=True))}
+
+    def frame(self, track: Track, step: int) -> int:
+        return int(round(track.t[step] / self.dt))
+
+    def lane_of(self, track: Track, step: int) -> float:
+        return float(_lane_keys(track)[step])
+
+    def leader(self, i: int, step: int) -> Neighbour | None:
+        return self._neighbour(i, step, +1)
+
+    def follower(self, i: int, step: int) -> Neighbour | None:
+        return self._neighbour(i, step, -1)
+
+    def nearest_in_lane(self, i: int, step: int, lane: float) -> tuple[Neighbour | None, bool]:
+        """The car of ``lane`` nearest to track ``i`` along the road at its ``step``, and
+        whether it is ahead."""
+        track = self.tracks[i]
+        frame = self.frame(track, step)
+        lo = np.searchsorted(self._frame, frame - 0.5)
+        hi = np.searchsorted(self._frame, frame + 0.5)
+        here = np.arange(lo, hi)[self._lane[lo:hi] == lane]
+        here = here[self._owner[here] != i]
+        if not len(here):
+            return None, True
+        offsets = self._s[here] - track.s[step]
+        best = here[int(np.argmin(np.abs(offsets)))]
+        ahead = bool(self._s[best] >= track.s[step])
+        return self._as_neighbour(i, step, best, ahead), ahead
+
+    def _neighbour(self, i: int, step: int, direction: int) -> Neighbour | None:
+        k = self._position.get((i, self.frame(self.tracks[i], step)))
+        if k is None:
+            return None
+        j = k + direction
+        if not 0 <= j < len(self._frame) or self._frame[j] != self._frame[k] \
+                or self._lane[j] != self._lane[k]:
+            return None
+        return self._as_neighbour(i, step, j, direction > 0)
+
+    def _as_neighbour(self, i: int, step: int, row: int, ahead: bool) -> Neighbour:
+        me, other = self.tracks[i], self.tracks[int(self._owner[row])]
+        other_step = int(np.argmin(np.abs(other.t - me.t[step])))
+        centre_gap = abs(float(self._s[row]) - float(me.s[step]))
+        gap = centre_gap - (me.length_m + other.length_m) / 2
+        return Neighbour(int(self._owner[row]), other_step, gap)
+
+    def _rows(self, i: int, track: Track) -> np.ndarray:
+        frames = np.round(track.t / self.dt)
+        return np.vstack([frames, _lane_keys(track), track.s, np.full(len(track.t), i)])
+
+
+def _lane_keys(track: Track) -> np.ndarray:
+    """A number per step naming the lane: the lane index where every step has one, else a
+    stable code of the lane's name."""
+    index = np.asarray(track.lane_index, dtype=float)
+    if len(index) == len(track.t) and np.all(np.isfinite(index)):
+        return index
+    return np.array([_code(str(name)) for name in track.lane], dtype=float)
+
+
+def _code(name: str) -> float:
+    """Lane names as numbers that never equal a lane index (indexes are small)."""
+    return float(zlib.crc32(name.encode()) + 1000)

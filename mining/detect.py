@@ -100,7 +100,9 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
     limits = scene.thresholds["brake"]
     for i, track in enumerate(scene.tracks):
         motion = scene.motion[i]
-        for first, last in runs(motion.acceleration < -limits["deceleration_ms2"]):
+        for hard_first, hard_last in runs(motion.acceleration < -limits["deceleration_ms2"]):
+            first, last = _widened(motion.acceleration > -limits["onset_ms2"], hard_first,
+                                   hard_last)
             took = float(track.t[last] - track.t[first])
             drop = float(motion.speed[first] - motion.speed[last])
             if took < limits["min_duration_s"] or drop < limits["min_speed_drop_ms"] \
@@ -112,22 +114,37 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
             yield _brake_event(scene, i, follower, first, last, limits)
 
 
+def _widened(calm: np.ndarray, first: int, last: int) -> tuple[int, int]:
+    """The run ``first..last`` grown to the neighbouring calm steps (exclusive)."""
+    while first > 0 and not calm[first - 1]:
+        first -= 1
+    while last + 1 < len(calm) and not calm[last + 1]:
+        last += 1
+    return first, last
+
+
 def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last: int,
-                 limits: dict[str, float]) -> Event:
+                 limits: dict[str, float]) -> Event | None:
+    """The braking as the linear speed change a scenario plays: from the speed before it to
+    the speed after it at the peak deceleration, centred where the speed is half way down
+    (smoothing blurs the episode's edges, not its middle)."""
     track, motion = scene.tracks[lead], scene.motion[lead]
-    start, end = float(track.t[first]), float(track.t[last])
-    ego_speed = scene.speed(follower.track, start) or 0.0
+    v0, v1 = float(motion.speed[first]), float(motion.speed[last])
     peak = float(-motion.acceleration[first:last + 1].min())
-    code = "BR_BK" if ego_speed < limits["busy_below_ms"] else "BRAKE"
+    duration = (v0 - v1) / peak
+    middle = first + int(np.argmax(motion.speed[first:last + 1] <= (v0 + v1) / 2))
+    start = max(float(track.t[middle]) - duration / 2, float(track.t[0]))
+    ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
+    if ego_speed is None or gap is None:
+        return None
     fields = {
-        "ego_vel_kmh": ego_speed * KMH, "lead_vel_kmh": float(motion.speed[first]) * KMH,
-        "duration_s": end - start,
-        "delta_vel_kmh": float(motion.speed[last] - motion.speed[first]) * KMH,
-        "npc_distance_m": follower.gap_m,
+        "ego_vel_kmh": ego_speed * KMH, "lead_vel_kmh": v0 * KMH, "duration_s": duration,
+        "delta_vel_kmh": (v1 - v0) * KMH, "npc_distance_m": gap,
         "brake_intensity": min(peak / limits["max_intensity_deceleration_ms2"], 1.0),
         "other_dir_traffic": "No", "lead_vehicle_type": _vehicle(track),
     }
-    return _event(scene, code, follower.track, lead, start, end, fields)
+    code = "BR_BK" if ego_speed < limits["busy_below_ms"] else "BRAKE"
+    return _event(scene, code, follower.track, lead, start, start + duration, fields)
 
 
 # -- lane changes: cut-ins, cut-outs, the ego's own (CIN*, COUT*, LC*) ---------------------

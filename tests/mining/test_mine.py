@@ -59,3 +59,18 @@ def test_scenweave_run_plays_mined_records_back(tmp_path, esmini):
     assert ran.exit_code == 0, ran.output
     summary = json.loads((tmp_path / "runs" / "mined" / "summary.json").read_text())
     assert [o["status"] for o in summary["scenarios"]] == ["ok"], summary["scenarios"]
+
+
+def test_a_mined_brake_survives_the_round_trip(tmp_path, esmini):
+    from scenweave.mining.roundtrip import round_trip
+    from scenweave.player import Playback
+
+    limits = load_thresholds()
+    mine_recordings([road()], tmp_path / "records", limits, classes=("BRAKE",))
+    (record,) = load_records(tmp_path / "records")
+    CliRunner().invoke(cli, ["run", str(tmp_path / "records"), "--no-llm", "--out",
+                             str(tmp_path / "runs"), "--run-id", "rt"])
+    playback = Playback.read(tmp_path / "runs" / "rt" / record["scenario_id"] / "replay.json")
+    trip = round_trip(record, playback, limits)
+    assert trip.found, "the replayed scenario shows the lead braking in front of the ego"
+    assert trip.holds, trip.misses

@@ -1,0 +1,76 @@
+"""Does a mined event survive the trip through a scenario? Mine the replay again and compare.
+
+The played scenario (``replay.json``) becomes a recording (``mining.replayed``); the same
+detectors must find the same class with the ego and the NPC in the same roles, and its fields
+must be the record's within the tolerances: speeds 0.5 m/s, gaps 1 m, times 0.2 s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from scenweave.mining.detect import KMH, Event, detect
+from scenweave.mining.replayed import recording_from_playback
+from scenweave.player import Playback
+
+SPEED_TOL_MS = 0.5
+GAP_TOL_M = 1.0
+TIME_TOL_S = 0.2
+GAP_FIELDS = ("npc_distance_m", "npc_distance_begin_m", "npc_distance_end_m")
+
+
+@dataclass
+class RoundTrip:
+    """The record's class and id, whether it held, and each field that missed."""
+
+    code: str
+    scenario_id: str
+    found: bool
+    misses: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    @property
+    def holds(self) -> bool:
+        return self.found and not self.misses
+
+    @property
+    def worst(self) -> str:
+        if not self.found:
+            return "not found again"
+        name, (want, got) = max(self.misses.items(), key=lambda m: _excess(m[0], *m[1]))
+        return f"{name} {want:g} -> {got:g}"
+
+
+def round_trip(record: dict, playback: Playback,
+               thresholds: dict[str, dict[str, float]]) -> RoundTrip:
+    """Mine ``playback`` (the record's scenario, played) and compare with ``record``."""
+    recording = recording_from_playback(playback, record["scenario_id"])
+    roles = record.get("provenance", {}).get("tracks", {})
+    candidates = [e for e in detect(recording, thresholds) if e.code == record["maneuver_class"]
+                  and e.ego == "ego" and (e.npc == "npc" if "npc" in roles else e.npc is None)]
+    result = RoundTrip(record["maneuver_class"], record["scenario_id"], bool(candidates))
+    if candidates:
+        best = min(candidates, key=lambda e: len(_misses(record["params"], e)))
+        result.misses = _misses(record["params"], best)
+    return result
+
+
+def _misses(wanted: dict, event: Event) -> dict[str, tuple[float, float]]:
+    found = {}
+    for name, want in wanted.items():
+        got = event.fields.get(name)
+        if not isinstance(want, int | float) or not isinstance(got, int | float):
+            continue
+        if _excess(name, want, got) > 0:
+            found[name] = (want, got)
+    return found
+
+
+def _excess(name: str, want: float, got: float) -> float:
+    """How far past its tolerance a field is (<= 0: within it); fields without one: 0."""
+    if name.endswith("_kmh"):
+        return abs(want - got) / KMH - SPEED_TOL_MS
+    if name in GAP_FIELDS:
+        return abs(want - got) - GAP_TOL_M
+    if name == "duration_s":
+        return abs(want - got) - TIME_TOL_S
+    return 0.0

@@ -97,6 +97,8 @@ class Weather:
     sun_intensity: float
     sun_elevation_rad: float
     rain_intensity: float
+    #: how far one sees (m); 100 km: no fog (an int, so the file keeps writing "100000")
+    visual_range_m: float = 100000
 
 
 WEATHERS: dict[str, Weather] = {
@@ -105,6 +107,8 @@ WEATHERS: dict[str, Weather] = {
     "Day_Rain": Weather(12, xosc.CloudState.rainy, 0.1, 1.0, 0.6),
     "Night_Clear": Weather(22, xosc.CloudState.free, 1.0, -0.5, 0.0),
     "Night_Rain": Weather(22, xosc.CloudState.rainy, 0.1, -0.5, 0.6),
+    "Day_Fog": Weather(12, xosc.CloudState.overcast, 0.2, 1.0, 0.0, visual_range_m=80.0),
+    "Night_Fog": Weather(22, xosc.CloudState.overcast, 0.1, -0.5, 0.0, visual_range_m=50.0),
 }
 
 
@@ -515,7 +519,7 @@ def _environment(weather_key: str) -> xosc.EnvironmentAction:
                        weather.hour, 0, 0),
         xosc.Weather(weather.clouds, sun=xosc.Sun(weather.sun_intensity, 1.0,
                                                   weather.sun_elevation_rad),
-                     fog=xosc.Fog(100000), precipitation=xosc.Precipitation(
+                     fog=xosc.Fog(weather.visual_range_m), precipitation=xosc.Precipitation(
                          rain, weather.rain_intensity)),
         xosc.RoadCondition(1.0),
     )

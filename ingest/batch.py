@@ -24,6 +24,9 @@ from scenweave.ingest.records import check_record
 from scenweave.ingest.urban import canonicalize_urban_file, iter_urban_files
 
 REPORT_NAME = "ingest_report.json"
+NO_DATA_MESSAGE = ("no MOOVE data found: expected highway files <CLASS>_BINS_VALUES.npy or urban "
+                   "folders <CODE>/<time>.json, here or in highway/ and urban/ (trajectory data "
+                   "such as CommonRoad, NGSIM or highD: use scenweave mine)")
 
 
 @dataclass
@@ -42,6 +45,7 @@ def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayout
     if not raw_dir.is_dir():
         raise IngestError(f"input folder not found: {raw_dir}")
     layouts = layouts or load_layouts()
+    read_before = report.files_read
     for path in iter_highway_files(raw_dir):
         try:
             result = canonicalize_highway_file(path, layouts, binning)
@@ -59,6 +63,8 @@ def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayout
         yield from _checked([record] if record else [], f"{path.parent.name}/{path.name}", report)
         if on_file:
             on_file(path)
+    if report.files_read == read_before:
+        report.add([Issue(file=str(raw_dir), severity="warning", message=NO_DATA_MESSAGE)])
 
 
 def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[RawRecord]:

@@ -7,6 +7,7 @@ minimum time-to-collision, and writes a two-sentence description.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import statistics
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave import maneuvers
-from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES, decode
+from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES, code_tables, decode
 from scenweave.ingest.issues import Issue, RecordIssue, unexpected_issue
 
 RECORD_VERSION = "urban.v1"
@@ -28,7 +29,8 @@ EGO_FIELDS = ("ego_speed", "longitudinal_acceleration_wheels", "steer_wheel_angl
 OBSTACLE_FIELDS = ("unique_id", "pos_x", "pos_y", "relative_velocity_x", "absolute_velocity_x",
                    "mobile_object_classification", "obstacle_relative_lane")
 OPTIONAL_OBSTACLE_FIELDS = ("relative_velocity_y", "blinker", "time_to_collision")
-CLIMATE_FIELDS = ("day_period", "outside_temperature", "precipitation")
+#: climate fields given as codes of these tables (or, tolerated, their labels)
+CLIMATE_CODE_TABLES = {"day_period": "RT_DayPeriod", "precipitation": "RT_Precipitation"}
 CLIMATE_FLAGS = ("dazzled", "fog")
 #: way-point element types the record uses, with the lowest value that makes sense (numbers)
 NUMERIC_ELEMENTS: dict[str, float | None] = {
@@ -50,9 +52,11 @@ def iter_urban_files(folder: Path) -> Iterator[Path]:
 def canonicalize_urban_file(path: Path) -> tuple[dict | None, list[Issue]]:
     """Read one ADScene file; return its canonical record (or None) and its issues."""
     name = f"{path.parent.name}/{path.name}"
+    notes: list[RecordIssue] = []
     try:
         scene = _read_json(path)
-        return canonicalize_scene(scene, name, folder_code=path.parent.name), []
+        record = canonicalize_scene(scene, name, folder_code=path.parent.name, notes=notes)
+        return record, [_warning(note, name) for note in notes]
     except RecordIssue as issue:
         return None, [issue.to_issue(name)]
     except Exception as err:  # noqa: BLE001 - last line of defence: one file, not the batch
@@ -76,8 +80,16 @@ def _read_json(path: Path) -> dict:
     return scene
 
 
-def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None) -> dict:
-    """Turn one parsed ADScene object into a canonical urban record (RecordIssue if bad)."""
+def _warning(note: RecordIssue, file: str) -> Issue:
+    return dataclasses.replace(note.to_issue(file), severity="warning")
+
+
+def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None,
+                       notes: list[RecordIssue] | None = None) -> dict:
+    """Turn one parsed ADScene object into a canonical urban record (RecordIssue if bad).
+
+    A field in a form we did not expect but can read (a day period written as ``"Night"``
+    instead of its code) is read and noted in ``notes``, not rejected."""
     code = _get(scene, "scenario_code", str)
     maneuver = maneuvers.find(code)
     if maneuver is None or maneuver.domain != "urban":
@@ -87,10 +99,10 @@ def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None)
         raise RecordIssue(f"file is in folder {folder_code} but says {code}",
                           field="scenario_code")
     segment = _get(scene, "segment", dict)
-    frames = _frames(scene)
+    frames = _frames(scene, notes if notes is not None else [])
     times = [f["time"] for f in frames]
     ego = _ego_trajectory(frames)
-    infra = _infrastructure(scene)
+    infra = _infrastructure(scene, notes if notes is not None else [])
     environment = _environment(frames[0], infra, scene)
     actors_start, actor_tracks = _actors(frames, ego["ds"])
     min_ttc = _min_ttc(frames)
@@ -150,11 +162,45 @@ def _optional_number(obj: dict, key: str, where: str, allow_bool: bool = False) 
     _get(obj, key, float, where)
 
 
+def _read_climate(climate: dict, where: str, notes: list[RecordIssue]) -> None:
+    """Climate fields as codes (in place): a code, a code written as text, or its label
+    (``"Night"``) are all read, the last two with a note; anything else is an error."""
+    for key, table in CLIMATE_CODE_TABLES.items():
+        value = climate.get(key)
+        if not isinstance(value, str):
+            _optional_number(climate, key, where)
+            continue
+        code = _code_of(value, table)
+        if code is None:  # the weather depends on it: a guess would be a silent error
+            labels = ", ".join(code_tables()[table].values())
+            raise RecordIssue(f"expected number, got str {value!r:.40} (neither a {table} code "
+                              f"nor one of its labels: {labels})", field=f"{where}.{key}")
+        notes.append(RecordIssue(f"{value!r} read as code {code} ({decode(table, code)})",
+                                 field=f"{where}.{key}"))
+        climate[key] = code
+    _optional_number(climate, "outside_temperature", where)
+    for key in CLIMATE_FLAGS:
+        value = climate.get(key)
+        if isinstance(value, str):
+            flag = value.strip().lower() in ("1", "yes", "true", "on")
+            notes.append(RecordIssue(f"{value!r} read as {flag}", field=f"{where}.{key}"))
+            climate[key] = flag
+        _optional_number(climate, key, where, allow_bool=True)
+
+
+def _code_of(value: object, table: str) -> int | None:
+    text = str(value).strip()
+    if text.lstrip("-").isdigit():
+        return int(text)
+    labels = {label.lower(): int(code) for code, label in code_tables()[table].items()}
+    return labels.get(text.lower())
+
+
 def _kind_name(kind: type | tuple[type, ...]) -> str:
     return "number" if kind == (int, float) else getattr(kind, "__name__", str(kind))
 
 
-def _frames(scene: dict) -> list[dict]:
+def _frames(scene: dict, notes: list[RecordIssue]) -> list[dict]:
     raw = _get(scene, "key_times", list)
     if len(raw) < 2:
         raise RecordIssue(f"needs at least 2 frames, has {len(raw)}", field="key_times")
@@ -173,9 +219,7 @@ def _frames(scene: dict) -> list[dict]:
         for key in EGO_FIELDS:
             _get(ego, key, float, f"{where}.ego_vehicle")
         climate = _get(frame, "temporal_climatic", dict, where)
-        for key in (*CLIMATE_FIELDS, *CLIMATE_FLAGS):
-            _optional_number(climate, key, f"{where}.temporal_climatic",
-                             allow_bool=key in CLIMATE_FLAGS)
+        _read_climate(climate, f"{where}.temporal_climatic", notes)
         obstacles = _get(frame, "obstacles", list, where)
         for j, obstacle in enumerate(obstacles):
             at = f"{where}.obstacles[{j}]"
@@ -223,7 +267,7 @@ def _metadata(segment: dict, source: str, times: list[float], scene: dict) -> di
     }
 
 
-def _infrastructure(scene: dict) -> dict:
+def _infrastructure(scene: dict, notes: list[RecordIssue]) -> dict:
     environment = _get(scene, "environment", dict)
     infra = _get(environment, "infrastructure", dict, "environment")
     points = _get(infra, "way_points", list, "environment.infrastructure")
@@ -234,19 +278,19 @@ def _infrastructure(scene: dict) -> dict:
             raise RecordIssue("expected an object", field=where)
         at = float(_get(point, "position_longi_from_0", float, where))
         elements = _get(point, "infrastructure_elements", list, where)
-        values = {}
+        values, sign_codes = {}, []
         for j, element in enumerate(elements):
             at_element = f"{where}.infrastructure_elements[{j}]"
             if not isinstance(element, dict):
                 raise RecordIssue("expected an object", field=at_element)
             kind = _get(element, "type", str, at_element)
+            if kind == "TrafficSignType":
+                sign_codes += _sign_codes(element, at_element, notes)
+                continue
             values[kind] = (_element_value(element, kind, at_element)
                             if kind in NUMERIC_ELEMENTS else element.get("value"))
-        if "TrafficSignType" in values:
-            code = values["TrafficSignType"]
-            signs.append({"position_m": at, "type_code": code,
-                          "label": decode("RT_TrafficSignType", code),
-                          "light_state": TRAFFIC_LIGHT_STATES.get(code)})
+        if sign_codes:
+            signs.append(_sign(at, sign_codes))
         if "LaneWidth" in values:
             profile.append({"position_m": at, "lane_width_m": values.get("LaneWidth"),
                             "front_curvature": values.get("FrontCurvature"),
@@ -257,6 +301,29 @@ def _infrastructure(scene: dict) -> dict:
             if key in values and key not in static:
                 static[key] = values[key]
     return {"traffic_signs": signs, "geometry_profile": profile, "static": static}
+
+
+def _sign_codes(element: dict, where: str, notes: list[RecordIssue]) -> list[float]:
+    """A sign's code, or several (a light changing at one way point: ``[170, 172]``)."""
+    value = element.get("value")
+    if not isinstance(value, list):
+        return [_element_value(element, "TrafficSignType", where)]
+    notes.append(RecordIssue(f"{len(value)} sign codes at one way point, kept in order",
+                             field=f"{where}.value"))
+    return [_element_value({"value": v}, "TrafficSignType", f"{where}.value[{k}]")
+            for k, v in enumerate(value)]
+
+
+def _sign(at: float, codes: list[float]) -> dict:
+    """One way point's sign; a light's states in the order given, the last one the state the
+    record's class is judged by."""
+    states = [TRAFFIC_LIGHT_STATES[c] for c in codes if c in TRAFFIC_LIGHT_STATES]
+    sign = {"position_m": at, "type_code": codes[-1],
+            "label": decode("RT_TrafficSignType", codes[-1]),
+            "light_state": states[-1] if states else None}
+    if len(codes) > 1:
+        sign["light_states"] = states
+    return sign
 
 
 def _element_value(element: dict, kind: str, where: str) -> float:
@@ -277,7 +344,7 @@ def _environment(first: dict, infra: dict, scene: dict) -> dict:
     night = climate.get("day_period") == 2
     rain = climate.get("precipitation", 0) not in (0, None)
     fog = bool(climate.get("fog"))
-    weather = "Rain" if rain else ("Cloudy" if fog and not night else "Clear")
+    weather = "Rain" if rain else ("Fog" if fog else "Clear")
     widths = [p["lane_width_m"] for p in infra["geometry_profile"] if p["lane_width_m"]]
     return {
         "weather_key": f"{'Night' if night else 'Day'}_{weather}",

@@ -37,6 +37,8 @@ HEADING_TOL_RAD = 1e-3
 TURN_EXIT_TOL_M = 0.5
 TURN_EXIT_HEADING_TOL_RAD = 0.05
 SLOTS = ("center", "right", "left")
+#: a Fog visual range below this is fog (m)
+FOG_BELOW_M = 1000.0
 #: what an unknown class must show: nothing beyond what every scenario shows
 NO_CLASS = Maneuver(code="", tag="", domain="urban", name="", script="")
 
@@ -82,15 +84,17 @@ def _weather(check: _Check) -> None:
         return
     root = check.doc.root
     rain = root.find(".//Environment/Weather/Precipitation")
+    fog = number(root.find(".//Environment/Weather/Fog"), "visualRange")
     time_of_day = root.find(".//Environment/TimeOfDay")
     hour = int((time_of_day.get("dateTime") or "T12")[11:13] or 12) if time_of_day is not None \
         else None
     seen = {
         "name": check.doc.weather_name,
         "rain": None if rain is None else rain.get("precipitationType") == "rain",
+        "fog": None if fog is None else fog < FOG_BELOW_M,
         "night": None if hour is None else not 6 <= hour < 20,
     }
-    wanted = {"name": weather, "rain": weather.endswith("_Rain"),
+    wanted = {"name": weather, "rain": weather.endswith("_Rain"), "fog": weather.endswith("_Fog"),
               "night": weather.startswith("Night")}
     for what, value in wanted.items():
         if seen[what] is not None and seen[what] != value:

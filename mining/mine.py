@@ -19,7 +19,7 @@ from scenweave.ingest.atomic import write_json_atomic
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.records import check_record
 from scenweave.mining.detect import Event, detect
-from scenweave.mining.records import highway_record
+from scenweave.mining.records import record_of
 from scenweave.mining.tracks import Recording
 
 REPORT_NAME = "mining_report.json"
@@ -73,7 +73,8 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
         if on_recording:
             on_recording(recording)
     for code, records in sorted(found.items()):
-        write_json_atomic(Path(out_dir) / "highway" / f"{code}.json", records, indent=None)
+        folder = "highway" if records[0]["domain"] == "highway" else "urban"
+        write_json_atomic(Path(out_dir) / folder / f"{code}.json", records, indent=None)
         report.written[code] += len(records)
     report.seconds = time.perf_counter() - started
     write_json_atomic(Path(out_dir) / REPORT_NAME, report.to_dict())
@@ -83,20 +84,31 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
 def _checked_record(event: Event, recording: Recording, number: int,
                     report: MiningReport) -> dict | None:
     """The event's record if it is one ScenWeave can play back, else None and a reason."""
-    record = highway_record(event, Path(recording.source), recording.reader, number)
     try:
+        record = record_of(event, Path(recording.source), recording.reader, number)
         check_record(record)
         check_playable(extract_params(record))
     except RecordIssue as issue:
         report.skipped.append({"file": recording.source, "class": event.code,
-                               "scenario_id": record["scenario_id"], "field": issue.field,
-                               "reason": issue.message})
+                               "scenario_id": f"{event.code} event {number}",
+                               "field": issue.field, "reason": issue.message})
         return None
     values = report.values.setdefault(event.code, {})
-    for name, value in event.fields.items():
+    for name, value in _reported_values(event, record).items():
         if isinstance(value, int | float):
             values.setdefault(name, []).append(value)
     return record
+
+
+def _reported_values(event: Event, record: dict) -> dict:
+    """What the report draws of an event: a highway record's fields, an urban record's
+    speeds and distances."""
+    if event.adscene is None:
+        return event.fields
+    params = extract_params(record)
+    return {k: params[k] for k in ("ego_speed_ms", "tfl_ds_m", "brake_time_s",
+                                   "drive_distance_m", "duration_s")
+            if isinstance(params.get(k), int | float)}
 
 
 def _file_entry(recording: Recording, events: list[Event]) -> dict:

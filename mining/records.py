@@ -6,7 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from scenweave import maneuvers
-from scenweave.mining.detect import Event
+from scenweave.ingest.urban import canonicalize_scene
+from scenweave.mining.scene import Event
 
 BINNING = "mined"
 
@@ -33,11 +34,32 @@ def highway_record(event: Event, source: Path, reader: str, number: int) -> dict
         "behavior_type": event.fields.get("behavior_type"),
         "params": dict(event.fields),
         "conventions": conventions,
-        "provenance": {"file": str(source), "reader": reader,
-                       "tracks": {"ego": event.ego} | ({"npc": event.npc} if event.npc else {}),
-                       "start_s": event.start_s, "end_s": event.end_s},
+        "provenance": _provenance(event, source, reader),
         "series": event.series,
     }
+
+
+def record_of(event: Event, source: Path, reader: str, number: int) -> dict:
+    """The canonical record of an event, highway or urban."""
+    if event.adscene is None:
+        return highway_record(event, source, reader, number)
+    return urban_record(event, source, reader, number)
+
+
+def urban_record(event: Event, source: Path, reader: str, number: int) -> dict:
+    """The urban.v1 record of a light event: its ADScene object through ingest's own
+    canonicaliser (RecordIssue where it is no valid scene)."""
+    name = f"{event.code}/{_slug(source.stem)}-row{number:06d}.json"
+    record = canonicalize_scene(event.adscene, name, notes=[])
+    record["provenance"] = _provenance(event, source, reader)
+    record["series"] = event.series
+    return record
+
+
+def _provenance(event: Event, source: Path, reader: str) -> dict:
+    return {"file": str(source), "reader": reader,
+            "tracks": {"ego": event.ego} | ({"npc": event.npc} if event.npc else {}),
+            "start_s": event.start_s, "end_s": event.end_s}
 
 
 def _npc(maneuver: maneuvers.Maneuver, event: Event) -> tuple[bool, str | None]:

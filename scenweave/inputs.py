@@ -38,6 +38,9 @@ class LoadedInput:
     params: list[dict] = field(default_factory=list)
     report: IngestReport = field(default_factory=IngestReport)
     kind: str = "raw"
+    #: scenario id -> the series a mined record recorded (``scenweave mine``), which the
+    #: replay figure draws against the played scenario
+    recorded: dict[str, dict] = field(default_factory=dict)
 
 
 def is_raw(data: Path) -> bool:
@@ -68,6 +71,8 @@ def load_input(data: Path, selection: InputSelection) -> LoadedInput:
             continue
         counts[code] = counts.get(code, 0) + 1
         loaded.params.extend(params)
+        if isinstance(record.get("series"), dict):
+            loaded.recorded.update((p["scenario_id"], record["series"]) for p in params)
         if selection.limit is not None and len(loaded.params) >= selection.limit:
             del loaded.params[selection.limit:]
             break

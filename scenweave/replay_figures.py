@@ -35,8 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.ingest.atomic import write_bytes_atomic
 from scenweave.player import REPLAY_NAME, Playback
+from scenweave.run_folder import RECORDED_NAME
 from scenweave.schemas.params import number as number_of
 from scenweave.schemas.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
@@ -143,6 +145,22 @@ class _Facts:
             return "replay passed", PASS_COLOUR
         codes = replay.get("codes") or []
         return "replay FAILED" + (f": {', '.join(codes)}" if codes else ""), FAIL_COLOUR
+
+    @property
+    def recorded(self) -> dict:
+        """What a mined record recorded (``recorded.json``; empty for other records)."""
+        return _read_json(self.folder / RECORDED_NAME)
+
+    def recorded_curve(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """(scenario time, values) of a recorded series: the record's event starts when the
+        scenario's manoeuvre does."""
+        recorded = self.recorded
+        values = recorded.get(key)
+        if not values or "t" not in recorded:
+            return None
+        shift = self.number("maneuver_start_s") or 0.0
+        times = np.asarray(recorded["t"], dtype=float) + shift
+        return times, np.asarray([math.nan if v is None else v for v in values], dtype=float)
 
     def number(self, key: str) -> float | None:
         return number_of(self.params, key)
@@ -285,6 +303,7 @@ def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str
         axes.plot(playback.times, playback.tracks[name]["speed"], color=colours[name],
                   linewidth=1.3)
         handles.append(Line2D([], [], color=colours[name], label=name))
+    handles += _recorded_lines(axes, facts, colours, "speed_ms", lambda v: v)
     for name, prefix in placed_actors(facts.params):
         value = facts.number(f"{prefix}_speed_ms")
         if value is not None and name in colours:
@@ -323,6 +342,24 @@ def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
             found.append((name.removesuffix("_speed_change"), float(target),
                           float(start) + float(duration)))
     return found
+
+
+def _recorded_lines(axes: Any, facts: _Facts, colours: dict[str, str], what: str,
+                    convert: Any) -> list[Any]:
+    """The mined record's own series, dashed, beside the replay's curves (``what``: speed_ms
+    or gap_m; ``convert`` turns recorded values into the panel's)."""
+    from matplotlib.lines import Line2D
+
+    drawn = []
+    for role, entity in (("ego", EGO), ("npc", "npc")):
+        curve = facts.recorded_curve(f"{role}_{what}")
+        if curve is not None and entity in colours:
+            axes.plot(curve[0], convert(curve[1]), color=colours[entity], linewidth=1.1,
+                      linestyle="--")
+            drawn.append(entity)
+    if not drawn:
+        return []
+    return [Line2D([], [], color="black", linestyle="--", label="recorded (mined data)")]
 
 
 # --- gap (highway) ---------------------------------------------------------------------------
@@ -374,6 +411,9 @@ def _gap_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, 
         return
     recorded = _recorded_gaps(facts)
     times = _sample_times(playback, len(others), [t for _, _, t in recorded])
+    kind = facts.params.get("npc_vehicle_type")
+    mined = _recorded_lines(axes, facts, colours, "gap_m",
+                            np.vectorize(lambda g: reference_gap_m(g, kind), otypes=[float]))
     for name in others:
         axes.plot(times, _gaps(playback, name, times, map_path), color=colours[name],
                   linewidth=1.3, label=name)
@@ -388,6 +428,7 @@ def _gap_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, 
     handles, _ = axes.get_legend_handles_labels()
     handles.append(Line2D([], [], marker="D", linestyle="", color="black",
                           markerfacecolor="white", label="record: gap"))
+    handles += mined
     axes.legend(handles=handles, fontsize=6.5, loc="best", framealpha=0.8)
 
 

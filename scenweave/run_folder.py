@@ -19,6 +19,8 @@ from scenweave.ingest.atomic import write_json_atomic
 STATUS_FILE = "status.json"
 SUMMARY_FILE = "summary.json"
 RUN_FILE = "run.json"
+#: a mined record's recorded series, beside the scenario it became (scenweave mine)
+RECORDED_NAME = "recorded.json"
 STATUSES = ("ok", "repaired", "fallback", "failed")
 
 

@@ -7,12 +7,14 @@ assigns the same spawns as an uninterrupted one.
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +22,7 @@ from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.progress import progress
 from scenweave.report import write_run_report
-from scenweave.run_folder import RUN_FILE, STATUSES, SUMMARY_FILE, RunFolder
+from scenweave.run_folder import RECORDED_NAME, RUN_FILE, STATUSES, SUMMARY_FILE, RunFolder
 
 
 @dataclass
@@ -71,8 +73,9 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
         if not done or (retry_failed and done.get("status") == "failed"):
             todo.append((index, params))
     skipped = len(loaded.params) - len(todo)
-    work = (_in_processes(todo, folder, settings, matcher, jobs) if jobs > 1 else
-            _in_this_process(todo, folder, settings, matcher))
+    stage = partial(_staging, folder, loaded.recorded)
+    work = (_in_processes(todo, stage, settings, matcher, jobs) if jobs > 1 else
+            _in_this_process(todo, stage, settings, matcher))
     for params, staging, outcome in progress(work, desc="scenarios", total=len(todo)):
         folder.commit(params["scenario_id"], staging, outcome)
     issues = [i.to_dict() for i in loaded.report.issues]
@@ -82,11 +85,20 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     return RunResult(folder, summary, skipped, issues)
 
 
-def _in_this_process(todo: list[tuple[int, dict]], folder: RunFolder,
+def _staging(folder: RunFolder, recorded: dict[str, dict], params: dict) -> Path:
+    """The scenario's staging folder, holding what a mined record recorded (for its figure)."""
+    staging = folder.staging(params["scenario_id"])
+    series = recorded.get(params["scenario_id"])
+    if series:
+        (staging / RECORDED_NAME).write_text(json.dumps(series), encoding="utf-8")
+    return staging
+
+
+def _in_this_process(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
                      settings: PipelineSettings, matcher: Any
                      ) -> Iterator[tuple[dict, Path, dict]]:
     for index, params in todo:
-        staging = folder.staging(params["scenario_id"])
+        staging = stage(params)
         yield params, staging, process_scenario(params, index, staging, settings, matcher)
 
 
@@ -103,8 +115,9 @@ def _process_in_worker(params: dict, index: int, staging: Path,
     return process_scenario(params, index, staging, settings, _worker_matcher)
 
 
-def _in_processes(todo: list[tuple[int, dict]], folder: RunFolder, settings: PipelineSettings,
-                  matcher: Any, jobs: int) -> Iterator[tuple[dict, Path, dict]]:
+def _in_processes(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
+                  settings: PipelineSettings, matcher: Any,
+                  jobs: int) -> Iterator[tuple[dict, Path, dict]]:
     """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
 
     Workers are spawned, not forked: a forked copy of this process would inherit the
@@ -115,7 +128,7 @@ def _in_processes(todo: list[tuple[int, dict]], folder: RunFolder, settings: Pip
                              initargs=(matcher,)) as pool:
         pending = {}
         for index, params in todo:
-            staging = folder.staging(params["scenario_id"])
+            staging = stage(params)
             future = pool.submit(_process_in_worker, params, index, staging, settings)
             pending[future] = (params, staging)
         for future in as_completed(pending):

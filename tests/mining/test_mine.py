@@ -74,3 +74,19 @@ def test_a_mined_brake_survives_the_round_trip(tmp_path, esmini):
     trip = round_trip(record, playback, limits)
     assert trip.found, "the replayed scenario shows the lead braking in front of the ego"
     assert trip.holds, trip.misses
+
+
+def test_the_replay_figure_of_a_mined_record_draws_what_was_recorded(tmp_path, esmini):
+    mine_recordings([road()], tmp_path / "records", load_thresholds(), classes=("BRAKE",))
+    CliRunner().invoke(cli, ["run", str(tmp_path / "records"), "--no-llm", "--out",
+                             str(tmp_path / "runs"), "--run-id", "fig"])
+    (record,) = load_records(tmp_path / "records")
+    folder = tmp_path / "runs" / "fig" / record["scenario_id"]
+    recorded = json.loads((folder / "recorded.json").read_text())
+    assert recorded == record["series"]
+    from scenweave.replay_figures import _Facts
+
+    times, speeds = _Facts.read(folder).recorded_curve("npc_speed_ms")
+    assert 2.0 <= times[0] < 2.1  # the event starts when the scenario's manoeuvre does
+    assert speeds[0] == record["series"]["npc_speed_ms"][0]
+    assert (folder / "replay.png").stat().st_size > 10_000

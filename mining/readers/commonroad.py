@@ -361,17 +361,17 @@ def _stop_point(lanelet: Lanelet) -> np.ndarray:
 
 
 def light_phases(light: CrLight, last_step: int, dt: float) -> tuple[LightPhase, ...]:
-    """The light's states over steps 0..last_step as runs of one colour; an inactive run is
-    left out."""
+    """The light's colours over steps 0..last_step as runs of one colour (red and redYellow
+    make one red run); an inactive run is left out."""
     cycle = light.traffic_light_cycle
-    states = [cycle.get_state_at_time_step(step) for step in range(last_step + 1)]
+    colours = [COLOURS.get(cycle.get_state_at_time_step(step)) for step in range(last_step + 1)]
     phases, start = [], 0
     for step in range(1, last_step + 2):
-        if step <= last_step and states[step] == states[start]:
+        if step <= last_step and colours[step] == colours[start]:
             continue
-        if states[start] in COLOURS:
-            end = min(step, last_step) * dt
-            phases.append(LightPhase(start * dt, end, COLOURS[states[start]]))
+        if colours[start] is not None:
+            phases.append(LightPhase(round(start * dt, 9), round(min(step, last_step) * dt, 9),
+                                  colours[start]))
         start = step
     return tuple(phases)
 

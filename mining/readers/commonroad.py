@@ -31,7 +31,6 @@ What the reader makes of it, and how far to trust it:
 
 from __future__ import annotations
 
-import copy
 import logging
 from collections import Counter
 from collections.abc import Iterator
@@ -182,7 +181,9 @@ class LaneMap:
         found = np.full(len(xy), -1)
         p, lane = self.tree.query(points, predicate="intersects")
         if len(p):
-            cost = self._cost(points[p], lane, heading[p])
+            cost = np.zeros(len(p))
+            shared = np.bincount(p)[p] > 1  # only a point in several lanelets needs a choice
+            cost[shared] = self._cost(points[p[shared]], lane[shared], heading[p[shared]])
             order = np.lexsort((cost, p))
             first = np.unique(p[order], return_index=True)[1]
             found[p[order][first]] = lane[order][first]
@@ -227,9 +228,17 @@ class _Raw:
     speed: np.ndarray
 
 
-def _floats(element: etree._Element, path: str) -> np.ndarray:
-    """One number per state of the obstacle ``element`` (as text under each state's ``path``)."""
-    return np.array(element.xpath(f"(initialState|trajectory/state)/{path}/text()"), dtype=float)
+#: what the fast path reads of each state, under the state element
+STATE_FIELDS = {"step": "time/exact", "x": "position/point/x", "y": "position/point/y",
+                "heading": "orientation/exact", "speed": "velocity/exact"}
+
+
+def _all_floats(root: etree._Element, path: str) -> np.ndarray:
+    """The number under ``path`` of every obstacle state in the file, in document order (an
+    obstacle's initial state, then its trajectory)."""
+    query = " | ".join(f"dynamicObstacle/{state}/{path}/text()"
+                       for state in ("initialState", "trajectory/state"))
+    return np.array(root.xpath(query), dtype=float)
 
 
 def _parsed_size(element: etree._Element) -> tuple[float, float] | None:
@@ -242,36 +251,42 @@ def _parsed_size(element: etree._Element) -> tuple[float, float] | None:
     return None
 
 
-def _parsed_raw(element: etree._Element, kind: str) -> _Raw | None:
-    """The obstacle's states straight from the XML, or ``None`` where they are not the plain
-    kind (exact values, point positions, a rectangle or circle) this fast path reads."""
-    n = len(element.xpath("initialState|trajectory/state"))
-    step, x, y = (_floats(element, p) for p in ("time/exact", "position/point/x",
-                                                 "position/point/y"))
-    heading, speed = _floats(element, "orientation/exact"), _floats(element, "velocity/exact")
-    size = _parsed_size(element)
-    if size is None or any(len(v) != n for v in (step, x, y)) or any(
-            len(v) not in (0, n) for v in (heading, speed)):
-        return None
-    missing = np.full(n, np.nan)
-    return _Raw(element.get("id"), *size, kind, step, np.column_stack([x, y]),
-                heading if len(heading) else missing, speed if len(speed) else missing)
+def _state_columns(root: etree._Element, counts: list[int]) -> dict[str, np.ndarray] | None:
+    """Each of :data:`STATE_FIELDS` for all states, or ``None`` where some state lacks a
+    field (an uncertain value, a shape for a position) that others have."""
+    total = sum(counts)
+    columns = {name: _all_floats(root, path) for name, path in STATE_FIELDS.items()}
+    for name, values in columns.items():
+        optional = name in ("heading", "speed")
+        if len(values) != total and not (optional and len(values) == 0):
+            return None
+        if len(values) == 0:
+            columns[name] = np.full(total, np.nan)
+    return columns
 
 
 def _parsed_raws(root: etree._Element) -> tuple[list[_Raw], Counter[str]] | None:
-    """Every vehicle's states parsed with lxml (the library's reader spends most of a file's
-    reading time on them); ``None`` if one obstacle needs the library's full reader."""
+    """Every vehicle's states parsed with lxml, five queries a file (the library's reader
+    spends most of a file's reading time on them); ``None`` where the file needs the
+    library's full reader."""
+    obstacles = root.findall("dynamicObstacle")
+    counts = [int(o.xpath("count(initialState | trajectory/state)")) for o in obstacles]
+    columns = _state_columns(root, counts)
+    if columns is None:
+        return None
+    bounds = np.cumsum(counts)[:-1]
+    per_obstacle = zip(*(np.split(columns[n], bounds) for n in STATE_FIELDS), strict=True)
     raws, skipped = [], Counter()
-    for element in root.iterfind("dynamicObstacle"):
+    for element, (step, x, y, heading, speed) in zip(obstacles, per_obstacle, strict=True):
         type_name = (element.findtext("type") or "unknown").strip()
-        kind = vehicle_type(type_name)
+        kind, size = vehicle_type(type_name), _parsed_size(element)
         if kind is None:
             skipped[type_name] += 1
-            continue
-        raw = _parsed_raw(element, kind)
-        if raw is None:
+        elif size is None:
             return None
-        raws.append(raw)
+        else:
+            raws.append(_Raw(element.get("id"), *size, kind, step, np.column_stack([x, y]),
+                             heading, speed))
     return raws, skipped
 
 
@@ -400,13 +415,12 @@ def _lights(network: LaneletNetwork, lane_map: LaneMap, last_step: int, dt: floa
 
 
 def _network(root: etree._Element) -> LaneletNetwork:
-    """The lanelet network and traffic lights, read by the library from the file without its
-    obstacles and planning problems (the library would parse those too)."""
-    road = etree.Element(root.tag, root.attrib)
-    road.extend(copy.deepcopy(child) for child in root
-                if child.tag not in ("dynamicObstacle", "planningProblem"))
+    """The lanelet network and traffic lights, read by the library from the file with its
+    obstacles and planning problems taken out of ``root`` (the library would parse those)."""
+    for child in root.findall("dynamicObstacle") + root.findall("planningProblem"):
+        root.remove(child)
     with _quiet_library():
-        return CommonRoadFileReader(etree.tostring(road)).open_lanelet_network()
+        return CommonRoadFileReader(etree.tostring(root)).open_lanelet_network()
 
 
 def read(path: Path) -> Recording:

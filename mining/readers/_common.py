@@ -47,16 +47,43 @@ def skipped_warning(skipped: Counter[str]) -> list[str]:
 
 def heading_from_motion(x: np.ndarray, y: np.ndarray, t: np.ndarray,
                         still_mps: float = STILL_MPS) -> np.ndarray:
-    """Heading (rad) of the motion between steps; where the vehicle stands still the last
-    moving heading is held (the first moving one before it moves); all NaN if it never moves."""
-    if len(t) < 2:
-        return np.full(len(t), np.nan)
-    vx, vy = np.gradient(x, t), np.gradient(y, t)
+    """Heading (rad) of one vehicle's motion: :func:`segment_headings` for one segment."""
+    return segment_headings(x, y, t, np.array([0]), still_mps)
+
+
+def segment_gradient(v: np.ndarray, t: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """dv/dt within each segment of rows (``starts``: the first row of each, ascending), as
+    ``np.gradient`` per segment: central differences inside, one-sided at the ends."""
+    n = len(v)
+    rows = np.arange(n)
+    first, last = np.zeros(n, bool), np.zeros(n, bool)
+    first[starts] = True
+    last[np.r_[starts[1:] - 1, n - 1]] = True
+    lo = np.where(first, rows, rows - 1)
+    hi = np.where(last, rows, np.minimum(rows + 1, n - 1))
+    span = t[hi] - t[lo]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(span > 0, (v[hi] - v[lo]) / span, 0.0)
+
+
+def segment_headings(x: np.ndarray, y: np.ndarray, t: np.ndarray, starts: np.ndarray,
+                     still_mps: float = STILL_MPS) -> np.ndarray:
+    """Heading (rad) of the motion of each segment of rows (one vehicle each); where it stands
+    still its last moving heading is held (its first one before it moves); NaN for a
+    segment that never moves."""
+    n = len(t)
+    if n == 0:
+        return np.empty(0)
+    vx, vy = segment_gradient(x, t, starts), segment_gradient(y, t, starts)
     heading = np.arctan2(vy, vx)
     moving = np.hypot(vx, vy) >= still_mps
-    if not moving.any():
-        return np.full(len(t), np.nan)
-    return hold_last(heading, moving)
+    lengths = np.diff(np.r_[starts, n])
+    seg_start, seg_end = np.repeat(starts, lengths), np.repeat(np.r_[starts[1:], n], lengths)
+    rows = np.arange(n)
+    before = np.maximum.accumulate(np.where(moving, rows, -1))
+    after = np.minimum.accumulate(np.where(moving, rows, n)[::-1])[::-1]
+    use = np.where(before >= seg_start, before, np.where(after < seg_end, after, -1))
+    return np.where(use >= 0, heading[np.maximum(use, 0)], np.nan)
 
 
 def hold_last(values: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -137,6 +164,28 @@ def load_table(path: Path, spec: TableSpec, warnings: list[str]) -> dict[str, np
     numeric where it must be is skipped with one warning naming the file and its line (the
     first :data:`MAX_ROW_WARNINGS` of them, then a count). A missing column raises
     ``ValueError``."""
+    line = first_line(path)
+    delimiter = delimiter_of(line)
+    fields = split_line(line, delimiter)
+    names = header_keys(fields, spec.aliases)
+    header_warnings: list[str] = []
+    index = _column_index(names, len(fields), spec, path.name, header_warnings)
+    numeric = [n for n in (*spec.numeric, *spec.optional) if n in index]
+    if not spec.text:
+        try:  # the fast path: numpy parses every row in C
+            values = np.loadtxt(path, delimiter=delimiter, skiprows=int(names is not None),
+                                usecols=[index[n] for n in numeric], ndmin=2, comments=None,
+                                quotechar='"', encoding="utf-8")
+        except ValueError:
+            pass  # a bad row: the slow path below finds and names it
+        else:
+            warnings += header_warnings
+            return {n: values[:, i] for i, n in enumerate(numeric)}
+    return _load_rows(path, spec, warnings)
+
+
+def _load_rows(path: Path, spec: TableSpec, warnings: list[str]) -> dict[str, np.ndarray]:
+    """:func:`load_table` row by row in Python, naming each row it has to skip."""
     with path.open(encoding="utf-8", errors="replace") as fh:
         lines = fh.read().splitlines()
     start = next((i for i, line in enumerate(lines) if line.strip()), len(lines))
@@ -144,8 +193,10 @@ def load_table(path: Path, spec: TableSpec, warnings: list[str]) -> dict[str, np
     fields = split_line(lines[start], delimiter) if start < len(lines) else []
     names = header_keys(fields, spec.aliases)
     index = _column_index(names, len(fields), spec, path.name, warnings)
-    rows = [(no + 1, split_line(line, delimiter)) for no, line in enumerate(lines)
-            if no >= start + (names is not None) and line.strip()]
+    split = (line.split() for line in lines) if delimiter is None else csv.reader(
+        lines, delimiter=delimiter)
+    rows = [(no + 1, fields) for no, fields in enumerate(split)
+            if no >= start + (names is not None) and "".join(fields).strip()]
     numeric = [n for n in (*spec.numeric, *spec.optional) if n in index]
     bad: list[str] = []
     rows = _complete_rows(rows, max(index.values(), default=0) + 1, path.name, bad)

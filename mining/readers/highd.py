@@ -92,9 +92,16 @@ def lane_order(lane_y: dict[int, float], upper: np.ndarray, lower: np.ndarray
     return order
 
 
-def _lane_centres(cols: dict[str, np.ndarray], centre_y: np.ndarray) -> dict[int, float]:
+def _row_lane_index(cols: dict[str, np.ndarray], upper: np.ndarray, lower: np.ndarray
+                    ) -> np.ndarray:
+    """Every row's lane index, from its laneId's place between the markings."""
     lanes = cols["laneid"].astype(int)
-    return {int(lane): float(np.median(centre_y[lanes == lane])) for lane in np.unique(lanes)}
+    ids = np.unique(lanes)
+    centre_y = cols["y"] + cols["height"] / 2
+    typical = {int(lane): float(np.median(centre_y[lanes == lane])) for lane in ids}
+    order = lane_order(typical, upper, lower)
+    return np.array([order[int(lane)] for lane in ids], dtype=float)[
+        np.searchsorted(ids, lanes)]
 
 
 def _meta(path: Path, number: str, warnings: list[str]) -> dict[int, tuple[float, float, str, int]]:
@@ -116,7 +123,7 @@ def _recording(path: Path, number: str, warnings: list[str]
 
 
 def _track(rows: np.ndarray, cols: dict[str, np.ndarray], meta: tuple[float, float, str, int],
-           t: np.ndarray, lane_index: dict[int, float]) -> Track:
+           t: np.ndarray, lane_index: np.ndarray) -> Track:
     length, width, kind, direction = meta
     x = cols["x"][rows] + cols["width"][rows] / 2
     y = cols["y"][rows] + cols["height"][rows] / 2
@@ -127,7 +134,7 @@ def _track(rows: np.ndarray, cols: dict[str, np.ndarray], meta: tuple[float, flo
         vehicle_type=vehicle_type(kind) or "car", t=t, x=x, y=y,
         heading=np.arctan2(vy, vx), speed=np.hypot(vx, vy),
         s=-x if direction == 1 else x, lane=lanes.astype(str),
-        lane_index=np.array([lane_index[lane] for lane in lanes], dtype=float))
+        lane_index=lane_index[rows])
 
 
 def read(path: Path) -> Recording:
@@ -140,7 +147,7 @@ def read(path: Path) -> Recording:
     cols = load_table(path, TRACKS_SPEC, warnings)
     order = np.lexsort((cols["frame"], cols["id"]))
     cols = {k: v[order] for k, v in cols.items()}
-    lane_index = lane_order(_lane_centres(cols, cols["y"] + cols["height"] / 2), upper, lower)
+    lane_index = _row_lane_index(cols, upper, lower)
     t0 = cols["frame"].min() if len(order) else 0.0
     tracks, skipped = [], Counter()
     for rows in np.split(np.arange(len(order)), np.flatnonzero(np.diff(cols["id"])) + 1):

@@ -34,8 +34,8 @@ from scenweave.mining.readers._common import (
     delimiter_of,
     first_line,
     header_keys,
-    heading_from_motion,
     load_table,
+    segment_headings,
     sort_tracks,
     split_line,
 )
@@ -89,63 +89,77 @@ def _frame_s(cols: dict[str, np.ndarray], order: np.ndarray) -> float:
     return round(float(np.median(np.diff(ms)[step])) / 1000.0, 4) or FRAME_S
 
 
-def _segments(vid: np.ndarray, frame: np.ndarray) -> list[np.ndarray]:
-    """Row indices (sorted by vehicle, frame) of each run of contiguous frames of one id."""
+def _segment_starts(vid: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """First row (rows sorted by vehicle, frame) of each run of contiguous frames of one id."""
     breaks = (np.diff(vid) != 0) | (np.diff(frame) != 1)
-    return np.split(np.arange(len(vid)), np.flatnonzero(breaks) + 1)
+    return np.r_[0, np.flatnonzero(breaks) + 1]
 
 
-def _travel_axes(cols: dict[str, np.ndarray], segments: list[np.ndarray]
-                 ) -> dict[float, tuple[str, float]]:
-    """Per Direction code (one group without the column): the axis its vehicles travel along
-    (``"localy"`` or ``"localx"``) and the sign of travel on it, from their summed motion."""
+def _travel_axes(cols: dict[str, np.ndarray], starts: np.ndarray, ends: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Per row: whether its vehicle travels along Local_X (else Local_Y), and the sign of
+    travel on that axis. Decided per Direction code (one group without the column) from the
+    summed motion of the group's vehicles."""
     groups = cols.get("direction", np.zeros_like(cols["vehicleid"]))
-    motion: dict[float, np.ndarray] = {}
-    for seg in segments:
-        d = np.array([cols["localx"][seg[-1]] - cols["localx"][seg[0]],
-                      cols["localy"][seg[-1]] - cols["localy"][seg[0]]])
-        motion[groups[seg[0]]] = motion.get(groups[seg[0]], np.zeros(2)) + d
-    axes = {}
-    for group, (dx, dy) in motion.items():
-        along_x = abs(dx) > abs(dy)
-        component = dx if along_x else dy
-        axes[group] = ("localx" if along_x else "localy", -1.0 if component < 0 else 1.0)
-    return axes
+    along_x, sign = np.zeros(len(groups), bool), np.ones(len(groups))
+    seg_group = groups[starts]
+    for group in np.unique(seg_group):
+        mine = seg_group == group
+        dx = float(np.sum(cols["localx"][ends[mine] - 1] - cols["localx"][starts[mine]]))
+        dy = float(np.sum(cols["localy"][ends[mine] - 1] - cols["localy"][starts[mine]]))
+        rows = groups == group
+        along_x[rows] = abs(dx) > abs(dy)
+        sign[rows] = -1.0 if (dx if abs(dx) > abs(dy) else dy) < 0 else 1.0
+    return along_x, sign
 
 
-def _lane_index(lane_id: np.ndarray) -> np.ndarray:
-    return np.where((lane_id >= 1) & (lane_id <= 9), lane_id, np.nan)
-
-
-def _track(track_id: str, seg: np.ndarray, cols: dict[str, np.ndarray], axis: tuple[str, float],
-           t: np.ndarray) -> Track:
-    name, sign = axis
-    length = float(np.median(cols["vlength"][seg])) * FOOT_M
-    front = {k: cols[k][seg] * FOOT_M for k in ("localx", "localy")}
-    centre = dict(front)
-    centre[name] = front[name] - sign * length / 2
-    x, y = centre["localx"], centre["localy"]
-    heading = heading_from_motion(x, y, t)
-    default = np.arctan2(sign if name == "localy" else 0.0, sign if name == "localx" else 0.0)
-    lane_id = cols["laneid"][seg]
-    return Track(
-        id=track_id, length_m=length, width_m=float(np.median(cols["vwidth"][seg])) * FOOT_M,
-        vehicle_type=CLASSES.get(int(cols["vclass"][seg[0]]), "car"),
-        t=t, x=x, y=y, heading=np.where(np.isnan(heading), default, heading),
-        speed=cols["vvel"][seg] * FOOT_M, s=sign * centre[name],
-        lane=lane_id.astype(int).astype(str), lane_index=_lane_index(lane_id))
-
-
-def _segment_ids(vid: np.ndarray, segments: list[np.ndarray]) -> list[str]:
+def _segment_ids(vid: np.ndarray, starts: np.ndarray) -> list[str]:
     """``"12"`` for a vehicle seen once, ``"12-1"``, ``"12-2"`` for one whose frames break."""
-    per_vehicle = Counter(int(vid[seg[0]]) for seg in segments)
+    vehicles = vid[starts].astype(int)
+    per_vehicle = Counter(vehicles.tolist())
     seen: Counter[int] = Counter()
     ids = []
-    for seg in segments:
-        v = int(vid[seg[0]])
+    for v in vehicles.tolist():
         seen[v] += 1
         ids.append(str(v) if per_vehicle[v] == 1 else f"{v}-{seen[v]}")
     return ids
+
+
+def _rows(cols: dict[str, np.ndarray], starts: np.ndarray, dt: float) -> dict[str, np.ndarray]:
+    """Every row's track values at once (rows sorted by vehicle and frame): the front moved
+    back to the centre along travel, s, times, heading from the motion."""
+    n = len(cols["vehicleid"])
+    ends = np.r_[starts[1:], n]
+    along_x, sign = _travel_axes(cols, starts, ends)
+    length = np.repeat(cols["vlength"][starts], np.diff(np.r_[starts, n])) * FOOT_M
+    x, y = cols["localx"] * FOOT_M, cols["localy"] * FOOT_M
+    x = np.where(along_x, x - sign * length / 2, x)
+    y = np.where(along_x, y, y - sign * length / 2)
+    t = (cols["frameid"] - cols["frameid"].min()) * dt
+    heading = segment_headings(x, y, t, starts)
+    default = np.where(along_x, np.where(sign > 0, 0.0, np.pi), sign * np.pi / 2)
+    return {"x": x, "y": y, "t": t, "s": sign * np.where(along_x, x, y),
+            "heading": np.where(np.isnan(heading), default, heading),
+            "speed": cols["vvel"] * FOOT_M, "lane": cols["laneid"].astype(int).astype(str),
+            "lane_index": np.where((cols["laneid"] >= 1) & (cols["laneid"] <= 9),
+                                   cols["laneid"], np.nan)}
+
+
+def _tracks(cols: dict[str, np.ndarray], starts: np.ndarray, dt: float) -> list[Track]:
+    """One track per run of contiguous frames that has two or more."""
+    values = _rows(cols, starts, dt)
+    ends = np.r_[starts[1:], len(cols["vehicleid"])]
+    tracks = []
+    for track_id, a, b in zip(_segment_ids(cols["vehicleid"], starts), starts, ends,
+                              strict=True):
+        if b - a < 2:
+            continue
+        tracks.append(Track(
+            id=track_id, length_m=float(cols["vlength"][a]) * FOOT_M,
+            width_m=float(cols["vwidth"][a]) * FOOT_M,
+            vehicle_type=CLASSES.get(int(cols["vclass"][a]), "car"),
+            **{name: v[a:b] for name, v in values.items()}))
+    return tracks
 
 
 def read(path: Path) -> Recording:
@@ -165,21 +179,10 @@ def read(path: Path) -> Recording:
     if duplicate.any():
         warnings.append(f"{path.name}: {int(duplicate.sum())} repeated vehicle/frame rows "
                         "skipped")
-    order = order[~duplicate]
-    cols = {k: v[order] for k, v in cols.items()}
-    segments = _segments(cols["vehicleid"], cols["frameid"])
-    short = [seg for seg in segments if len(seg) < 2]
-    if short:
-        warnings.append(f"{path.name}: {len(short)} vehicle(s) seen in one frame only skipped")
-    axes = _travel_axes(cols, segments)
-    groups = cols.get("direction", np.zeros_like(cols["vehicleid"]))
-    first_frame = cols["frameid"].min()
-    tracks = [
-        _track(track_id, seg, cols, axes[groups[seg[0]]],
-               (cols["frameid"][seg] - first_frame) * dt)
-        for track_id, seg in zip(_segment_ids(cols["vehicleid"], segments), segments,
-                                 strict=True)
-        if len(seg) >= 2
-    ]
-    return Recording(source=str(path), dt=dt, tracks=sort_tracks(tracks), reader=NAME,
-                     warnings=warnings)
+    cols = {k: v[order[~duplicate]] for k, v in cols.items()}
+    starts = _segment_starts(cols["vehicleid"], cols["frameid"])
+    single = int(np.sum(np.diff(np.r_[starts, len(cols["vehicleid"])]) < 2))
+    if single:
+        warnings.append(f"{path.name}: {single} vehicle(s) seen in one frame only skipped")
+    return Recording(source=str(path), dt=dt, tracks=sort_tracks(_tracks(cols, starts, dt)),
+                     reader=NAME, warnings=warnings)

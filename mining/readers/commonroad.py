@@ -1,0 +1,444 @@
+"""CommonRoad scenario XML (read with the ``commonroad-io`` package), as the CommonRoad team
+converted NGSIM US-101, Lankershim and Peachtree.
+
+What the reader makes of it, and how far to trust it:
+
+- One track per dynamic obstacle: rectangle length/width, ``time_step * dt``, position,
+  orientation and velocity as given. Cars, taxis, priority and parked vehicles are cars;
+  trucks and buses trucks; pedestrians, bicycles and other road users are skipped (counted
+  in the warnings).
+- ``lane`` is the lanelet the car's centre is in. Where lanelets overlap (boundaries,
+  intersections) the one whose centre line is nearest and runs the car's way wins; a centre
+  just outside every lanelet (up to :data:`MAX_OFF_MAP_M`) takes the nearest one; further out
+  it is ``""``. All steps of a file are matched in one query against an R-tree of the
+  lanelet polygons built once per file.
+- ``s`` projects the position onto the axis of the lanelet's *direction group*: lanelets are
+  grouped by the direction they run (within :data:`GROUP_ANGLE_DEG`), and each group's axis
+  is the length-weighted mean direction of its centre lines, so it points along traffic. On a
+  straight road (US-101) this is the road's axis, and gaps between cars of one road and
+  direction are differences in ``s``. Where a road bends, or a car turns onto a road of
+  another direction (the arterials), ``s`` is only comparable within one direction group and
+  jumps where the car changes group.
+- ``lane_index`` counts same-direction ``adjacentLeft`` steps from the lanelet to the road's
+  left edge (1 = leftmost); a lanelet without same-direction neighbours (an on-ramp, a turn
+  inside an intersection) takes its predecessor's index, else its successor's.
+- Traffic lights: one per ``trafficLight``, its lanes the lanelets that reference it, its stop
+  line the ``s`` of those lanelets' stop lines (their ends where they have none), its phases
+  the cycle over the snippet's steps. ``redYellow`` counts as red (it still means stop);
+  ``inactive`` (a turn arrow that is off) leaves a gap: that light says nothing then.
+  Lights for different movements (``left``, ``straightRight``) can share an approach lanelet.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import shapely
+from commonroad.common.file_reader import CommonRoadFileReader
+from commonroad.scenario.lanelet import Lanelet, LaneletNetwork
+from commonroad.scenario.obstacle import DynamicObstacle
+from commonroad.scenario.scenario import Scenario
+from commonroad.scenario.traffic_light import TrafficLight as CrLight
+from commonroad.scenario.traffic_light import TrafficLightState
+from lxml import etree
+
+from scenweave.mining.readers._common import (
+    heading_from_motion,
+    hold_last,
+    skipped_warning,
+    sort_tracks,
+    vehicle_type,
+)
+from scenweave.mining.tracks import LightPhase, Recording, Track, TrafficLight
+
+NAME = "commonroad"
+GROUP_ANGLE_DEG = 45.0
+#: a centre further than this outside every lanelet is off the map
+MAX_OFF_MAP_M = 2.0
+#: a lanelet running more than this against the car's heading is a poor match
+WRONG_WAY_DEG = 60.0
+WRONG_WAY_COST_M = 100.0
+COLOURS = {
+    TrafficLightState.GREEN: "green", TrafficLightState.YELLOW: "yellow",
+    TrafficLightState.RED: "red", TrafficLightState.RED_YELLOW: "red",
+}
+
+
+def sniff(path: Path) -> bool:
+    """An XML file whose root element is ``commonRoad``."""
+    if path.suffix.lower() != ".xml":
+        return False
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return False
+    return b"<commonRoad" in head
+
+
+@contextmanager
+def _quiet_library() -> Iterator[None]:
+    """commonroad-io logs a warning per old-format (2020a) intersection element, which is
+    all of NGSIM's; they concern intersections, which the reader does not use."""
+    logger = logging.getLogger("commonroad")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
+# --- the lanelet map ------------------------------------------------------------------------
+
+def _direction(centre: np.ndarray) -> np.ndarray:
+    """Unit vector from a centre line's start to its end."""
+    d = centre[-1] - centre[0]
+    norm = np.hypot(*d)
+    return d / norm if norm > 0 else np.array([1.0, 0.0])
+
+
+def direction_groups(directions: np.ndarray, lengths: np.ndarray,
+                     max_angle_deg: float = GROUP_ANGLE_DEG) -> tuple[np.ndarray, np.ndarray]:
+    """Group unit ``directions`` (n, 2): the longest ungrouped lanelet seeds a group that takes
+    every ungrouped one within ``max_angle_deg`` of it. Returns each lanelet's group and each
+    group's axis (the length-weighted mean direction of its members)."""
+    group = np.full(len(directions), -1)
+    cos_max = np.cos(np.radians(max_angle_deg))
+    axes = []
+    for seed in np.argsort(-lengths):
+        if group[seed] >= 0:
+            continue
+        members = (group < 0) & (directions @ directions[seed] >= cos_max)
+        group[members] = len(axes)
+        mean = (directions[members] * lengths[members, None]).sum(axis=0)
+        axes.append(mean / np.hypot(*mean))
+    return group, np.array(axes).reshape(-1, 2)
+
+
+def _lane_indices(network: LaneletNetwork) -> dict[int, int]:
+    """Lanelet id -> lanes from the left edge of its road (1 = leftmost)."""
+    def walk_left(lanelet: Lanelet) -> int:
+        count, seen = 1, {lanelet.lanelet_id}
+        while lanelet.adj_left is not None and lanelet.adj_left_same_direction:
+            if lanelet.adj_left in seen:
+                break
+            seen.add(lanelet.adj_left)
+            lanelet = network.find_lanelet_by_id(lanelet.adj_left)
+            count += 1
+        return count
+
+    def alone(lanelet: Lanelet) -> bool:
+        return not (lanelet.adj_left_same_direction and lanelet.adj_left is not None) and not (
+            lanelet.adj_right_same_direction and lanelet.adj_right is not None)
+
+    index = {ll.lanelet_id: walk_left(ll) for ll in network.lanelets}
+    for ll in network.lanelets:
+        if alone(ll):
+            neighbours = [network.find_lanelet_by_id(i) for i in (*ll.predecessor, *ll.successor)]
+            placed = [n for n in neighbours if n is not None and not alone(n)]
+            if placed:
+                index[ll.lanelet_id] = index[placed[0].lanelet_id]
+    return index
+
+
+@dataclass
+class LaneMap:
+    """A file's lanelets, ready for vectorised queries (built once per file)."""
+
+    ids: list[int]
+    polygons: np.ndarray
+    centres: np.ndarray
+    tree: shapely.STRtree
+    group: np.ndarray
+    axes: np.ndarray
+    lane_index: np.ndarray
+
+    @classmethod
+    def of(cls, network: LaneletNetwork) -> LaneMap:
+        lanelets = list(network.lanelets)
+        polygons = np.array([ll.polygon.shapely_object for ll in lanelets], dtype=object)
+        centres = np.array([shapely.LineString(ll.center_vertices) for ll in lanelets],
+                           dtype=object)
+        directions = np.array([_direction(ll.center_vertices) for ll in lanelets]).reshape(-1, 2)
+        group, axes = direction_groups(directions, shapely.length(centres).astype(float))
+        if not len(axes):  # no lanelets: s runs along x
+            axes = np.array([[1.0, 0.0]])
+        index = _lane_indices(network)
+        return cls(ids=[ll.lanelet_id for ll in lanelets], polygons=polygons, centres=centres,
+                   tree=shapely.STRtree(polygons), group=group, axes=axes,
+                   lane_index=np.array([index[ll.lanelet_id] for ll in lanelets], dtype=float))
+
+    def locate(self, xy: np.ndarray, heading: np.ndarray) -> np.ndarray:
+        """The row of the lanelet each point is on (-1: off the map)."""
+        points = shapely.points(xy)
+        found = np.full(len(xy), -1)
+        p, lane = self.tree.query(points, predicate="intersects")
+        if len(p):
+            cost = np.zeros(len(p))
+            shared = np.bincount(p)[p] > 1  # only a point in several lanelets needs a choice
+            cost[shared] = self._cost(points[p[shared]], lane[shared], heading[p[shared]])
+            order = np.lexsort((cost, p))
+            first = np.unique(p[order], return_index=True)[1]
+            found[p[order][first]] = lane[order][first]
+        missing = np.flatnonzero(found < 0)
+        if len(missing):
+            q, near = self.tree.query_nearest(points[missing], max_distance=MAX_OFF_MAP_M)
+            first = np.unique(q, return_index=True)[1]  # of a tie, the first match
+            found[missing[q[first]]] = near[first]
+        return found
+
+    def _cost(self, points: np.ndarray, lane: np.ndarray, heading: np.ndarray) -> np.ndarray:
+        """Distance to the lanelet's centre line, plus a penalty where it runs against the
+        car's heading there."""
+        centres = self.centres[lane]
+        at = shapely.line_locate_point(centres, points)
+        ahead = shapely.get_coordinates(shapely.line_interpolate_point(centres, at + 0.5))
+        behind = shapely.get_coordinates(shapely.line_interpolate_point(centres, at - 0.5))
+        along = ahead - behind
+        run = np.arctan2(along[:, 1], along[:, 0])
+        off = np.abs(np.angle(np.exp(1j * (heading - run))))
+        wrong = np.nan_to_num(off, nan=0.0) > np.radians(WRONG_WAY_DEG)
+        return shapely.distance(points, centres) + WRONG_WAY_COST_M * wrong
+
+    def s(self, xy: np.ndarray, group: np.ndarray) -> np.ndarray:
+        """Position along each point's direction group's axis."""
+        return np.einsum("ij,ij->i", xy, self.axes[group])
+
+
+# --- tracks ---------------------------------------------------------------------------------
+
+@dataclass
+class _Raw:
+    """One obstacle's states as arrays, before lanes are known."""
+
+    id: str
+    length: float
+    width: float
+    kind: str
+    step: np.ndarray
+    xy: np.ndarray
+    heading: np.ndarray
+    speed: np.ndarray
+
+
+#: what the fast path reads of each state, under the state element
+STATE_FIELDS = {"step": "time/exact", "x": "position/point/x", "y": "position/point/y",
+                "heading": "orientation/exact", "speed": "velocity/exact"}
+
+
+def _all_floats(root: etree._Element, path: str) -> np.ndarray:
+    """The number under ``path`` of every obstacle state in the file, in document order (an
+    obstacle's initial state, then its trajectory)."""
+    query = " | ".join(f"dynamicObstacle/{state}/{path}/text()"
+                       for state in ("initialState", "trajectory/state"))
+    return np.array(root.xpath(query), dtype=float)
+
+
+def _parsed_size(element: etree._Element) -> tuple[float, float] | None:
+    if element.find("shape/rectangle") is not None:
+        return (float(element.findtext("shape/rectangle/length")),
+                float(element.findtext("shape/rectangle/width")))
+    if element.find("shape/circle") is not None:
+        diameter = 2 * float(element.findtext("shape/circle/radius"))
+        return diameter, diameter
+    return None
+
+
+def _state_columns(root: etree._Element, counts: list[int]) -> dict[str, np.ndarray] | None:
+    """Each of :data:`STATE_FIELDS` for all states, or ``None`` where some state lacks a
+    field (an uncertain value, a shape for a position) that others have."""
+    total = sum(counts)
+    columns = {name: _all_floats(root, path) for name, path in STATE_FIELDS.items()}
+    for name, values in columns.items():
+        optional = name in ("heading", "speed")
+        if len(values) != total and not (optional and len(values) == 0):
+            return None
+        if len(values) == 0:
+            columns[name] = np.full(total, np.nan)
+    return columns
+
+
+def _parsed_raws(root: etree._Element) -> tuple[list[_Raw], Counter[str]] | None:
+    """Every vehicle's states parsed with lxml, five queries a file (the library's reader
+    spends most of a file's reading time on them); ``None`` where the file needs the
+    library's full reader."""
+    obstacles = root.findall("dynamicObstacle")
+    counts = [int(o.xpath("count(initialState | trajectory/state)")) for o in obstacles]
+    columns = _state_columns(root, counts)
+    if columns is None:
+        return None
+    bounds = np.cumsum(counts)[:-1]
+    per_obstacle = zip(*(np.split(columns[n], bounds) for n in STATE_FIELDS), strict=True)
+    raws, skipped = [], Counter()
+    for element, (step, x, y, heading, speed) in zip(obstacles, per_obstacle, strict=True):
+        type_name = (element.findtext("type") or "unknown").strip()
+        kind, size = vehicle_type(type_name), _parsed_size(element)
+        if kind is None:
+            skipped[type_name] += 1
+        elif size is None:
+            return None
+        else:
+            raws.append(_Raw(element.get("id"), *size, kind, step, np.column_stack([x, y]),
+                             heading, speed))
+    return raws, skipped
+
+
+def _library_raws(scenario: Scenario) -> tuple[list[_Raw], Counter[str]]:
+    """Every vehicle's states from the library's scenario objects."""
+    raws, skipped = [], Counter()
+    for obstacle in scenario.dynamic_obstacles:
+        kind = vehicle_type(obstacle.obstacle_type.value)
+        if kind is None:
+            skipped[obstacle.obstacle_type.value] += 1
+            continue
+        trajectory = getattr(obstacle.prediction, "trajectory", None)
+        states = [obstacle.initial_state, *(trajectory.state_list if trajectory else [])]
+        raws.append(_Raw(
+            str(obstacle.obstacle_id), *_size(obstacle), kind,
+            np.array([s.time_step for s in states], dtype=float),
+            np.array([s.position for s in states], dtype=float).reshape(-1, 2),
+            np.array([getattr(s, "orientation", np.nan) for s in states], dtype=float),
+            np.array([getattr(s, "velocity", np.nan) for s in states], dtype=float)))
+    return raws, skipped
+
+
+def _size(obstacle: DynamicObstacle) -> tuple[float, float]:
+    shape = obstacle.obstacle_shape
+    if hasattr(shape, "length"):
+        return float(shape.length), float(shape.width)
+    x0, y0, x1, y1 = shape.shapely_object.bounds
+    return float(x1 - x0), float(y1 - y0)
+
+
+def _fill_motion(raw: _Raw, dt: float) -> _Raw:
+    """Heading and speed from the motion where the file leaves them out."""
+    t = raw.step * dt
+    if np.isnan(raw.heading).any():
+        raw.heading = np.where(np.isnan(raw.heading), heading_from_motion(*raw.xy.T, t),
+                               raw.heading)
+    if np.isnan(raw.speed).any() and len(t) > 1:
+        moved = np.hypot(np.gradient(raw.xy[:, 0], t), np.gradient(raw.xy[:, 1], t))
+        raw.speed = np.where(np.isnan(raw.speed), moved, raw.speed)
+    return raw
+
+
+def _step_groups(lane_map: LaneMap, row: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    """Each step's direction group: its lanelet's, held over off-map steps; a track never on
+    the map takes the group its mean heading points along."""
+    on_map = row >= 0
+    if on_map.any():
+        return hold_last(lane_map.group[np.where(on_map, row, 0)], on_map)
+    mean = np.array([np.nanmean(np.cos(heading)), np.nanmean(np.sin(heading))])
+    return np.full(len(row), int(np.argmax(lane_map.axes @ np.nan_to_num(mean))))
+
+
+def _track(raw: _Raw, row: np.ndarray, lane_map: LaneMap, dt: float) -> Track:
+    lane_ids = np.array([str(lane_map.ids[r]) if r >= 0 else "" for r in row])
+    index = np.where(row >= 0, lane_map.lane_index[row], np.nan)
+    return Track(id=raw.id, length_m=raw.length, width_m=raw.width, vehicle_type=raw.kind,
+                 t=raw.step * dt, x=raw.xy[:, 0], y=raw.xy[:, 1], heading=raw.heading,
+                 speed=raw.speed,
+                 s=lane_map.s(raw.xy, _step_groups(lane_map, row, raw.heading)),
+                 lane=lane_ids, lane_index=index)
+
+
+def _tracks(raws: list[_Raw], lane_map: LaneMap, dt: float, warnings: list[str]
+            ) -> list[Track]:
+    """Tracks of the vehicles seen in two steps or more, their lanes found in one query."""
+    raws = [_fill_motion(r, dt) for r in raws if len(r.step) >= 2]
+    if not raws:
+        return []
+    rows = lane_map.locate(np.concatenate([r.xy for r in raws]),
+                           np.concatenate([r.heading for r in raws]))
+    bounds = np.cumsum([len(r.step) for r in raws])[:-1]
+    tracks = [_track(raw, row, lane_map, dt)
+              for raw, row in zip(raws, np.split(rows, bounds), strict=True)]
+    off = int((rows < 0).sum())
+    if off:
+        warnings.append(f"{off} of {len(rows)} positions are on no lanelet (lane unknown)")
+    return tracks
+
+
+# --- traffic lights -------------------------------------------------------------------------
+
+def _stop_point(lanelet: Lanelet) -> np.ndarray:
+    line = lanelet.stop_line
+    if line is not None and line.start is not None and line.end is not None:
+        return (np.asarray(line.start, float) + np.asarray(line.end, float)) / 2
+    return np.asarray(lanelet.center_vertices[-1], float)
+
+
+def light_phases(light: CrLight, last_step: int, dt: float) -> tuple[LightPhase, ...]:
+    """The light's colours over steps 0..last_step as runs of one colour (red and redYellow
+    make one red run); an inactive run is left out."""
+    cycle = light.traffic_light_cycle
+    colours = [COLOURS.get(cycle.get_state_at_time_step(step)) for step in range(last_step + 1)]
+    phases, start = [], 0
+    for step in range(1, last_step + 2):
+        if step <= last_step and colours[step] == colours[start]:
+            continue
+        if colours[start] is not None:
+            phases.append(LightPhase(round(start * dt, 9), round(min(step, last_step) * dt, 9),
+                                  colours[start]))
+        start = step
+    return tuple(phases)
+
+
+def _lights(network: LaneletNetwork, lane_map: LaneMap, last_step: int, dt: float,
+            warnings: list[str]) -> list[TrafficLight]:
+    lights = []
+    row_of = {lanelet_id: row for row, lanelet_id in enumerate(lane_map.ids)}
+    for light in network.traffic_lights:
+        lanelets = [ll for ll in network.lanelets if light.traffic_light_id in ll.traffic_lights]
+        cycle = light.traffic_light_cycle
+        if not light.active or cycle is None or not cycle.cycle_elements:
+            warnings.append(f"traffic light {light.traffic_light_id} has no active cycle")
+            phases: tuple[LightPhase, ...] = ()
+        else:
+            phases = light_phases(light, last_step, dt)
+        stop_s = None
+        if lanelets:
+            rows = np.array([row_of[ll.lanelet_id] for ll in lanelets])
+            points = np.array([_stop_point(ll) for ll in lanelets])
+            stop_s = float(np.mean(lane_map.s(points, lane_map.group[rows])))
+        lights.append(TrafficLight(id=str(light.traffic_light_id),
+                                   lanes=tuple(str(ll.lanelet_id) for ll in lanelets),
+                                   stop_line_s=stop_s, phases=phases))
+    return lights
+
+
+def _network(root: etree._Element) -> LaneletNetwork:
+    """The lanelet network and traffic lights, read by the library from the file with its
+    obstacles and planning problems taken out of ``root`` (the library would parse those)."""
+    for child in root.findall("dynamicObstacle") + root.findall("planningProblem"):
+        root.remove(child)
+    with _quiet_library():
+        return CommonRoadFileReader(etree.tostring(root)).open_lanelet_network()
+
+
+def read(path: Path) -> Recording:
+    """The scenario's vehicles and traffic lights."""
+    path = Path(path)
+    root = etree.parse(str(path)).getroot()
+    dt = float(root.get("timeStepSize", "0.1"))
+    parsed = _parsed_raws(root)
+    if parsed is None:
+        with _quiet_library():
+            scenario, _ = CommonRoadFileReader(str(path)).open()
+        parsed = _library_raws(scenario)
+    raws, skipped = parsed
+    network = _network(root)
+    warnings = skipped_warning(skipped)
+    lane_map = LaneMap.of(network)
+    tracks = _tracks(raws, lane_map, dt, warnings)
+    last_step = int(max((t.t[-1] for t in tracks), default=0.0) / dt + 0.5)
+    lights = _lights(network, lane_map, last_step, dt, warnings)
+    return Recording(source=str(path), dt=dt, tracks=sort_tracks(tracks), lights=lights,
+                     reader=NAME, warnings=[f"{path.name}: {w}" for w in warnings])

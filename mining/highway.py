@@ -56,6 +56,8 @@ def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last:
     v0, v1 = float(motion.speed[first]), float(motion.speed[last])
     peak = float(-motion.acceleration[first:last + 1].min())
     duration = (v0 - v1) / peak
+    if duration < max(limits["min_duration_s"], scene.thresholds["smoothing"]["window_s"]):
+        return None  # shorter than the smoothing window: its peak is not measured, only blurred
     middle = first + int(np.argmax(motion.speed[first:last + 1] <= (v0 + v1) / 2))
     start = max(float(track.t[middle]) - duration / 2, float(track.t[0]))
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
@@ -182,17 +184,45 @@ def _episodes(scene: Scene, code: str, ego: int, ids: np.ndarray,
     track = scene.tracks[ego]
     for other in set(ids[ids >= 0].tolist()):
         for first, last in runs(ids == other):
-            start, end = float(track.t[first]), float(track.t[last])
-            while end - start >= limits["min_duration_s"] - 1e-6:
-                stop = min(end, start + limits["max_duration_s"])
-                event = _follow_event(scene, code, ego, int(other), start, stop, limits)
-                if event is not None:
-                    yield event
-                start = stop
+            yield from _windows(scene, code, ego, int(other), float(track.t[first]),
+                                float(track.t[last]), limits)
 
 
-def _follow_event(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,
-                  limits: dict[str, float]) -> Event | None:
+def _windows(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,
+             limits: dict[str, float]) -> Iterator[Event]:
+    """A following episode cut into the longest windows (``min_duration_s`` to
+    ``max_duration_s``) that a linear speed change of both cars describes: a MOOVE following
+    record gives start and end speeds and gaps only, so the end gap must follow from them."""
+    shortest, step = limits["min_duration_s"], limits["window_step_s"]
+    while end - start >= shortest - 1e-6:
+        stop = min(end, start + limits["max_duration_s"])
+        while stop - start >= shortest - 1e-6 and not _linear(scene, ego, npc, start, stop,
+                                                               limits["linear_within_m"]):
+            stop -= step
+        if stop - start < shortest - 1e-6:
+            start += step
+            continue
+        event = follow_event(scene, code, ego, npc, start, stop, limits)
+        if event is not None:
+            yield event
+        start = stop
+
+
+def _linear(scene: Scene, ego: int, npc: int, start: float, stop: float,
+            within_m: float) -> bool:
+    values = [scene.speed(i, t) for i in (ego, npc) for t in (start, stop)]
+    gaps = [scene.gap(ego, npc, t) for t in (start, stop)]
+    if None in values or None in gaps:
+        return False
+    ego0, ego1, npc0, npc1 = values
+    made = gaps[0] + ((npc0 + npc1) - (ego0 + ego1)) / 2 * (stop - start)
+    return abs(made - gaps[1]) <= within_m
+
+
+def follow_event(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,
+                 limits: dict[str, float]) -> Event | None:
+    """FLF/FLB over ``start``..``end``: speeds and gaps at both ends (None if either car is
+    missing or too slow then)."""
     speeds = [scene.speed(i, t) for i in (ego, npc) for t in (start, end)]
     gaps = [scene.gap(ego, npc, t) for t in (start, end)]
     if None in speeds or None in gaps or min(speeds) < limits["min_speed_ms"]:

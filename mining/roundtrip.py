@@ -9,8 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from scenweave.mining.detect import KMH, Event, detect
+from scenweave import maneuvers
+from scenweave.ingest import extract_params
+from scenweave.mining.detect import KMH, Event, Scene, detect
+from scenweave.mining.highway import follow_event
 from scenweave.mining.replayed import recording_from_playback
+from scenweave.mining.tracks import Recording
 from scenweave.player import Playback
 
 SPEED_TOL_MS = 0.5
@@ -45,13 +49,31 @@ def round_trip(record: dict, playback: Playback,
     """Mine ``playback`` (the record's scenario, played) and compare with ``record``."""
     recording = recording_from_playback(playback, record["scenario_id"])
     roles = record.get("provenance", {}).get("tracks", {})
-    candidates = [e for e in detect(recording, thresholds) if e.code == record["maneuver_class"]
+    code = record["maneuver_class"]
+    candidates = [e for e in detect(recording, thresholds) if e.code == code
                   and e.ego == "ego" and (e.npc == "npc" if "npc" in roles else e.npc is None)]
-    result = RoundTrip(record["maneuver_class"], record["scenario_id"], bool(candidates))
+    result = RoundTrip(code, record["scenario_id"], bool(candidates))
+    if candidates and maneuvers.get(code).gap_at_end:
+        candidates = _same_window(recording, record, thresholds)
     if candidates:
         best = min(candidates, key=lambda e: len(_misses(record["params"], e)))
         result.misses = _misses(record["params"], best)
     return result
+
+
+def _same_window(recording: Recording, record: dict,
+                 thresholds: dict[str, dict[str, float]]) -> list[Event]:
+    """A following record is a window cut out of a longer episode: measure the replay over
+    the record's own window (the manoeuvre's start to its end in the scenario)."""
+    scene = Scene(recording, thresholds)
+    ids = [track.id for track in recording.tracks]
+    if "ego" not in ids or "npc" not in ids:
+        return []
+    start = float(extract_params(record)["maneuver_start_s"])
+    end = start + float(record["params"]["duration_s"])
+    event = follow_event(scene, record["maneuver_class"], ids.index("ego"), ids.index("npc"),
+                         start, end, thresholds["follow"])
+    return [] if event is None else [event]
 
 
 def _misses(wanted: dict, event: Event) -> dict[str, tuple[float, float]]:

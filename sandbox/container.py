@@ -37,6 +37,11 @@ from scenweave.sandbox.settings import MIB, SandboxSettings
 
 SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
 LOG_MAX_SIZE = "1m"
+#: RLIMIT_NPROC counts every process of the sandbox uid on the host, across all containers:
+#: set to the container's pids_limit, one fork bomb starved every other sandbox. The
+#: per-container cap is the pids cgroup (``pids_limit``); this only has to be explicit (podman
+#: fails to raise its default here) and far above what concurrent sandboxes hold.
+UID_NPROC = 4096
 BUILD_HINT = "build it with `bash scripts/setup.d/20-sandbox.sh` or set SandboxSettings.image"
 
 
@@ -114,7 +119,8 @@ class DockerSandbox(Sandbox):
         finally:
             _remove(handle.container)
         return RawRun(exit_code=code, stdout=handle.stdout.text(), stderr=handle.stderr.text(),
-                      timed_out=timed_out, duration_s=duration)
+                      timed_out=timed_out, duration_s=duration,
+                      ended_at=time.time())
 
     def _alive(self, handle: Running) -> bool:
         try:
@@ -169,7 +175,7 @@ class DockerSandbox(Sandbox):
         s = self.settings
         cpu_s = s.cpu_time_limit_s
         return [Ulimit(name="nofile", soft=256, hard=256),
-                Ulimit(name="nproc", soft=s.pids, hard=s.pids),
+                Ulimit(name="nproc", soft=UID_NPROC, hard=UID_NPROC),
                 Ulimit(name="fsize", soft=s.file_size_limit, hard=s.file_size_limit),
                 Ulimit(name="core", soft=0, hard=0),
                 Ulimit(name="msgqueue", soft=0, hard=0),  # no POSIX queues in /dev/mqueue

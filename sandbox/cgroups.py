@@ -21,12 +21,13 @@ import uuid
 from pathlib import Path
 
 from scenweave.sandbox.errors import SandboxError, SandboxUnavailable
+from scenweave.sandbox.owner import owner_gone, owner_tag
 
 log = logging.getLogger(__name__)
 CPU_PERIOD_US = 100_000
 V1_CONTROLLERS = ("memory", "pids", "cpu")
 PARENT = "scenweave"  # every run's cgroup is a child of this one
-RUN_NAME = re.compile(r"run-(\d+)-(\d+)-[0-9a-f]+")
+RUN_NAME = re.compile(r"run-(\d+-\d+)-[0-9a-f]+")
 REMOVE_WITHIN_S = 5.0  # the kernel may take a moment to let go of killed tasks
 
 
@@ -124,26 +125,14 @@ class RunCgroup:
 
 def run_name(owner: int) -> str:
     """A new run cgroup's name, owned by the process ``owner``."""
-    return f"run-{owner}-{process_start(owner)}-{uuid.uuid4().hex[:8]}"
+    return f"run-{owner_tag(owner)}-{uuid.uuid4().hex[:8]}"
 
 
-def process_start(pid: int) -> int | None:
-    """When ``pid`` started (clock ticks after boot; with the pid, unique), None if gone."""
-    try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
-    except OSError:
-        return None
-    return int(fields[19])  # field 22 of stat, counted after the command's ')'
-
-
-def owner_alive(name: str) -> bool:
-    """Whether the process that made the run cgroup ``name`` still runs (True for names of
+def orphaned(name: str) -> bool:
+    """Whether the process that made the run cgroup ``name`` has ended (False for names of
     other formats: nothing says they are orphaned)."""
     match = RUN_NAME.fullmatch(name)
-    if match is None:
-        return True
-    pid, start = map(int, match.groups())
-    return process_start(pid) == start
+    return match is not None and owner_gone(match.group(1))
 
 
 def sweep_stale(root: Path) -> list[str]:
@@ -151,7 +140,7 @@ def sweep_stale(root: Path) -> list[str]:
     unified = _unified(root)
     names = {folder.name for parent in _parents(root, unified) if parent.is_dir()
              for folder in parent.iterdir() if folder.is_dir()}
-    stale = sorted(name for name in names if not owner_alive(name))
+    stale = sorted(name for name in names if orphaned(name))
     for name in stale:
         orphan = RunCgroup(root, name)
         orphan.kill_all()

@@ -11,6 +11,8 @@ unsized ``/tmp``, ``/var/tmp`` and ``/run`` (a sized ``/tmp`` and read-only othe
 from __future__ import annotations
 
 import contextlib
+import logging
+import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -33,9 +35,15 @@ from scenweave.sandbox.attempt import (
 from scenweave.sandbox.base import Sandbox
 from scenweave.sandbox.capture import CappedBuffer
 from scenweave.sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from scenweave.sandbox.owner import owner_gone, owner_tag
 from scenweave.sandbox.settings import MIB, SandboxSettings
 
+log = logging.getLogger(__name__)
 SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
+SANDBOX_LABEL = "scenweave.sandbox"
+#: ``<host name>/<pid>-<start time>`` of the process that made the container: the next start
+#: on that host removes the containers of a process that died (e.g. a warm one it held)
+OWNER_LABEL = "scenweave.owner"
 LOG_MAX_SIZE = "1m"
 #: RLIMIT_NPROC counts every process of the sandbox uid on the host, across all containers:
 #: set to the container's pids_limit, one fork bomb starved every other sandbox. The
@@ -81,13 +89,28 @@ class DockerSandbox(Sandbox):
         return self._client
 
     def probe(self) -> None:
-        """Check that the engine answers and the sandbox image exists."""
+        """Check that the engine answers and the sandbox image exists; remove the containers
+        that processes of this host killed from outside left behind."""
         try:
             self.client.images.get(self.settings.image)
+            self._sweep_orphans()
         except NotFound as err:
             raise ImageNotFound(f"image {self.settings.image} not found: {BUILD_HINT}") from err
         except (DockerException, requests.RequestException) as err:
             raise SandboxUnavailable(f"container engine error: {err}") from err
+
+    def _sweep_orphans(self) -> None:
+        host = f"{socket.gethostname()}/"
+        for container in self.client.containers.list(all=True,
+                                                     filters={"label": SANDBOX_LABEL}):
+            owner = container.labels.get(OWNER_LABEL, "")
+            if owner.startswith(host) and owner_gone(owner.removeprefix(host)):
+                log.warning("removing sandbox container %s: the process that made it is gone",
+                            container.short_id)
+                try:
+                    _remove(container)
+                except SandboxError as err:  # e.g. another start removing it too: next time
+                    log.warning("%s", err)
 
     def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings
@@ -163,7 +186,7 @@ class DockerSandbox(Sandbox):
                        "/run": closed, OUT_MOUNT: f"size={s.output_max_bytes},mode=1777"},
                 ipc_mode="none",  # no /dev/shm (a 64 MB writable tmpfs otherwise)
                 ulimits=self._ulimits(), volumes=volumes, working_dir="/tmp",
-                hostname="sandbox", labels={"scenweave.sandbox": "attempt"},
+                hostname="sandbox", labels=owner_labels(),
                 log_config=LogConfig(type="json-file", config={"max-size": LOG_MAX_SIZE}),
                 stdin_open=False, detach=True)
         except docker.errors.ImageNotFound as err:
@@ -187,6 +210,11 @@ class DockerSandbox(Sandbox):
         if self._client is not None:
             self._client.close()
             self._client = None
+
+
+def owner_labels(pid: int | None = None) -> dict[str, str]:
+    """The labels of a sandbox container made by ``pid`` (default: this process)."""
+    return {SANDBOX_LABEL: "attempt", OWNER_LABEL: f"{socket.gethostname()}/{owner_tag(pid)}"}
 
 
 def _drain(stream: Iterator[tuple[bytes | None, bytes | None]], stdout: CappedBuffer,

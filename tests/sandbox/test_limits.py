@@ -20,8 +20,10 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from docker.errors import NotFound
 from scenweave.sandbox import SandboxSettings, get_sandbox
 from scenweave.sandbox.cgroups import RunCgroup, run_name
+from scenweave.sandbox.container import owner_labels
 from scenweave.sandbox.settings import MIB
 
 from tests.sandbox.conftest import FAST
@@ -362,3 +364,29 @@ def test_run_cgroups_of_dead_owners_are_swept_at_the_next_start(cgroup_root, tmp
                 process.wait()
         for cgroup in (stale, *kept):
             cgroup.remove()
+
+
+def test_containers_of_dead_owners_are_removed_at_the_next_start(make_docker_box):
+    """A process killed from outside leaves its containers (a warm one, a running attempt):
+    the next start on this host removes them, but never a live process's."""
+    box = make_docker_box()
+    owners = {"dead": subprocess.Popen(["sleep", "60"]), "live": subprocess.Popen(["sleep", "60"])}
+    containers = {name: box.client.containers.create(
+        box.settings.image, command=["sleep", "60"], labels=owner_labels(owner.pid),
+        network_mode="none", ulimits=box._ulimits(), user="65534:65534")
+        for name, owner in owners.items()}
+    owners["dead"].kill()
+    owners["dead"].wait()
+    try:
+        for container in containers.values():
+            container.start()
+        make_docker_box()
+        left = {c.id for c in box.client.containers.list(all=True)}
+        assert containers["dead"].id not in left
+        assert containers["live"].id in left
+    finally:
+        owners["live"].kill()
+        owners["live"].wait()
+        for container in containers.values():
+            with contextlib.suppress(NotFound):
+                container.remove(force=True)

@@ -96,24 +96,25 @@ class DockerSandbox(Sandbox):
         that processes of this host killed from outside left behind."""
         try:
             self.client.images.get(self.settings.image)
-            self._sweep_orphans()
         except NotFound as err:
             raise ImageNotFound(f"image {self.settings.image} not found: {BUILD_HINT}") from err
         except (DockerException, requests.RequestException) as err:
             raise SandboxUnavailable(f"container engine error: {err}") from err
+        try:
+            self._sweep_orphans()
+        except (DockerException, requests.RequestException, SandboxError) as err:
+            log.warning("could not sweep orphaned sandbox containers (next start will): %s", err)
 
     def _sweep_orphans(self) -> None:
         host = f"{socket.gethostname()}/"
-        for container in self.client.containers.list(all=True,
-                                                     filters={"label": SANDBOX_LABEL}):
-            owner = container.labels.get(OWNER_LABEL, "")
+        # sparse: no inspect per container, which fails when another process removes one
+        for container in self.client.containers.list(all=True, sparse=True,
+                                                     filters={"label": OWNER_LABEL}):
+            owner = (container.attrs.get("Labels") or {}).get(OWNER_LABEL, "")
             if owner.startswith(host) and owner_gone(owner.removeprefix(host)):
                 log.warning("removing sandbox container %s: the process that made it is gone",
                             container.short_id)
-                try:
-                    _remove(container)
-                except SandboxError as err:  # e.g. another start removing it too: next time
-                    log.warning("%s", err)
+                _remove(container)
 
     def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings

@@ -143,8 +143,9 @@ def _duration(value: object, wall_time_s: float) -> float | None:
 def phase_timings(began_at: float, marks: dict[str, float], ended_at: float,
                   host_collect_s: float) -> dict[str, float]:
     """Where an attempt's wall time went (seconds): ``start`` (until the job began inside),
-    ``import``, ``generate``, ``collect`` (inside and on the host), ``stop`` (report, exit,
-    teardown). The harness's marks are untrusted: they are clamped into the host's span."""
+    ``import`` (the script's module body: its imports, e.g. scenariogeneration's, which a warm
+    sandbox has done), ``generate``, ``collect`` (inside and on the host), ``stop`` (report,
+    exit, teardown). The harness's marks are untrusted: they are clamped into the host's span."""
     if any(key not in marks for key in MARKS):
         return {}
     moments, low = [], began_at

@@ -113,7 +113,9 @@ class RunCgroup:
             while not _removed(folder):
                 if time.monotonic() > deadline:
                     raise SandboxError(f"cannot remove the run cgroup {folder}: processes "
-                                       f"{sorted(self.pids())} are still in it")
+                                       f"{sorted(self.pids())} are still in it (stuck in the "
+                                       "kernel?); a sandbox start after this process ends "
+                                       "sweeps it")
                 time.sleep(0.01)
 
     def _path(self, relative: str) -> Path:

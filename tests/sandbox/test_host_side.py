@@ -132,7 +132,8 @@ def test_capped_buffer_keeps_head_and_tail():
 
 
 @pytest.mark.parametrize("field, value", [("backend", "qemu"), ("wall_time_s", 0),
-                                          ("memory_mb", -1), ("pids", 0)])
+                                          ("memory_mb", -1), ("pids", 0),
+                                          ("output_names", ()), ("output_names", ("",))])
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(ValueError, match=field):
         sandbox.SandboxSettings(**{field: value})

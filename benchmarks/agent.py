@@ -30,14 +30,14 @@ def run_strategy(raw: Path, out: Path, classes: tuple[str, ...], repair: str,
                  max_attempts: int, sandbox: str) -> tuple[list[dict], float]:
     """All selected records through the agent with ``repair``; outcomes and wall time."""
     from scenweave.agent import AgentSettings
+    from scenweave.agent.settings import batch_sandbox
     from scenweave.inputs import InputSelection
     from scenweave.pipeline import PipelineSettings
     from scenweave.runner import run_batch
-    from scenweave.sandbox import SandboxSettings
 
     settings = PipelineSettings(no_llm=False, agent=AgentSettings(
         llm="embedded", repair=repair, max_attempts=max_attempts,
-        sandbox=SandboxSettings(backend=sandbox)))
+        sandbox=batch_sandbox(sandbox)))
     started = time.perf_counter()
     result = run_batch(raw, out, InputSelection(classes=classes, per_class=1), settings,
                        run_id=repair)

@@ -4,15 +4,26 @@ environment every backend uses, and how a raw run becomes an ``ExecResult``."""
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from scenweave.sandbox.errors import SandboxError
-from scenweave.sandbox.result import ExecResult, Report, ReportInvalid, read_report, write_files
+from scenweave.sandbox.result import (
+    ExecResult,
+    Report,
+    ReportInvalid,
+    phase_timings,
+    read_report,
+    write_files,
+)
 from scenweave.sandbox.settings import SandboxSettings
+
+log = logging.getLogger(__name__)
 
 HARNESS = Path(__file__).with_name("harness.py")
 #: the only environment a sandboxed script sees (nothing from the host)
@@ -42,6 +53,7 @@ class RawRun:
     stderr: str
     timed_out: bool
     duration_s: float
+    ended_at: float  # wall clock once the sandbox was gone
 
 
 class Attempt:
@@ -85,14 +97,16 @@ class Attempt:
         command = [python, "-I", f"{JOB_MOUNT}/harness.py", str(self.settings.output_max_bytes)]
         return [*command, "--warm", str(self.settings.warm_idle_s)] if warm else command
 
-    def outcome(self, raw: RawRun, out_dir: Path, backend: str) -> ExecResult:
-        """Turn what the backend saw plus the (vetted) report into an :class:`ExecResult`."""
+    def outcome(self, raw: RawRun, out_dir: Path, backend: str, began_at: float) -> ExecResult:
+        """Turn what the backend saw plus the (vetted) report into an :class:`ExecResult`;
+        ``began_at`` is the wall clock when the host began the attempt."""
         result = ExecResult(exit_code=raw.exit_code, stdout=raw.stdout, stderr=raw.stderr,
                             timed_out=raw.timed_out, duration_s=raw.duration_s, backend=backend)
         s = self.settings
+        collecting = time.time()
         try:
             report = read_report(self.report, s.output_max_bytes, s.output_max_files,
-                                 raw.duration_s)
+                                 raw.duration_s, s.output_names)
             result.files = write_files(report.files, out_dir)
         except ReportInvalid as err:
             report = Report(error_type="NoReport",
@@ -103,6 +117,11 @@ class Attempt:
         result.error_type = report.error_type
         result.error_message = report.error_message
         result.traceback = report.traceback
+        result.warnings = report.warnings
+        for warning in report.warnings:
+            log.warning("%s sandbox: %s", backend, warning)
+        result.timings = phase_timings(began_at, report.marks, raw.ended_at,
+                                       time.time() - collecting)
         self._explain_kill(result)
         return result
 

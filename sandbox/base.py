@@ -37,6 +37,7 @@ class Sandbox(ABC):
         The script's failures (exceptions, timeout, limits) come back in the result; only
         infrastructure failures raise :class:`sandbox.SandboxError`.
         """
+        began_at = time.time()
         params_json = params_to_json(params)
         out_dir = Path(out_dir)
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -56,7 +57,7 @@ class Sandbox(ABC):
             raise
         try:
             raw = self._finish(handle, started)
-            return attempt.outcome(raw, out_dir, self.name)
+            return attempt.outcome(raw, out_dir, self.name, began_at)
         finally:
             attempt.close()
 

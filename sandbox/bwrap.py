@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import logging
 import os
 import shutil
 import signal
@@ -32,10 +33,11 @@ from scenweave.sandbox.attempt import (
 )
 from scenweave.sandbox.base import Sandbox
 from scenweave.sandbox.capture import CappedBuffer, drain_in_background
-from scenweave.sandbox.cgroups import RunCgroup
+from scenweave.sandbox.cgroups import RunCgroup, sweep_stale
 from scenweave.sandbox.errors import SandboxError, SandboxUnavailable
 from scenweave.sandbox.settings import MIB
 
+log = logging.getLogger(__name__)
 #: joins the run's cgroups (as root, before dropping privileges), then execs the rest
 JOIN_CGROUPS = 'while [ "$1" != -- ]; do echo $$ > "$1" || exit 125; shift; done; shift; exec "$@"'
 SYSTEM_DIRS = ("bin", "sbin", "lib", "lib32", "lib64")
@@ -63,7 +65,11 @@ class BwrapSandbox(Sandbox):
         return RunCgroup.unavailable_reason(self.settings.cgroup_root)
 
     def probe(self) -> None:
-        """Check bwrap, setpriv, prlimit and the sandbox Python, then run a trivial sandbox."""
+        """Check bwrap, setpriv, prlimit and the sandbox Python, then run a trivial sandbox;
+        sweep the run cgroups that processes killed from outside left behind."""
+        if self.cgroup_problem is None:
+            for name in sweep_stale(self.settings.cgroup_root):
+                log.warning("removed the run cgroup %s: the process that made it is gone", name)
         for tool in ("bwrap", "prlimit", *(["setpriv"] if os.geteuid() == 0 else [])):
             if shutil.which(tool) is None:
                 raise SandboxUnavailable(f"{tool} not found: install the Debian packages in "
@@ -88,8 +94,8 @@ class BwrapSandbox(Sandbox):
         s = self.settings
         cgroup = None
         if self.cgroup_problem is None:
-            cgroup = RunCgroup(s.cgroup_root, s.memory_mb * MIB, s.pids, s.cpus)
-            cgroup.create()
+            cgroup = RunCgroup(s.cgroup_root)
+            cgroup.create(s.memory_mb * MIB, s.pids, s.cpus)
         join = (["/bin/sh", "-c", JOIN_CGROUPS, "join", *map(str, cgroup.procs_files()), "--"]
                 if cgroup else [])
         command = [*join, *self._privilege_drop(), *self._rlimits(cgroup is None), "bwrap",
@@ -119,18 +125,24 @@ class BwrapSandbox(Sandbox):
             self._abort(handle)
         code = handle.proc.returncode
         return RawRun(exit_code=128 - code if code < 0 else code, stdout=handle.stdout.text(),
-                      stderr=handle.stderr.text(), timed_out=timed_out, duration_s=duration)
+                      stderr=handle.stderr.text(), timed_out=timed_out, duration_s=duration,
+                      ended_at=time.time())
 
     def _alive(self, handle: Running) -> bool:
         return handle.proc.poll() is None
 
     def _abort(self, handle: Running) -> None:
-        """Kill the launcher's group and everything in the run's cgroup, then clean up."""
-        _kill_group(handle.proc)
+        """Kill the sandbox and return once every process of it is reaped, its cgroup gone.
+
+        The sandbox's PID 1 dies first: the kernel then kills the rest of its PID namespace
+        and bwrap, its parent, reaps it and exits. Killing bwrap first would leave PID 1 to
+        the host's init, a zombie for seconds after the run.
+        """
+        _kill_namespace(handle.proc)
         if handle.cgroup is not None:
-            handle.cgroup.kill_all()  # readers end once nothing holds the pipes open
+            handle.cgroup.kill_all()  # anything that got out of the namespace
             handle.cgroup.remove()
-        for reader in handle.readers:
+        for reader in handle.readers:  # they end once nothing holds the pipes open
             reader.join(timeout=5)
 
     def _privilege_drop(self) -> list[str]:
@@ -186,7 +198,25 @@ def _venv_root(python: str) -> Path:
     return Path(python).parent.parent
 
 
-def _kill_group(proc: subprocess.Popen) -> None:
-    with contextlib.suppress(ProcessLookupError):
-        os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
+def _kill_namespace(proc: subprocess.Popen, reaped_within_s: float = 5.0) -> None:
+    """SIGKILL the sandbox's PID 1 (bwrap's child), let bwrap reap it, then reap bwrap."""
+    if proc.poll() is not None:
+        return  # bwrap exits only after its child, the namespace's PID 1, is reaped
+    children = _children(proc.pid)
+    for child in children:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(child, signal.SIGKILL)
+    try:  # no child (yet): bwrap is starting or about to exit on its own
+        proc.wait(timeout=reaped_within_s if children else 0.5)
+    except subprocess.TimeoutExpired:
+        proc.kill()  # bwrap is stuck: the run cgroup's kill takes the rest
+        proc.wait()
+
+
+def _children(pid: int) -> list[int]:
+    """The children of ``pid`` (bwrap is single-threaded), [] when it has none or is gone."""
+    try:
+        listed = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    except OSError:
+        return []
+    return [int(child) for child in listed.split()]

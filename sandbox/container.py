@@ -11,6 +11,9 @@ unsized ``/tmp``, ``/var/tmp`` and ``/run`` (a sized ``/tmp`` and read-only othe
 from __future__ import annotations
 
 import contextlib
+import functools
+import logging
+import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -34,10 +37,23 @@ from scenweave.sandbox.attempt import (
 from scenweave.sandbox.base import Sandbox
 from scenweave.sandbox.capture import CappedBuffer
 from scenweave.sandbox.errors import ImageNotFound, SandboxError, SandboxUnavailable
+from scenweave.sandbox.owner import owner_gone, owner_tag
 from scenweave.sandbox.settings import MIB, SandboxSettings
 
+log = logging.getLogger(__name__)
 SANDBOX_PYTHON = "/opt/venv/bin/python"  # where Dockerfile.sandbox installs it
+SANDBOX_LABEL = "scenweave.sandbox"
+#: ``<host name>/<pid>-<start time>`` of the process that made the container: the next start
+#: on that host removes the containers of a process that died (e.g. a warm one it held)
+OWNER_LABEL = "scenweave.owner"
+PODMAN_API = "v4.0.0"  # podman's own API (for its wait with an interval)
+WAIT_INTERVAL = "10ms"
 LOG_MAX_SIZE = "1m"
+#: RLIMIT_NPROC counts every process of the sandbox uid on the host, across all containers:
+#: set to the container's pids_limit, one fork bomb starved every other sandbox. The
+#: per-container cap is the pids cgroup (``pids_limit``); this only has to be explicit (podman
+#: fails to raise its default here) and far above what concurrent sandboxes hold.
+UID_NPROC = 4096
 BUILD_HINT = "build it with `bash scripts/setup.d/20-sandbox.sh` or set SandboxSettings.image"
 
 
@@ -77,13 +93,29 @@ class DockerSandbox(Sandbox):
         return self._client
 
     def probe(self) -> None:
-        """Check that the engine answers and the sandbox image exists."""
+        """Check that the engine answers and the sandbox image exists; remove the containers
+        that processes of this host killed from outside left behind."""
         try:
             self.client.images.get(self.settings.image)
         except NotFound as err:
             raise ImageNotFound(f"image {self.settings.image} not found: {BUILD_HINT}") from err
         except (DockerException, requests.RequestException) as err:
             raise SandboxUnavailable(f"container engine error: {err}") from err
+        try:
+            self._sweep_orphans()
+        except (DockerException, requests.RequestException, SandboxError) as err:
+            log.warning("could not sweep orphaned sandbox containers (next start will): %s", err)
+
+    def _sweep_orphans(self) -> None:
+        host = f"{socket.gethostname()}/"
+        # sparse: no inspect per container, which fails when another process removes one
+        for container in self.client.containers.list(all=True, sparse=True,
+                                                     filters={"label": OWNER_LABEL}):
+            owner = (container.attrs.get("Labels") or {}).get(OWNER_LABEL, "")
+            if owner.startswith(host) and owner_gone(owner.removeprefix(host)):
+                log.warning("removing sandbox container %s: the process that made it is gone",
+                            container.short_id)
+                _remove(container)
 
     def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings
@@ -115,7 +147,8 @@ class DockerSandbox(Sandbox):
         finally:
             _remove(handle.container)
         return RawRun(exit_code=code, stdout=handle.stdout.text(), stderr=handle.stderr.text(),
-                      timed_out=timed_out, duration_s=duration)
+                      timed_out=timed_out, duration_s=duration,
+                      ended_at=time.time())
 
     def _alive(self, handle: Running) -> bool:
         try:
@@ -130,13 +163,30 @@ class DockerSandbox(Sandbox):
     def _wait(self, container: Container, started: float) -> tuple[bool, int | None]:
         remaining = self.settings.wall_time_s - (time.monotonic() - started)
         try:
-            status = container.wait(timeout=max(remaining, 0.1))
-            return False, int(status.get("StatusCode", -1))
+            return False, self._exit_code(container, max(remaining, 0.1))
         except requests.RequestException:  # the wait timed out: hard kill
             with contextlib.suppress(APIError):  # "not running": it ended meanwhile
                 container.kill()
-            status = container.wait(timeout=30)
-            return True, int(status.get("StatusCode", -1))
+            return True, self._exit_code(container, 30.0)
+
+    def _exit_code(self, container: Container, timeout_s: float) -> int:
+        """Wait until ``container`` has exited; requests' timeout error after ``timeout_s``.
+
+        podman's Docker-compatible wait looks every 250 ms, a quarter of a warm attempt;
+        its own endpoint takes the interval.
+        """
+        if not self._podman:
+            return int(container.wait(timeout=timeout_s).get("StatusCode", -1))
+        api = self.client.api
+        response = api._post(f"{api.base_url}/{PODMAN_API}/libpod/containers/{container.id}/wait",
+                             params={"condition": "exited", "interval": WAIT_INTERVAL},
+                             timeout=timeout_s)
+        return int(api._result(response, json=True))
+
+    @functools.cached_property
+    def _podman(self) -> bool:
+        components = self.client.version().get("Components") or []
+        return any("podman" in str(c.get("Name", "")).lower() for c in components)
 
     def _create(self, attempt: Attempt, warm: bool):
         s = self.settings
@@ -158,7 +208,7 @@ class DockerSandbox(Sandbox):
                        "/run": closed, OUT_MOUNT: f"size={s.output_max_bytes},mode=1777"},
                 ipc_mode="none",  # no /dev/shm (a 64 MB writable tmpfs otherwise)
                 ulimits=self._ulimits(), volumes=volumes, working_dir="/tmp",
-                hostname="sandbox", labels={"scenweave.sandbox": "attempt"},
+                hostname="sandbox", labels=owner_labels(),
                 log_config=LogConfig(type="json-file", config={"max-size": LOG_MAX_SIZE}),
                 stdin_open=False, detach=True)
         except docker.errors.ImageNotFound as err:
@@ -170,7 +220,7 @@ class DockerSandbox(Sandbox):
         s = self.settings
         cpu_s = s.cpu_time_limit_s
         return [Ulimit(name="nofile", soft=256, hard=256),
-                Ulimit(name="nproc", soft=s.pids, hard=s.pids),
+                Ulimit(name="nproc", soft=UID_NPROC, hard=UID_NPROC),
                 Ulimit(name="fsize", soft=s.file_size_limit, hard=s.file_size_limit),
                 Ulimit(name="core", soft=0, hard=0),
                 Ulimit(name="msgqueue", soft=0, hard=0),  # no POSIX queues in /dev/mqueue
@@ -182,6 +232,11 @@ class DockerSandbox(Sandbox):
         if self._client is not None:
             self._client.close()
             self._client = None
+
+
+def owner_labels(pid: int | None = None) -> dict[str, str]:
+    """The labels of a sandbox container made by ``pid`` (default: this process)."""
+    return {SANDBOX_LABEL: "attempt", OWNER_LABEL: f"{socket.gethostname()}/{owner_tag(pid)}"}
 
 
 def _drain(stream: Iterator[tuple[bytes | None, bytes | None]], stdout: CappedBuffer,

@@ -64,12 +64,17 @@ def forbid_user_namespaces() -> None:
         raise OSError(ctypes.get_errno(), "harness: cannot install the seccomp filter")
 
 
-def wait_for_job(idle_s: float) -> None:
-    """Warm mode: do the common imports, then wait for the host's ``go`` (exit when idle)."""
-    sys.path.insert(0, LIB)
+def import_common() -> None:
+    """Import what every reference script imports (a failure is the script's to meet)."""
+    if LIB not in sys.path:
+        sys.path.insert(0, LIB)
     for name in WARM_IMPORTS:
         with contextlib.suppress(Exception):  # the script will meet the same error itself
             importlib.import_module(name)
+
+
+def wait_for_job(idle_s: float) -> None:
+    """Warm mode: wait for the host's ``go`` file (exit when idle for ``idle_s``)."""
     deadline = time.monotonic() + idle_s
     while not os.path.exists(GO):
         if time.monotonic() > deadline:
@@ -77,8 +82,9 @@ def wait_for_job(idle_s: float) -> None:
         time.sleep(0.02)
 
 
-def run_script() -> dict:
-    """Import ``script.py`` as a module and call ``generate(params, SCENARIO)``."""
+def run_script(marks: dict) -> dict:
+    """Import ``script.py`` as a module (its own imports included: the ``imported`` mark)
+    and call ``generate(params, SCENARIO)``."""
     with open(os.path.join(JOB, "params.json"), encoding="utf-8") as handle:
         params = json.load(handle)
     if LIB not in sys.path:
@@ -90,6 +96,7 @@ def run_script() -> dict:
         module = importlib.util.module_from_spec(spec)
         sys.modules["llm_script"] = module
         spec.loader.exec_module(module)
+        marks["imported"] = time.time()
         module.generate(params, SCENARIO)
     except BaseException as err:  # noqa: BLE001 - SystemExit from the script is an error too
         report["error_type"] = type(err).__name__
@@ -99,21 +106,26 @@ def run_script() -> dict:
     return report
 
 
+def output_paths() -> list:
+    """Every path under the output folder (never following links), the scenario first: the
+    host takes outputs in this order up to its limits, and vets every name itself."""
+    paths = [os.path.join(folder, name)
+             for folder, _, names in os.walk(OUT, followlinks=False) for name in names]
+    return sorted(paths, key=lambda path: (path != SCENARIO, path))
+
+
 def produced_files(limit_bytes: int) -> list:
-    """Regular files under the output folder (never following links), up to ``limit_bytes``."""
+    """The regular files of the output folder (no links, FIFOs...), up to ``limit_bytes``."""
     files, total = [], 0
-    for folder, dirs, names in os.walk(OUT, followlinks=False):
-        for name in sorted(names):
-            path = os.path.join(folder, name)
-            info = os.lstat(path)
-            if not stat.S_ISREG(info.st_mode) or total + info.st_size > limit_bytes:
-                continue
-            with open(path, "rb") as handle:
-                data = handle.read(info.st_size)
-            total += len(data)
-            files.append({"name": os.path.relpath(path, OUT),
-                          "data": base64.b64encode(data).decode("ascii")})
-        dirs.sort()
+    for path in output_paths():
+        info = os.lstat(path)
+        if not stat.S_ISREG(info.st_mode) or total + info.st_size > limit_bytes:
+            continue
+        with open(path, "rb") as handle:
+            data = handle.read(info.st_size)
+        total += len(data)
+        files.append({"name": os.path.relpath(path, OUT),
+                      "data": base64.b64encode(data).decode("ascii")})
     return files
 
 
@@ -121,9 +133,14 @@ def main() -> int:
     """Run the job and write the report; exit 0 when the script raised nothing."""
     forbid_user_namespaces()
     limit = int(sys.argv[1]) if len(sys.argv) > 1 else 16 * 1024 * 1024
+    marks = {"begun": time.time()}  # wall clock: the host compares them with its own
     if len(sys.argv) > 3 and sys.argv[2] == "--warm":
+        import_common()
         wait_for_job(float(sys.argv[3]))
-    report = run_script()
+        marks["begun"] = time.time()
+    report = run_script(marks)
+    marks["generated"] = time.time()
+    marks.setdefault("imported", marks["generated"])  # the script did not import
     try:
         report["files"] = produced_files(limit)
     except Exception as err:  # noqa: BLE001 - e.g. a tree too deep to walk: report it
@@ -131,6 +148,8 @@ def main() -> int:
         if report["error_type"] is None:
             report["error_type"] = "OutputUnreadable"
             report["error_message"] = f"{type(err).__name__}: {err}"
+    marks["collected"] = time.time()
+    report["marks"] = marks
     with open(RESULT, "w", encoding="utf-8") as handle:
         json.dump(report, handle)
     return 0 if report["error_type"] is None else 1

@@ -2,24 +2,39 @@
 
 Everything the report says comes from inside the sandbox, where the LLM-written script could
 have rewritten it: it is size-capped, type-checked and its file names are vetted before the
-host writes a single byte. A malformed report is a failed attempt, never a host crash.
+host writes a single byte. An output the host refuses (its name, or beyond a limit) is dropped
+with a warning and the others still count; a malformed report is a failed attempt, never a
+host crash.
 """
 
 from __future__ import annotations
 
 import base64
 import binascii
+import fnmatch
 import json
+import math
 import os
+import re
 import stat
 import tempfile
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
-from pathlib import Path, PurePosixPath
+from itertools import pairwise
+from pathlib import Path
 
 MAX_MESSAGE_CHARS = 4000
 MAX_TRACEBACK_CHARS = 16000
-MAX_NAME_CHARS = 200
-MAX_DEPTH = 4
+MAX_TYPE_CHARS = 200
+#: the longest output name the host takes
+MAX_NAME_CHARS = 100
+#: the characters of an output name the host takes (and no leading '-' or '.')
+SAFE_NAME = re.compile(r"[A-Za-z0-9_.-]+")
+#: dropped outputs named one by one in ``ExecResult.warnings``; the rest are counted
+MAX_WARNINGS = 20
+#: the moments the harness reports (wall clock): job begun, imports done, generate() returned,
+#: outputs collected
+MARKS = ("begun", "imported", "generated", "collected")
 
 
 @dataclass
@@ -37,6 +52,9 @@ class ExecResult:
     traceback: str | None = None
     files: list[Path] = field(default_factory=list)
     backend: str = ""
+    warnings: list[str] = field(default_factory=list)
+    #: where the wall time went: start, import, generate, collect, stop (seconds)
+    timings: dict[str, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -67,14 +85,21 @@ class Report:
     traceback: str | None = None
     script_duration_s: float | None = None
     files: dict[str, bytes] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+    marks: dict[str, float] = field(default_factory=dict)
 
 
 class ReportInvalid(ValueError):
     """The harness report is missing or malformed (the script tampered with it or died)."""
 
 
-def read_report(path: Path, max_bytes: int, max_files: int, wall_time_s: float) -> Report:
-    """Parse and vet the report at ``path``; raise :class:`ReportInvalid` if unusable."""
+def read_report(path: Path, max_bytes: int, max_files: int, wall_time_s: float,
+                allowed: Sequence[str]) -> Report:
+    """Parse and vet the report at ``path``; raise :class:`ReportInvalid` if unusable.
+
+    Outputs whose name is not in ``allowed`` (or not plain, see :func:`name_problem`), or
+    beyond the limits, are dropped one by one with a warning; the rest still count.
+    """
     try:
         info = os.lstat(path)
     except OSError as err:
@@ -90,12 +115,13 @@ def read_report(path: Path, max_bytes: int, max_files: int, wall_time_s: float) 
         raise ReportInvalid(f"report is not JSON: {type(err).__name__}") from err
     if not isinstance(raw, dict):
         raise ReportInvalid("report is not an object")
+    files, warnings = _files(raw.get("files"), max_bytes, max_files, allowed)
     return Report(
-        error_type=_text(raw.get("error_type"), MAX_NAME_CHARS),
+        error_type=_text(raw.get("error_type"), MAX_TYPE_CHARS),
         error_message=_text(raw.get("error_message"), MAX_MESSAGE_CHARS),
         traceback=_text(raw.get("traceback"), MAX_TRACEBACK_CHARS, keep_tail=True),
         script_duration_s=_duration(raw.get("script_duration_s"), wall_time_s),
-        files=_files(raw.get("files"), max_bytes, max_files),
+        files=files, warnings=warnings, marks=_marks(raw.get("marks")),
     )
 
 
@@ -114,46 +140,128 @@ def _duration(value: object, wall_time_s: float) -> float | None:
     return min(max(float(value), 0.0), wall_time_s)
 
 
-def _files(value: object, max_bytes: int, max_files: int) -> dict[str, bytes]:
-    if value is None:
+def phase_timings(began_at: float, marks: dict[str, float], ended_at: float,
+                  host_collect_s: float) -> dict[str, float]:
+    """Where an attempt's wall time went (seconds): ``start`` (until the job began inside),
+    ``import`` (the script's module body: its imports, e.g. scenariogeneration's, which a warm
+    sandbox has done), ``generate``, ``collect`` (inside and on the host), ``stop`` (report,
+    exit, teardown). The harness's marks are untrusted: they are clamped into the host's span."""
+    if any(key not in marks for key in MARKS):
         return {}
-    if not isinstance(value, list) or len(value) > max_files:
-        raise ReportInvalid(f"report lists more than {max_files} files or no list")
-    files: dict[str, bytes] = {}
-    total = 0
+    moments, low = [], began_at
+    for moment in (began_at, *(marks[key] for key in MARKS), ended_at):
+        low = min(max(moment, low), ended_at)
+        moments.append(low)
+    start, imports, generate, collect, stop = (b - a for a, b in pairwise(moments))
+    return {"start": start, "import": imports, "generate": generate,
+            "collect": collect + host_collect_s, "stop": stop}
+
+
+def _marks(value: object) -> dict[str, float]:
+    if not isinstance(value, dict):
+        return {}
+    return {key: float(value[key]) for key in MARKS
+            if isinstance(value.get(key), int | float) and not isinstance(value[key], bool)
+            and math.isfinite(value[key])}
+
+
+def name_problem(name: object, allowed: Sequence[str]) -> str | None:
+    """Why the host refuses an output called ``name``, or None when it takes it.
+
+    Taken: a plain file name (no folder) of ASCII letters, digits, ``_``, ``.`` and ``-``, not
+    starting with ``-`` or ``.``, at most ``MAX_NAME_CHARS`` long, matching one of the
+    ``allowed`` patterns (``SandboxSettings.output_names``).
+    """
+    if not isinstance(name, str):
+        return "the name is not text"
+    if len(name) > MAX_NAME_CHARS:
+        return f"longer than {MAX_NAME_CHARS} characters"
+    if "/" in name or "\\" in name:
+        return "a path, not a plain file name (outputs go straight into the output folder)"
+    if name.startswith(("-", ".")):
+        return "starts with '-' or '.'"
+    if not SAFE_NAME.fullmatch(name):
+        return "not only ASCII letters, digits, '_', '.' and '-'"
+    if not any(fnmatch.fnmatchcase(name, pattern) for pattern in allowed):
+        return f"not one of SandboxSettings.output_names ({', '.join(allowed)})"
+    return None
+
+
+def shown(name: object) -> str:
+    """``name`` safe to print in a log line: ASCII-escaped, quoted and cut short."""
+    if not isinstance(name, str):
+        return f"<{type(name).__name__}>"
+    text = ascii(name)
+    return text if len(text) <= 80 else f"{text[:60]}...' ({len(name)} characters)"
+
+
+class _Intake:
+    """A report's outputs taken one by one: each refused one is dropped and the reason kept,
+    so one bad entry never costs the others (the scenario file above all)."""
+
+    def __init__(self, max_bytes: int, max_files: int, allowed: Sequence[str]) -> None:
+        self.max_bytes, self.max_files, self.allowed = max_bytes, max_files, allowed
+        self.files: dict[str, bytes] = {}
+        self.total = 0
+        self.dropped: list[str] = []
+
+    def add(self, item: object) -> None:
+        """Take one ``{"name": ..., "data": <base64>}`` entry, or note why not."""
+        name = item.get("name") if isinstance(item, dict) else None
+        problem = name_problem(name, self.allowed) or self._limit_problem(name)
+        data = None if problem else _decoded(item)
+        if data is None:
+            problem = problem or "its data is not base64"
+        elif self.total + len(data) > self.max_bytes:
+            problem = f"outputs would exceed SandboxSettings.output_max_bytes ({self.max_bytes})"
+        if problem:
+            self.dropped.append(f"dropped output {shown(name)}: {problem}")
+            return
+        self.files[name] = data
+        self.total += len(data)
+
+    def _limit_problem(self, name: str) -> str | None:
+        if name in self.files:
+            return "listed twice"
+        if len(self.files) >= self.max_files:
+            return f"more than SandboxSettings.output_max_files ({self.max_files}) outputs"
+        return None
+
+    def warnings(self) -> list[str]:
+        """One line per dropped output, the first ``MAX_WARNINGS`` of them and a count."""
+        extra = len(self.dropped) - MAX_WARNINGS
+        more = [f"... and {extra} more outputs dropped"] if extra > 0 else []
+        return self.dropped[:MAX_WARNINGS] + more
+
+
+def _decoded(item: object) -> bytes | None:
+    data = item.get("data") if isinstance(item, dict) else None
+    if not isinstance(data, str):
+        return None
+    try:
+        return base64.b64decode(data, validate=True)
+    except (binascii.Error, ValueError):
+        return None
+
+
+def _files(value: object, max_bytes: int, max_files: int,
+           allowed: Sequence[str]) -> tuple[dict[str, bytes], list[str]]:
+    if value is None:
+        return {}, []
+    if not isinstance(value, list):
+        raise ReportInvalid("the report's files are not a list")
+    intake = _Intake(max_bytes, max_files, allowed)
     for item in value:
-        if not isinstance(item, dict) or not isinstance(item.get("data"), str):
-            raise ReportInvalid("report has a malformed file entry")
-        name = safe_relative_name(item.get("name"))
-        try:
-            data = base64.b64decode(item["data"], validate=True)
-        except (binascii.Error, ValueError) as err:
-            raise ReportInvalid(f"file {name!r} is not base64") from err
-        total += len(data)
-        if total > max_bytes:
-            raise ReportInvalid(f"files exceed the output limit of {max_bytes} bytes")
-        files[name] = data
-    return files
-
-
-def safe_relative_name(name: object) -> str:
-    """``name`` if it is a plain relative path inside the output folder, else ReportInvalid."""
-    if not isinstance(name, str) or not name or len(name) > MAX_NAME_CHARS or "\0" in name:
-        raise ReportInvalid(f"unsafe file name {name!r}")
-    parts = PurePosixPath(name).parts
-    if (name.startswith("/") or not parts or len(parts) > MAX_DEPTH
-            or any(part in (".", "..") for part in parts) or "\\" in name):
-        raise ReportInvalid(f"unsafe file name {name!r}")
-    return "/".join(parts)
+        intake.add(item)
+    return intake.files, intake.warnings()
 
 
 def write_files(files: dict[str, bytes], out_dir: Path) -> list[Path]:
-    """Write vetted files into ``out_dir`` atomically, never through a link; return the paths."""
+    """Write vetted (plain) names into ``out_dir`` atomically, never through a link."""
     written = []
     for name, data in files.items():
         target = out_dir / name
-        _make_real_dirs(out_dir, target.parent)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".sandbox-")
+        fd, tmp = tempfile.mkstemp(dir=out_dir, prefix=".sandbox-")
         try:
             with os.fdopen(fd, "wb") as handle:
                 handle.write(data)
@@ -163,16 +271,3 @@ def write_files(files: dict[str, bytes], out_dir: Path) -> list[Path]:
             raise
         written.append(target)
     return written
-
-
-def _make_real_dirs(root: Path, folder: Path) -> None:
-    current = root
-    for part in folder.relative_to(root).parts:
-        current = current / part
-        try:
-            mode = os.lstat(current).st_mode
-        except FileNotFoundError:
-            current.mkdir()
-            continue
-        if not stat.S_ISDIR(mode):
-            raise ReportInvalid(f"output path {current} exists and is not a folder")

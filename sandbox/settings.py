@@ -11,6 +11,9 @@ from pathlib import Path
 BACKENDS = ("docker", "bwrap")
 PODMAN_SOCKET = Path("/run/podman/podman.sock")
 MIB = 1024 * 1024
+#: what a script may leave in the output folder: the scenario (``generate``'s ``out_path``),
+#: further scenarios and road networks, and notes or data it wrote for the reader
+OUTPUT_NAMES = ("scenario.xosc", "*.xosc", "*.xodr", "*.json", "*.txt", "*.log")
 
 
 @dataclass(frozen=True)
@@ -36,6 +39,9 @@ class SandboxSettings:
     work_dir: Path | None = None  # where attempts are staged; default: the system temp folder
     warm_pool: int = 0  # sandboxes started ahead, each still used once (0: every run is cold)
     warm_idle_s: int = 600  # a warm sandbox nobody used by then exits and is replaced
+    #: outputs the host takes from the output folder (fnmatch patterns of plain file names,
+    #: see ``sandbox.result.name_problem``); any other file is dropped with a warning
+    output_names: tuple[str, ...] = OUTPUT_NAMES
 
     def __post_init__(self) -> None:
         if self.backend not in (*BACKENDS, "auto"):
@@ -46,7 +52,9 @@ class SandboxSettings:
                      "warm_idle_s"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"SandboxSettings.{name} must be > 0, got {getattr(self, name)!r}")
-
+        if not self.output_names or not all(isinstance(n, str) and n for n in self.output_names):
+            raise ValueError("SandboxSettings.output_names must be non-empty patterns, got "
+                             f"{self.output_names!r}")
         if self.warm_pool < 0:
             raise ValueError(f"SandboxSettings.warm_pool must be >= 0, got {self.warm_pool!r}")
 

@@ -24,6 +24,7 @@ import json
 import multiprocessing
 import os
 import signal
+import sys
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
@@ -211,13 +212,25 @@ def run_job(spec: dict) -> str:
     if done is None or _redo(done, spec):
         # the scenario's staging folder is emptied first: leftovers of a dead attempt go
         staging = folder.staging(scenario_id)
-        outcome = process_scenario(spec["params"], spec["index"], staging, spec["settings"],
-                                   matcher_for(spec.get("matcher") or DEFAULT_MATCHER))
+        try:
+            outcome = process_scenario(spec["params"], spec["index"], staging,
+                                       spec["settings"],
+                                       matcher_for(spec.get("matcher") or DEFAULT_MATCHER))
+        finally:
+            _close_agent()
         outcome.update(worker=os.environ.get("RQ_WORKER_ID"), submission=spec.get("submission"))
         folder.commit(scenario_id, staging, outcome)
         done = outcome
     refresh_run(folder.root)
     return done["status"]
+
+
+def _close_agent() -> None:
+    """Close the agent's LLM and sandbox (its warm pool) made for this job: RQ's work horse
+    ends with ``os._exit``, which skips ``atexit``, and a warm sandbox must not outlive it."""
+    agent_run = sys.modules.get("scenweave.agent.run")
+    if agent_run is not None:
+        agent_run.close_shared()
 
 
 def _redo(done: dict, spec: dict) -> bool:

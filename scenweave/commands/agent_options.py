@@ -77,7 +77,7 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
         return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings)
     from scenweave.agent import AgentSettings
     from scenweave.agent.repair import get_strategy
-    from scenweave.sandbox import SandboxSettings
+    from scenweave.agent.settings import batch_sandbox
 
     try:
         get_strategy(repair)
@@ -89,7 +89,7 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           max_attempts=max_attempts, timeout_s=llm_timeout, num_ctx=num_ctx,
                           max_tokens=max_tokens, ollama_host=ollama_host,
                           replay_file=replay_file, on_llm_error=on_llm_error,
-                          sandbox=SandboxSettings(backend=sandbox), replay=replay_settings)
+                          sandbox=batch_sandbox(sandbox), replay=replay_settings)
     return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings)
 
 

@@ -128,12 +128,17 @@ def cpu_seconds(pids: list[int]) -> float:
     """User plus system CPU time the kernel accounted to ``pids`` (gone ones count 0)."""
     ticks = 0
     for pid in pids:
-        try:
-            fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
-        except OSError:
-            continue
-        ticks += int(fields[11]) + int(fields[12])  # utime, stime (fields 14, 15 of stat)
+        fields = _stat(pid)
+        ticks += int(fields[11]) + int(fields[12]) if fields else 0  # utime, stime (14, 15)
     return ticks / os.sysconf("SC_CLK_TCK")
+
+
+def _stat(pid: int) -> list[str] | None:
+    """The fields of ``/proc/<pid>/stat`` after the command (field 3 first), None if gone."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+    except OSError:
+        return None
 
 
 def bytes_under(folder: Path) -> int:
@@ -169,3 +174,33 @@ def file_size(path: Path) -> int | None:
     except FileNotFoundError:
         return None
     return info.st_size if stat.S_ISREG(info.st_mode) else None
+
+
+def start_time(pid: int) -> int | None:
+    """When ``pid`` started (clock ticks after boot), None when there is no such process; a
+    zombie still has one."""
+    fields = _stat(pid)
+    return int(fields[19]) if fields else None  # field 22 of stat
+
+
+def pids_cgroup(pid: int) -> Path:
+    """The folder of the pids cgroup ``pid`` runs in (cgroup v1 or v2)."""
+    entries = [line.split(":", 2) for line in Path(f"/proc/{pid}/cgroup").read_text().split("\n")
+               if line]
+    for _, controllers, path in entries:
+        if "pids" in controllers.split(","):
+            return Path("/sys/fs/cgroup/pids", path.lstrip("/"))
+    return next(Path("/sys/fs/cgroup", path.lstrip("/")) for _, controllers, path in entries
+                if controllers == "")
+
+
+def members(cgroup: Path) -> dict[int, int | None]:
+    """The processes in ``cgroup`` now, each with its start time (so a reused pid differs)."""
+    pids = map(int, (cgroup / "cgroup.procs").read_text().split())
+    return {pid: start_time(pid) for pid in pids}
+
+
+def survivors(processes: dict[int, int | None]) -> list[int]:
+    """The ``processes`` (pid -> start time) that still exist, zombies included."""
+    return [pid for pid, start in processes.items()
+            if start is not None and start_time(pid) == start]

@@ -16,6 +16,8 @@ import subprocess
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import pytest
+
 from scenweave.sandbox.settings import MIB
 from tests.sandbox.evidence import (
     Listener,
@@ -41,17 +43,19 @@ import os
 import scenariogeneration
 def generate(params, out_path):
     print("stdout says", params["text"])
-    os.makedirs(os.path.dirname(out_path) + "/extra")
-    open(os.path.dirname(out_path) + "/extra/note.txt", "w").write("note")
+    open(os.path.dirname(out_path) + "/note.txt", "w").write("note")
     open(out_path, "w").write(params["text"])
 """
     result = box.run(code, {"text": "<OpenSCENARIO/>"}, tmp_path)
     assert result.ok, result
     assert (tmp_path / "scenario.xosc").read_text() == "<OpenSCENARIO/>"
-    assert (tmp_path / "extra" / "note.txt").read_text() == "note"
-    assert sorted(result.files) == [tmp_path / "extra" / "note.txt", tmp_path / "scenario.xosc"]
+    assert (tmp_path / "note.txt").read_text() == "note"
+    assert result.files == [tmp_path / "scenario.xosc", tmp_path / "note.txt"]
+    assert result.warnings == []
     assert "stdout says <OpenSCENARIO/>" in result.stdout
     assert 0 < result.script_duration_s <= result.duration_s
+    assert set(result.timings) == {"start", "import", "generate", "collect", "stop"}
+    assert sum(result.timings.values()) == pytest.approx(result.duration_s, abs=0.5)
 
 
 def test_script_errors_come_back_as_values(box, tmp_path):
@@ -313,16 +317,55 @@ import base64, json, os
 def generate(params, out_path):
     evil = base64.b64encode(b"pwned").decode()
     report = {"error_type": None, "script_duration_s": 1e308, "traceback": ["x"] * 9,
+              "marks": {"begun": "now", "imported": 1e308},
               "files": [{"name": "../escaped.txt", "data": evil},
-                        {"name": "/tmp/abs.txt", "data": evil}]}
+                        {"name": "/tmp/abs.txt", "data": evil},
+                        {"name": "..", "data": evil},
+                        {"name": "scenario.xosc", "data": evil}]}
     with open("/sandbox/result.json", "w") as handle:
         json.dump(report, handle)
     os._exit(0)
 """
     result = box.run(code, {}, out_dir)
-    assert not escape.exists() and list(out_dir.iterdir()) == []
-    assert not result.ok and result.error_type == "NoReport"
-    assert "unsafe file name" in result.error_message
+    assert not escape.exists() and not Path("/tmp/abs.txt").exists()
+    assert [p.name for p in out_dir.iterdir()] == ["scenario.xosc"]  # the forged one arrives
+    assert [w.split(":")[0] for w in result.warnings] == [
+        "dropped output '../escaped.txt'", "dropped output '/tmp/abs.txt'",
+        "dropped output '..'"]
+    assert result.timings == {}  # the forged marks are not believed
+
+
+#: files an LLM-written script can name so that a careless host trips over them
+HOSTILE_NAMES = {"newline": (b"new\nline.xosc", "'new\\nline.xosc'"),
+                 "non-UTF-8": (b"\xff\xfe.xosc", "'\\udcff\\udcfe.xosc'"),
+                 "leading dash": (b"-rf.xosc", "'-rf.xosc'"),
+                 "over-long": (b"x" * 200 + b".xosc", "(205 characters)"),
+                 "in a folder": (b"sub/inner.xosc", "'sub/inner.xosc'"),
+                 "outside the allow-list": (b"payload.sh", "'payload.sh'")}
+
+
+def test_outputs_with_hostile_names_are_dropped_and_the_scenario_still_arrives(box, tmp_path):
+    code = """
+import os
+def generate(params, out_path):
+    folder = os.path.dirname(out_path).encode()
+    os.mkdir(folder + b"/sub")
+    for name in params["names"]:
+        with open(folder + b"/" + bytes.fromhex(name), "w") as handle:
+            handle.write("hostile")
+    open(out_path, "w").write("<OpenSCENARIO/>")
+"""
+    names = {kind: name.hex() for kind, (name, _) in HOSTILE_NAMES.items()}
+    result = box.run(code, {"names": list(names.values())}, tmp_path)
+    assert result.ok, result
+    assert sorted(os.listdir(tmp_path)) == ["scenario.xosc"]
+    assert (tmp_path / "scenario.xosc").read_text() == "<OpenSCENARIO/>"
+    assert result.files == [tmp_path / "scenario.xosc"]
+    assert all(warning.isascii() and warning.isprintable() for warning in result.warnings)
+    missing = [kind for kind, (_, shown) in HOSTILE_NAMES.items()
+               if not any(shown in warning for warning in result.warnings)]
+    assert missing == [], f"no warning names the {missing} output: {result.warnings}"
+    assert len(result.warnings) == len(HOSTILE_NAMES)
 
 
 def _host_ip() -> str:

@@ -8,15 +8,23 @@ and each shows it really reached its limit, so a limit set far too high fails as
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
 import shutil
+import signal
+import subprocess
 import time
+import uuid
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from docker.errors import NotFound
 
 from scenweave.sandbox import SandboxSettings, get_sandbox
+from scenweave.sandbox.cgroups import RunCgroup, run_name
+from scenweave.sandbox.container import owner_labels
 from scenweave.sandbox.settings import MIB
 from tests.sandbox.conftest import FAST
 from tests.sandbox.evidence import (
@@ -24,8 +32,11 @@ from tests.sandbox.evidence import (
     cpu_seconds,
     held_run,
     marker,
+    members,
+    pids_cgroup,
     processes_with,
     run_seeing_processes,
+    survivors,
     wait_for_processes,
 )
 
@@ -45,6 +56,30 @@ def generate(params, out_path):
     open(out_path, "w").write(str(forks))
     time.sleep(1)
 """
+#: FORK_BOMB that then keeps its sleepers until the host kills them
+HOLDING_FORK_BOMB = FORK_BOMB.replace("    time.sleep(1)\n", """    while True:
+        try:
+            os.wait()
+        except ChildProcessError:
+            break
+""")
+#: what any script may do: start a few processes
+BENIGN_FORKS = """
+import os, subprocess
+def generate(params, out_path):
+    children = []
+    for _ in range(4):
+        child = os.fork()
+        if child == 0:
+            os._exit(0)
+        children.append(child)
+    for child in children:
+        os.waitpid(child, 0)
+    echoed = subprocess.run(["/bin/echo", "and ran echo"], capture_output=True, text=True)
+    open(out_path, "w").write(f"forked {len(children)} {echoed.stdout.strip()}")
+"""
+#: benign attempts running beside the fork bomb: as many as a batch's workers run at once
+BESIDE_THE_BOMB = 4
 #: allocates (and touches) 8 MiB at a time, printing the running total, up to 512 MiB
 MEMORY_BOMB = """
 def generate(params, out_path):
@@ -81,6 +116,54 @@ def test_fork_bomb_is_capped_and_leaves_no_process(make_box, tmp_path):
     assert processes_with(tag) == []
     assert result.ok, result
     assert 0 < int((tmp_path / "scenario.xosc").read_text()) < 24
+
+
+def test_a_fork_bomb_starves_no_concurrent_sandbox(make_box, tmp_path):
+    """The process cap is per sandbox: while a fork bomb holds every process it could get,
+    attempts beside it (all as the same uid) still start and fork."""
+    box = make_box(pids=32, wall_time_s=60.0)
+    tag = marker()
+    with ThreadPoolExecutor(max_workers=1 + BESIDE_THE_BOMB) as pool:
+        bomb = pool.submit(box.run, HOLDING_FORK_BOMB, {"tag": tag}, tmp_path / "bomb")
+        try:
+            wait_for_processes(tag, bomb, count=24)
+            benign = [pool.submit(box.run, BENIGN_FORKS, {}, tmp_path / str(index))
+                      for index in range(BESIDE_THE_BOMB)]
+            results = [future.result() for future in benign]
+            held = processes_with(tag)  # the bomb still held its processes at the end
+        finally:
+            for pid in processes_with(tag):
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, signal.SIGKILL)
+        bombed = bomb.result()
+    assert [r.error_message for r in results if not r.ok] == [], results
+    assert {(tmp_path / str(i) / "scenario.xosc").read_text()
+            for i in range(BESIDE_THE_BOMB)} == {"forked 4 and ran echo"}
+    assert len(held) >= 24, "the bomb let go of its processes before the others ran"
+    assert bombed.ok and 24 <= int((tmp_path / "bomb" / "scenario.xosc").read_text()) < 32
+
+
+def test_run_returns_once_every_process_and_the_cgroup_of_a_timed_out_attempt_is_gone(
+        make_box, tmp_path):
+    box = make_box(wall_time_s=5.0)  # a cold container takes ~2 s to reach generate()
+    tag = marker()
+    code = """
+import os, time
+def generate(params, out_path):
+    for _ in range(3):
+        if os.fork() == 0:
+            os.execv("/bin/sleep", [params["tag"], "300"])
+    time.sleep(300)
+"""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        running = pool.submit(box.run, code, {"tag": tag}, tmp_path)
+        cgroup = pids_cgroup(wait_for_processes(tag, running, count=3)[0])
+        attempt = members(cgroup)  # the sandbox's PID 1 (the harness) and the sleepers
+        result = running.result()
+    assert result.timed_out, result
+    assert survivors(attempt) == [], "left behind (zombies count) when run() returned"
+    assert not cgroup.exists(), f"the attempt's cgroup {cgroup} survived run()"
+    assert len(attempt) >= 4
 
 
 def allocated_mib(stdout: str) -> int:
@@ -239,3 +322,71 @@ def test_without_a_cgroup_rlimits_still_stop_bombs(tmp_path, work_dir):
     assert memory.error_type == "MemoryError"
     assert 32 <= allocated_mib(memory.stdout) <= 4 * settings.memory_mb  # the address-space cap
     check_disk_fill_stops_at_the_caps(box, tmp_path)
+
+
+@pytest.fixture
+def cgroup_root() -> Path:
+    """The host's cgroup tree, where the bwrap backend makes its run cgroups."""
+    root = SandboxSettings().cgroup_root
+    if shutil.which("bwrap") is None:
+        pytest.skip("BWRAP BACKEND NOT TESTED: bubblewrap is not installed")
+    if (problem := RunCgroup.unavailable_reason(root)) is not None:
+        pytest.skip(f"RUN CGROUPS NOT TESTED: {problem}")
+    return root
+
+
+def test_run_cgroups_of_dead_owners_are_swept_at_the_next_start(cgroup_root, tmp_path):
+    """A worker killed from outside leaves its run cgroup behind: the next sandbox start kills
+    what is left in it and removes it, but never touches a live worker's."""
+    dead_owner = subprocess.Popen(["sleep", "60"])
+    stale = RunCgroup(cgroup_root, run_name(dead_owner.pid))
+    dead_owner.kill()
+    dead_owner.wait()
+    live_owner = subprocess.Popen(["sleep", "60"])
+    kept = [RunCgroup(cgroup_root, run_name(live_owner.pid)),
+            RunCgroup(cgroup_root, f"run-{uuid.uuid4().hex[:12]}")]  # no owner in the name
+    orphan = None
+    try:
+        for cgroup in (stale, *kept):
+            cgroup.create(64 * MIB, 8, 1.0)
+        orphan = subprocess.Popen(["sleep", "60"])  # a sandbox process that outlived its owner
+        for procs in stale.procs_files():
+            procs.write_text(str(orphan.pid))
+        get_sandbox(SandboxSettings(backend="bwrap", **FAST)).close()
+        assert [folder for folder in stale.folders if folder.exists()] == []
+        assert orphan.wait(timeout=5) == -signal.SIGKILL
+        assert [folder for cgroup in kept for folder in cgroup.folders if
+                not folder.is_dir()] == []
+    finally:
+        for process in (live_owner, orphan):
+            if process is not None:
+                process.kill()
+                process.wait()
+        for cgroup in (stale, *kept):
+            cgroup.remove()
+
+
+def test_containers_of_dead_owners_are_removed_at_the_next_start(make_docker_box):
+    """A process killed from outside leaves its containers (a warm one, a running attempt):
+    the next start on this host removes them, but never a live process's."""
+    box = make_docker_box()
+    owners = {"dead": subprocess.Popen(["sleep", "60"]), "live": subprocess.Popen(["sleep", "60"])}
+    containers = {name: box.client.containers.create(
+        box.settings.image, command=["sleep", "60"], labels=owner_labels(owner.pid),
+        network_mode="none", ulimits=box._ulimits(), user="65534:65534")
+        for name, owner in owners.items()}
+    owners["dead"].kill()
+    owners["dead"].wait()
+    try:
+        for container in containers.values():
+            container.start()
+        make_docker_box()
+        left = {c.id for c in box.client.containers.list(all=True)}
+        assert containers["dead"].id not in left
+        assert containers["live"].id in left
+    finally:
+        owners["live"].kill()
+        owners["live"].wait()
+        for container in containers.values():
+            with contextlib.suppress(NotFound):
+                container.remove(force=True)

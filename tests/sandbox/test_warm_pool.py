@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import shutil
 import time
 
+import pytest
+
+from scenweave.agent.run import close_shared, shared_sandbox
+from scenweave.commands.agent_options import pipeline_settings
 from tests.sandbox.evidence import processes_with
 
 PROBE = """
@@ -17,8 +22,8 @@ def generate(params, out_path):
 IDLE_S = 4321  # unique in the warm harnesses' command lines
 
 
-def _warm_harnesses() -> list[int]:
-    return processes_with(f"--warm\0{IDLE_S}")
+def _warm_harnesses(idle_s: int = IDLE_S) -> list[int]:
+    return processes_with(f"--warm\0{idle_s}")
 
 
 def test_each_attempt_gets_a_fresh_warm_sandbox(make_box, tmp_path):
@@ -49,3 +54,22 @@ def test_an_idle_warm_sandbox_expires_and_runs_still_work(make_box, tmp_path):
     result = box.run(PROBE, {}, tmp_path)
     assert result.ok, result
     assert (tmp_path / "scenario.xosc").read_text().startswith("False")
+
+
+def test_a_batch_runs_its_attempts_in_warm_sandboxes(tmp_path):
+    """What ``scenweave run`` / the worker use: the agent's shared sandbox keeps a warm one."""
+    if shutil.which("bwrap") is None:
+        pytest.skip("BWRAP BACKEND NOT TESTED: bubblewrap is not installed")
+    settings = pipeline_settings(no_llm=False, top_n=1, llm="replay",
+                                 replay_file=tmp_path / "replies.json", sandbox="bwrap",
+                                 replay=False).agent
+    try:
+        box = shared_sandbox(settings)
+        time.sleep(2)  # the LLM's turn: the pool starts a sandbox and imports in it
+        result = box.run(PROBE, {}, tmp_path)
+        assert result.ok, result
+        assert (tmp_path / "scenario.xosc").read_text() == "False True"
+        assert result.timings["import"] < 0.05, result.timings
+    finally:
+        close_shared()
+    assert _warm_harnesses(settings.sandbox.warm_idle_s) == []

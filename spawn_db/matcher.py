@@ -31,6 +31,7 @@ from scenweave.corpus.kinematics import start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import load_database
 from scenweave.spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
+from scenweave.spawn_db.map_ref import MapRef, resolve_map, spawn_database
 from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
 from scenweave.spawn_db.signals import junction_approach
 
@@ -200,6 +201,8 @@ class SpawnMatcher:
         self.database = load_database(self.db_path)
         self.entries: list[dict[str, Any]] = self.database["spawn_points"]
         self.map_path = Path(map_path) if map_path else self._find_map()
+        #: the map the spawns stand on; ``assign`` names it in the params (key ``map``)
+        self.map = resolve_map(self.map_path)
         #: per context, ``(fixed score, entry)`` best first: ``find`` stops early down this list
         self._by_context: dict[str, list[tuple[float, dict[str, Any]]]] = {}
         for entry in self.entries:
@@ -207,6 +210,11 @@ class SpawnMatcher:
         for ranked in self._by_context.values():
             ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
         self._last_params: dict[str, Any] | None = None
+
+    @classmethod
+    def for_map(cls, map_ref: MapRef, cache_dir: Path) -> SpawnMatcher:
+        """The matcher of ``map_ref``'s spawn database (built and cached on first use)."""
+        return cls(spawn_database(map_ref, cache_dir), map_ref.path)
 
     def _find_map(self) -> Path:
         source = self.database["metadata"]["source_map"]
@@ -261,7 +269,7 @@ class SpawnMatcher:
             accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
         if not accepted:
-            raise NoSpawnFits(_no_fit_message(params, self.db_path, self.assess(params)))
+            raise NoSpawnFits(_no_fit_message(params, self.map.name, self.assess(params)))
         return _spread_over_roads(accepted)[:top_n]
 
     def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
@@ -269,6 +277,7 @@ class SpawnMatcher:
         candidates = self.find(params, top_n)
         candidate = candidates[index % len(candidates)]
         result = dict(params)
+        result["map"] = self.map.logic_file
         result["spawn_id"] = candidate.spawn_id
         ego = candidate.lane_point
         result.update(_pose_keys("ego", candidate.x, candidate.y, candidate.z, candidate.h))
@@ -523,17 +532,19 @@ def _light_keys(entry: dict[str, Any], needs: Requirements) -> dict[str, Any]:
     }
 
 
-def _no_fit_message(params: dict[str, Any], db_path: Path,
+def _no_fit_message(params: dict[str, Any], map_name: str,
                     assessments: list[Assessment]) -> str:
     scenario = params.get("scenario_id", "<no scenario_id>")
     in_context = [a for a in assessments
                   if not any(r.constraint == "context" for r in a.rejections)]
     if not in_context:
-        return (f"{scenario}: no {params.get('domain')} spawn point in {db_path.name}")
+        return (f"{scenario} ({params.get('maneuver_class')}): map {map_name} has no "
+                f"{params.get('domain')} lane that fits (no {params.get('domain')} spawn point "
+                "in its spawn database)")
     counts = Counter(r.constraint for a in in_context for r in a.rejections)
     constraint, count = counts.most_common(1)[0]
     example = next(r for a in in_context for r in a.rejections if r.constraint == constraint)
-    return (f"{scenario} ({params.get('maneuver_class')}): no spawn point of {db_path.name} "
+    return (f"{scenario} ({params.get('maneuver_class')}): no spawn point on map {map_name} "
             f"fits; {constraint} rules out {count} of {len(in_context)} "
             f"{params.get('domain')} spawn points (e.g. {example.detail})")
 

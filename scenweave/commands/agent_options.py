@@ -1,4 +1,5 @@
-"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``.
+"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``, and the
+``--map`` option of every command that makes, serves or plays scenarios.
 
 Choices are spelled out here (not imported from ``agent``) so ``scenweave --help`` does not
 load LangGraph; ``pipeline_settings`` turns the options into settings and checks them.
@@ -57,6 +58,32 @@ AGENT_OPTIONS = [
 ]
 
 
+#: the map scenarios are made for when ``--map`` is not given (spawn_db.DEFAULT_MAP)
+DEFAULT_MAP = "Town04"
+MAP_HELP = ("Map: a bundled CARLA town (Town01, Town02, Town04, Town06, Town07, Town10HD) or a "
+            "path to an OpenDRIVE .xodr file; its spawn database is built on first use and "
+            "cached in $SCENWEAVE_HOME.")
+
+
+def map_option(default: str | None = DEFAULT_MAP, help: str = MAP_HELP
+               ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--map NAME|FILE.xodr``, passed to the command as ``map_ref`` (a ``spawn_db.MapRef``,
+    or None when ``default`` is None and the option is not given)."""
+    return click.option("--map", "map_ref", default=default, show_default=default is not None,
+                        metavar="NAME|FILE.xodr", callback=_resolve_map, help=help)
+
+
+def _resolve_map(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+    if value is None:
+        return None
+    from scenweave.spawn_db import UnknownMapError, resolve_map
+
+    try:
+        return resolve_map(value)
+    except UnknownMapError as err:
+        raise click.BadParameter(str(err), ctx=ctx, param=param) from err
+
+
 def agent_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """Add every agent option to a click command function."""
     for decls, attrs in reversed(AGENT_OPTIONS):
@@ -69,12 +96,14 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                       sandbox: str = "auto", ollama_host: str | None = None,
                       llm_timeout: float = 300.0, num_ctx: int = 8192,
                       max_tokens: int | None = None, replay_file: Path | None = None,
-                      on_llm_error: str = "raise", replay: bool | None = None
-                      ) -> PipelineSettings:
-    """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts."""
+                      on_llm_error: str = "raise", replay: bool | None = None,
+                      map_ref: Any = None) -> PipelineSettings:
+    """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts;
+    ``map_ref`` (``--map``) is the map scenarios are made for (None: Town04)."""
     replay_settings = replay_settings_for(replay)
+    map_name = None if map_ref is None else map_ref.logic_file
     if no_llm or llm == "none":
-        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings)
+        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings, map=map_name)
     from scenweave.agent import AgentSettings
     from scenweave.agent.repair import get_strategy
     from scenweave.sandbox import SandboxSettings
@@ -90,7 +119,8 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           max_tokens=max_tokens, ollama_host=ollama_host,
                           replay_file=replay_file, on_llm_error=on_llm_error,
                           sandbox=SandboxSettings(backend=sandbox), replay=replay_settings)
-    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings)
+    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings,
+                            map=map_name)
 
 
 def replay_settings_for(wanted: bool | None) -> Any:

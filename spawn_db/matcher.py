@@ -27,7 +27,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from scenweave.corpus.kinematics import start_gap_m
+from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import load_database
 from scenweave.spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
@@ -58,6 +58,9 @@ FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 CUT_IN_CLASSES = ("CINF", "CINB")
 #: free-ride classes place their NPCs by slot, not as one ``npc``
 FREE_RIDE_CLASSES = ("FRF", "FRB")
+#: who changes lanes in each lane-change class, and the params prefix of its speeds
+LANE_CHANGER = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
+                "LCF": "ego", "LCB": "ego"}
 
 
 @dataclass(frozen=True)
@@ -244,7 +247,8 @@ class SpawnMatcher:
         needs = Requirements.from_params(params)
         assessments = []
         for entry in self.entries:
-            rejections = tuple(_hard_filters(entry, needs))
+            rejections = tuple(_hard_filters(entry, needs)) or self._route_rejections(entry,
+                                                                                      params)
             score = -1.0 if rejections else _score(entry, needs)
             assessments.append(Assessment(entry["spawn_id"], score, rejections))
         return assessments
@@ -263,7 +267,8 @@ class SpawnMatcher:
             if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
                 break  # neither this spawn nor any after it can reach (or tie) the top N
             # only the first rejection matters here; assess() lists them all for debugging
-            if next(_hard_filters(entry, needs), None) is not None:
+            if next(_hard_filters(entry, needs), None) is not None \
+                    or self._route_rejections(entry, params):
                 continue
             score = fixed + _needs_score(entry, needs)
             accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
@@ -328,6 +333,55 @@ class SpawnMatcher:
         exit_lane = exits[0]
         return network.advance(exit_lane.road_id, exit_lane.lane_id,
                                network.entry_s(exit_lane), TURN_EXIT_INTO_M)
+
+    def _route_rejections(self, entry: dict[str, Any], params: dict[str, Any]
+                          ) -> tuple[Rejection, ...]:
+        """Beyond the database's facts: a lane change must keep its lane ids.
+
+        A lane change names its target relative to the car's lane at its start, and players
+        follow lanes by id; where a road ends, the next road may number the same lanes
+        differently (Town06's highway: road 52's lane -7 goes on as junction road 415's lane
+        -6), and a change under way there ends in the wrong lane. The changing car's lane,
+        from where it starts the change (``maneuver_start_s`` at its start speed) over the
+        change's length plus a car length, must keep one lane id.
+        """
+        actor = LANE_CHANGER.get(params.get("maneuver_class"))
+        if actor is None or entry["context"] != "highway":
+            return ()
+        ego = LanePoint(str(entry["geometry"]["road_id"]), entry["geometry"]["lane_id"],
+                        entry["geometry"]["s"])
+        try:
+            start = ego if actor == "ego" else next(
+                self._place(ego, side, distance, params)
+                for name, side, distance in _placed_actors(params) if name == actor)
+        except (LaneEndsError, NoSpawnFits, StopIteration):
+            return ()  # the hard filters' lengths and sides judge these
+        number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+        v0 = number(f"{actor}_speed_ms")
+        begin = v0 * number("maneuver_start_s", 0.0)
+        end = begin + VEHICLE_MARGIN_M + lane_change_length_m(
+            v0, number(f"{actor}_end_speed_ms", v0), number("duration_s", 0.0))
+        lanes = self._lanes_between(start, begin, end)
+        if len({lane for _, lane in lanes}) <= 1:
+            return ()
+        path = ", ".join(f"road {road} lane {lane}" for road, lane in lanes)
+        return (Rejection("lane_change_lane_ids", f"the {actor}'s lane changes its id during "
+                          f"the lane change ({begin:.0f}-{end:.0f} m on: {path})"),)
+
+    def _lanes_between(self, start: LanePoint, begin: float, end: float
+                       ) -> list[tuple[str, int]]:
+        """``(road, lane)`` of the lane followed from ``start`` between ``begin`` and ``end``
+        metres on, in order, each once."""
+        lanes: list[tuple[str, int]] = []
+        travelled = 0.0
+        for segment in self.network.walk(start.road_id, start.lane_id, start.s):
+            place = (segment.key.road_id, segment.key.lane_id)
+            if travelled + segment.length >= begin and place not in lanes:
+                lanes.append(place)
+            travelled += segment.length
+            if travelled >= end:
+                break
+        return lanes
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
                params: dict[str, Any]) -> LanePoint:

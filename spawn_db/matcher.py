@@ -22,7 +22,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -139,6 +139,9 @@ class Requirements:
     speed_limit_kmh: float | None
     tfl_ds_m: float | None
     drive_distance_m: float | None = None
+    #: metres ahead that must have no signalised junction (highway): the whole drive until
+    #: the stop trigger, or (``lights_after_manoeuvre``) until the manoeuvre ends
+    light_free_m: float = 0.0
 
     @classmethod
     def from_params(cls, params: dict[str, Any]) -> Requirements:
@@ -166,7 +169,16 @@ class Requirements:
             side_behind_m=gap_behind + VEHICLE_MARGIN_M, speed_kmh=max_speed * 3.6,
             speed_limit_kmh=number.optional("speed_limit_kmh"),
             tfl_ds_m=number.optional("tfl_ds_m"),
-            drive_distance_m=number.optional("drive_distance_m"))
+            drive_distance_m=number.optional("drive_distance_m"), light_free_m=ahead)
+
+    def lights_after_manoeuvre(self) -> Requirements:
+        """These needs with a light allowed on the route once the manoeuvre has ended.
+
+        A map whose highways end at signalised junctions every kilometre (Town06) has no
+        spawn light-free for the whole drive of a long record (the stop trigger comes at 2.5x
+        the manoeuvre's end); the record's manoeuvre must still never meet one.
+        """
+        return replace(self, light_free_m=self.side_ahead_m)
 
     @property
     def light_movement(self) -> str | None:
@@ -244,7 +256,9 @@ class SpawnMatcher:
 
     def assess(self, params: dict[str, Any]) -> list[Assessment]:
         """Every spawn point judged against ``params``, in database order."""
-        needs = Requirements.from_params(params)
+        return self._assess(Requirements.from_params(params), params)
+
+    def _assess(self, needs: Requirements, params: dict[str, Any]) -> list[Assessment]:
         assessments = []
         for entry in self.entries:
             rejections = tuple(_hard_filters(entry, needs)) or self._route_rejections(entry,
@@ -262,6 +276,18 @@ class SpawnMatcher:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
         needs = Requirements.from_params(params)
         self._last_params = dict(params)
+        accepted = self._accepted(needs, params, top_n)
+        if not accepted and needs.domain == "highway":
+            # prefer a drive free of lights to the stop trigger, need one to the manoeuvre's end
+            needs = needs.lights_after_manoeuvre()
+            accepted = self._accepted(needs, params, top_n)
+        if not accepted:
+            raise NoSpawnFits(_no_fit_message(params, self.map.name, self._assess(needs, params)))
+        return _spread_over_roads(accepted)[:top_n]
+
+    def _accepted(self, needs: Requirements, params: dict[str, Any],
+                  top_n: int) -> list[SpawnCandidate]:
+        """The spawn points passing every filter, as far down the ranking as the top N go."""
         accepted, top_scores = [], []  # top_scores: a min-heap of the best top_n scores
         for fixed, entry in self._by_context.get(needs.domain, []):
             if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
@@ -273,9 +299,7 @@ class SpawnMatcher:
             score = fixed + _needs_score(entry, needs)
             accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
-        if not accepted:
-            raise NoSpawnFits(_no_fit_message(params, self.map.name, self.assess(params)))
-        return _spread_over_roads(accepted)[:top_n]
+        return accepted
 
     def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
@@ -430,10 +454,10 @@ def _hard_filters(entry: dict[str, Any], needs: Requirements):
         if features["is_intersection"] or features["is_intersection_w_traffic_light"]:
             yield Rejection("intersection", "an intersection or traffic light is within reach")
         signal = drivable["signal_ahead_m"]
-        if signal is not None and signal < needs.ahead_m:
+        if signal is not None and signal < needs.light_free_m:
             yield Rejection("traffic_light_on_route",
                             f"a signalised junction {signal:.0f} m ahead, inside the "
-                            f"{needs.ahead_m:.0f} m the scenario drives")
+                            f"{needs.light_free_m:.0f} m that must be free of lights")
     else:
         yield from _urban_filters(entry, needs)
     for side in needs.sides:

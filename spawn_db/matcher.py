@@ -422,15 +422,17 @@ class SpawnMatcher:
 
     def _place_oncoming(self, ego: LanePoint, distance: float,
                         params: dict[str, Any]) -> LanePoint:
-        """In the nearest lane of the other direction, ``distance`` ahead along the ego's lane
-        (or, where the road there has none, as far ahead as one is, in 5 m steps)."""
+        """In the nearest lane of the other direction whose traffic does not turn left across
+        the ego's path, ``distance`` ahead along the ego's lane (or, where the road there has
+        none, as far ahead as one is, in 5 m steps)."""
         ahead = distance
         while ahead >= 0.0:
             try:
                 point = self.network.advance(ego.road_id, ego.lane_id, ego.s, ahead)
             except LaneEndsError:
                 point = None
-            found = None if point is None else _oncoming_lane_point(self.network, point)
+            found = None if point is None else _oncoming_lane_point(self.network, point,
+                                                                    distance)
             if found is not None:
                 return found
             ahead -= ONCOMING_SEARCH_STEP_M
@@ -438,9 +440,33 @@ class SpawnMatcher:
                           f"{distance:.0f} m ahead of the spawn for the recorded oncoming car")
 
 
-def _oncoming_lane_point(network: Any, point: LanePoint) -> LanePoint | None:
-    lane = network.oncoming_lane(network.key_at(point.road_id, point.lane_id, point.s))
-    return None if lane is None else LanePoint(point.road_id, lane.lane_id, point.s)
+def _oncoming_lane_point(network: Any, point: LanePoint, reach_m: float) -> LanePoint | None:
+    """The lane of the other direction at ``point`` nearest the centre line whose traffic does
+    not turn left within ``reach_m`` (a recorded oncoming car passes the ego; Town06's inner
+    lanes are left-turn lanes that would send it across the ego's path); None if none."""
+    for lane in network.oncoming_lanes(network.key_at(point.road_id, point.lane_id, point.s)):
+        candidate = LanePoint(point.road_id, lane.lane_id, point.s)
+        if not _turns_left(network, candidate, reach_m):
+            return candidate
+    return None
+
+
+def _turns_left(network: Any, start: LanePoint, reach_m: float) -> bool:
+    """Whether the walk from ``start`` (straightest on, as players drive) turns left at a
+    junction within ``reach_m``."""
+    travelled, approach = 0.0, None
+    for segment in network.walk(start.road_id, start.lane_id, start.s):
+        place = (segment.key.road_id, segment.key.lane_id)
+        if approach is not None and any(
+                m.movement == "left" and (m.connecting_lane.road_id,
+                                          m.connecting_lane.lane_id) == place
+                for m in approach.movements):
+            return True
+        approach = junction_approach(network, segment.key)
+        travelled += segment.length
+        if travelled > reach_m:
+            return False
+    return False
 
 
 def _hard_filters(entry: dict[str, Any], needs: Requirements):

@@ -188,12 +188,15 @@ class RoadNetwork:
 
     def oncoming_lane(self, key: LaneKey) -> LaneKey | None:
         """The drivable lane nearest the centre line whose traffic comes the other way."""
+        return next(iter(self.oncoming_lanes(key)), None)
+
+    def oncoming_lanes(self, key: LaneKey) -> list[LaneKey]:
+        """The drivable lanes whose traffic comes the other way, nearest the centre first."""
         section = self.road(key.road_id).sections[key.section]
         sign = 1 if key.lane_id < 0 else -1
-        for lane_id in sorted((i for i in section.lanes if i * sign > 0), key=abs):
-            if section.lanes[lane_id].drivable:
-                return LaneKey(key.road_id, key.section, lane_id)
-        return None
+        return [LaneKey(key.road_id, key.section, lane_id)
+                for lane_id in sorted((i for i in section.lanes if i * sign > 0), key=abs)
+                if section.lanes[lane_id].drivable]
 
     # --- walks --------------------------------------------------------------------------------
     def walk(self, road_id: str | int, lane_id: int, s: float,

@@ -54,4 +54,14 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: s
     else:
         for issue in result.input_issues[:10]:
             click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
+        for line in spawn_failures(result.summary):
+            click.echo(line, err=True)
         click.echo(result.line())
+
+
+def spawn_failures(summary: dict) -> list[str]:
+    """One line per scenario no spawn point fits (e.g. a highway record on a map without a
+    highway), naming the record and why."""
+    return [f"spawn: {outcome['error'].removeprefix('NoSpawnFits: ')}"
+            for outcome in summary["scenarios"]
+            if "spawn" in outcome.get("error_taxonomy", []) and outcome.get("error")]

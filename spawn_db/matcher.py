@@ -58,6 +58,8 @@ FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 CUT_IN_CLASSES = ("CINF", "CINB")
 #: free-ride classes place their NPCs by slot, not as one ``npc``
 FREE_RIDE_CLASSES = ("FRF", "FRB")
+#: lane walks for the lane-change check are made (and kept) this long at least (m)
+LANE_PATH_M = 500.0
 #: who changes lanes in each lane-change class, and the params prefix of its speeds
 LANE_CHANGER = {"CINF": "npc", "CINB": "npc", "COUTF": "npc", "COUTB": "npc",
                 "LCF": "ego", "LCB": "ego"}
@@ -225,6 +227,8 @@ class SpawnMatcher:
         for ranked in self._by_context.values():
             ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
         self._last_params: dict[str, Any] | None = None
+        #: lane walks of ``_lane_path``: start -> (metres walked, walk ended, path)
+        self._lane_paths: dict[tuple, tuple[float, bool, list]] = {}
 
     @classmethod
     def for_map(cls, map_ref: MapRef, cache_dir: Path) -> SpawnMatcher:
@@ -293,10 +297,13 @@ class SpawnMatcher:
             if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
                 break  # neither this spawn nor any after it can reach (or tie) the top N
             # only the first rejection matters here; assess() lists them all for debugging
-            if next(_hard_filters(entry, needs), None) is not None \
-                    or self._route_rejections(entry, params):
+            if next(_hard_filters(entry, needs), None) is not None:
                 continue
             score = fixed + _needs_score(entry, needs)
+            if len(top_scores) == top_n and score < top_scores[0]:
+                continue  # N better ones are in: it cannot make the top N, so skip the walk
+            if self._route_rejections(entry, params):
+                continue
             accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
         return accepted
@@ -372,40 +379,60 @@ class SpawnMatcher:
         actor = LANE_CHANGER.get(params.get("maneuver_class"))
         if actor is None or entry["context"] != "highway":
             return ()
-        ego = LanePoint(str(entry["geometry"]["road_id"]), entry["geometry"]["lane_id"],
-                        entry["geometry"]["s"])
-        try:
-            start = ego if actor == "ego" else next(
-                self._place(ego, side, distance, params)
-                for name, side, distance in _placed_actors(params) if name == actor)
-        except (LaneEndsError, NoSpawnFits, StopIteration):
-            return ()  # the hard filters' lengths and sides judge these
+        lane_start, offset = self._changer_lane(entry, actor, params)
+        if lane_start is None:
+            return ()  # the hard filters' sides judge this
         number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
         v0 = number(f"{actor}_speed_ms")
-        begin = v0 * number("maneuver_start_s", 0.0)
+        begin = max(0.0, offset + v0 * number("maneuver_start_s", 0.0))
         end = begin + VEHICLE_MARGIN_M + lane_change_length_m(
             v0, number(f"{actor}_end_speed_ms", v0), number("duration_s", 0.0))
-        lanes = self._lanes_between(start, begin, end)
+        lanes = list(dict.fromkeys((road, lane) for road, lane, low, high
+                                   in self._lane_path(lane_start, end)
+                                   if high >= begin and low <= end))
         if len({lane for _, lane in lanes}) <= 1:
             return ()
         path = ", ".join(f"road {road} lane {lane}" for road, lane in lanes)
         return (Rejection("lane_change_lane_ids", f"the {actor}'s lane changes its id during "
                           f"the lane change ({begin:.0f}-{end:.0f} m on: {path})"),)
 
-    def _lanes_between(self, start: LanePoint, begin: float, end: float
-                       ) -> list[tuple[str, int]]:
-        """``(road, lane)`` of the lane followed from ``start`` between ``begin`` and ``end``
-        metres on, in order, each once."""
-        lanes: list[tuple[str, int]] = []
-        travelled = 0.0
+    def _changer_lane(self, entry: dict[str, Any], actor: str, params: dict[str, Any]
+                      ) -> tuple[LanePoint | None, float]:
+        """The lane the lane-changing actor starts in, at the spawn's ``s``, and how far along
+        it the actor stands at t = 0."""
+        geometry = entry["geometry"]
+        ego = LanePoint(str(geometry["road_id"]), geometry["lane_id"], geometry["s"])
+        if actor == "ego":
+            return ego, 0.0
+        side, distance = next(((side, distance) for name, side, distance
+                               in _placed_actors(params) if name == actor), (None, 0.0))
+        if side is None:
+            return ego, distance
+        neighbour = self.network.neighbour(self.network.key_at(ego.road_id, ego.lane_id, ego.s),
+                                           side)
+        if neighbour is None:
+            return None, 0.0
+        return LanePoint(neighbour.road_id, neighbour.lane_id, ego.s), distance
+
+    def _lane_path(self, start: LanePoint, upto_m: float
+                   ) -> list[tuple[str, int, float, float]]:
+        """``(road, lane, from, to)`` metres of the lane walked from ``start`` (straightest
+        on), at least ``upto_m`` far; kept per start, since batches reuse the best spawns."""
+        key = (start.road_id, start.lane_id, start.s)
+        cached = self._lane_paths.get(key)
+        if cached is not None and (cached[0] >= upto_m or cached[1]):
+            return cached[2]
+        path, travelled, ended = [], 0.0, True
+        reach = max(upto_m, LANE_PATH_M)
         for segment in self.network.walk(start.road_id, start.lane_id, start.s):
-            place = (segment.key.road_id, segment.key.lane_id)
-            if travelled + segment.length >= begin and place not in lanes:
-                lanes.append(place)
+            path.append((segment.key.road_id, segment.key.lane_id, travelled,
+                         travelled + segment.length))
             travelled += segment.length
-            if travelled >= end:
+            if travelled >= reach:
+                ended = False
                 break
-        return lanes
+        self._lane_paths[key] = (travelled, ended, path)
+        return path
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
                params: dict[str, Any]) -> LanePoint:

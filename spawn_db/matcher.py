@@ -5,7 +5,9 @@ a junction, (highway) an intersection or light nearby, (urban) no light where th
 needs one or a manoeuvre not in ``suitable_for``; and, beyond the thesis, the manoeuvre must
 fit: a same-direction lane on every side ``required_lane_sides`` names, for as long as the
 manoeuvre lasts, and enough drivable lane ahead for the gap plus the distance the fastest
-actor travels until the stop trigger, and behind for the gap to the rearmost actor. The
+actor travels until the stop trigger, and behind for the gap to the rearmost actor; on the
+highway no signalised junction until the manoeuvre ends (until the stop trigger where the map
+has such spawns), and a lane change whose lane keeps its id throughout. The
 survivors are scored with Table 5.3 and ranked (urban manoeuvres without a light get the
 light-distance points for room to drive before the next light instead); ``assign`` picks candidate
 ``index % len(candidates)`` (round robin) and fills the params' spawn keys in the

@@ -58,30 +58,27 @@ AGENT_OPTIONS = [
 ]
 
 
-#: the map scenarios are made for when ``--map`` is not given (spawn_db.DEFAULT_MAP)
-DEFAULT_MAP = "Town04"
 MAP_HELP = ("Map: a bundled CARLA town (Town01, Town02, Town04, Town06, Town07, Town10HD) or a "
             "path to an OpenDRIVE .xodr file; its spawn database is built on first use and "
-            "cached in $SCENWEAVE_HOME.")
+            "cached in $SCENWEAVE_HOME  [default: Town04]")
 
 
-def map_option(default: str | None = DEFAULT_MAP, help: str = MAP_HELP
+def map_option(optional: bool = False, help: str = MAP_HELP
                ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """``--map NAME|FILE.xodr``, passed to the command as ``map_ref`` (a ``spawn_db.MapRef``,
-    or None when ``default`` is None and the option is not given)."""
-    return click.option("--map", "map_ref", default=default, show_default=default is not None,
-                        metavar="NAME|FILE.xodr", callback=_resolve_map, help=help)
+    """``--map NAME|FILE.xodr``, passed to the command as ``map_ref``: the
+    ``spawn_db.MapRef`` it names (not given: Town04, or None when ``optional``)."""
+    def resolve(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+        if value is None and optional:
+            return None
+        from scenweave.spawn_db import UnknownMapError, resolve_map
 
+        try:
+            return resolve_map(value)
+        except UnknownMapError as err:
+            raise click.BadParameter(str(err), ctx=ctx, param=param) from err
 
-def _resolve_map(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
-    if value is None:
-        return None
-    from scenweave.spawn_db import UnknownMapError, resolve_map
-
-    try:
-        return resolve_map(value)
-    except UnknownMapError as err:
-        raise click.BadParameter(str(err), ctx=ctx, param=param) from err
+    return click.option("--map", "map_ref", metavar="NAME|FILE.xodr", callback=resolve,
+                        help=help)
 
 
 def agent_options(command: Callable[..., Any]) -> Callable[..., Any]:

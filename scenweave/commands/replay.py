@@ -26,7 +26,7 @@ from scenweave.progress import progress
               help="Seconds one replay may take before its player is killed.")
 @click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per scenario.")
-@map_option(default=None, help="Map to play on instead of the one each scenario names (its "
+@map_option(optional=True, help="Map to play on instead of the one each scenario names (its "
                                "params' map, else its LogicFile): a bundled CARLA town or an "
                                ".xodr path.")
 def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures: bool,

@@ -21,7 +21,8 @@ from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, WorkerOptions, work, wo
 @click.option("--preload", default=DEFAULT_MATCHER, show_default=True,
               help="Spawn matcher (module:callable) to load once before work starts.")
 @map_option(help="Map whose spawn matcher is loaded (and database built) before work starts: "
-                 "a bundled CARLA town or an .xodr path. Jobs name their own map.")
+                 "a bundled CARLA town or an .xodr path. Jobs name their own map.  "
+                 "[default: Town04]")
 def worker(url: str | None, count: int, burst: bool, heartbeat: int, maintenance_interval: int,
            preload: str, map_ref: object) -> None:
     """Run queued scenarios (from ``scenweave submit``) until stopped; Ctrl-C or SIGTERM

@@ -41,6 +41,7 @@ from scenweave.corpus.kinematics import (
 
 HERO = "hero"
 XML_DECLARATION = '<?xml version="1.0" encoding="utf-8"?>\n'
+#: the map a scenario names when its params name none (params ``map``, docs/params.md)
 MAP_NAME = "Town04"
 AUTHOR = "ScenWeave"
 #: a fixed header date, so that the same params always give byte-identical files
@@ -554,7 +555,8 @@ def _act(tag: str, events: Iterable[StoryEvent], timeout_s: float) -> xosc.Act:
 
 def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
                   events: list[StoryEvent]) -> xosc.Scenario:
-    """The OpenSCENARIO 1.0 scenario for CARLA Town04: entities, Init, one Story, stop trigger.
+    """The OpenSCENARIO 1.0 scenario for the CARLA map ``params["map"]`` (default Town04):
+    entities, Init, one Story, stop trigger.
 
     ``tag`` is the script's corpus tag (names the Story and Act); ``actors`` start where and
     as fast as given, ``events`` run in the order given within their entity's ManeuverGroup,
@@ -569,9 +571,10 @@ def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
     storyboard = xosc.StoryBoard(_init(actors, params["weather_key"]),
                                  at_time("timeout", timeout_s, "stop"))
     storyboard.add_story(story)
+    road_network = xosc.RoadNetwork(params.get("map") or MAP_NAME)
     return xosc.Scenario(
         f"ScenWeave {params['maneuver_class']} {params['scenario_id']}", AUTHOR,
-        xosc.ParameterDeclarations(), entities, storyboard, xosc.RoadNetwork(MAP_NAME),
+        xosc.ParameterDeclarations(), entities, storyboard, road_network,
         xosc.Catalog(), osc_minor_version=0, creation_date=HEADER_DATE,
     )
 

@@ -70,6 +70,8 @@ class BenchSettings:
     top_n: int = 5
     #: player.ReplaySettings: every scenario is played in esmini and judged (None: no replay)
     replay: Any = None
+    #: the map scenarios are made for: a bundled town's name or an .xodr path (None: Town04)
+    map: str | None = None
 
 
 @dataclass
@@ -150,6 +152,7 @@ def run_bench(settings: BenchSettings, out_root: Path, bench_id: str | None = No
     outcomes, run_dirs = {}, {}
     for model in progress(settings.models, desc="models", total=len(settings.models)):
         pipelines[model].top_n = settings.top_n
+        pipelines[model].map = settings.map
         result = run_batch(data, root / "runs", selection, pipelines[model],
                            run_id=model_dir_name(model))
         outcomes[model] = result.summary["scenarios"]

@@ -33,6 +33,8 @@ class PipelineSettings:
     agent: Any = None  # agent.AgentSettings when no_llm is False
     #: player.ReplaySettings: play every scenario in esmini and judge it (None: no replay)
     replay: Any = None
+    #: the map scenarios are made for: a bundled town's name or an .xodr path (None: Town04)
+    map: str | None = None
 
 
 def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,

@@ -67,9 +67,9 @@ PASS_COLOUR = "#1a7f37"
 def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None) -> Path | None:
     """Write ``replay.png`` into ``scenario_dir`` and return its path; None without a replay.
 
-    ``map_path`` is the OpenDRIVE map the scenario was played on (default: the bundled
-    Town04). Never raises for a problem of the files read: an unreadable ``replay.json`` or a
-    playback with an engine error gets a figure that says so.
+    ``map_path`` is the OpenDRIVE map the scenario was played on (default: the one its params
+    or its ``LogicFile`` name, else Town04). Never raises for a problem of the files read: an
+    unreadable ``replay.json`` or a playback with an engine error gets a figure that says so.
     """
     folder = Path(scenario_dir)
     replay_path = folder / REPLAY_NAME
@@ -88,7 +88,7 @@ def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None) -
                                   playback.log[-6:])
         else:
             try:
-                png = _replay_figure(playback, facts, map_path)
+                png = _replay_figure(playback, facts, map_path or facts.map_path)
             except (KeyError, IndexError, ValueError, TypeError) as err:  # a malformed playback
                 png = _message_figure(facts, "the replay could not be drawn",
                                       f"{type(err).__name__}: {err}")
@@ -161,6 +161,17 @@ class _Facts:
         shift = self.number("maneuver_start_s") or 0.0
         times = np.asarray(recorded["t"], dtype=float) + shift
         return times, np.asarray([math.nan if v is None else v for v in values], dtype=float)
+
+    @property
+    def map_path(self) -> Path | None:
+        """The map the scenario was made for (params ``map``, else its LogicFile)."""
+        from scenweave import spawn_db
+
+        try:
+            return spawn_db.resolve_map(self.params.get("map") or (
+                self.doc.logic_file if self.doc is not None else None)).path
+        except spawn_db.UnknownMapError:
+            return None
 
     def number(self, key: str) -> float | None:
         return number_of(self.params, key)

@@ -48,11 +48,23 @@ class RunResult:
                 f"(open {self.folder.root / 'report.html'})")
 
 
-def default_matcher() -> Any:
-    """The Town04 spawn matcher (imported here so ``scenweave --help`` stays fast)."""
-    from scenweave.spawn_db import SpawnMatcher
+def spawn_db_cache() -> Path:
+    """Where spawn databases built for maps other than the shipped Town04 are cached."""
+    from scenweave.agent.home import home
 
-    return SpawnMatcher()
+    return home() / "cache" / "spawn_db"
+
+
+def default_matcher(map_name: str | None = None) -> Any:
+    """The spawn matcher of ``map_name`` (a bundled town or an ``.xodr`` path; None: Town04).
+
+    Its spawn database is the shipped one for Town04, otherwise built on first use and cached
+    in ``spawn_db_cache()`` (``spawn_db.spawn_database``). Imported here so ``scenweave
+    --help`` stays fast.
+    """
+    from scenweave.spawn_db import SpawnMatcher, resolve_map
+
+    return SpawnMatcher.for_map(resolve_map(map_name), spawn_db_cache())
 
 
 def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: PipelineSettings,
@@ -66,7 +78,7 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     loaded = load_input(Path(data), selection)
     folder = RunFolder.open(out_root, run_id)
     folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
-    matcher = matcher or default_matcher()
+    matcher = matcher or default_matcher(settings.map)
     todo = []
     for index, params in round_robin(loaded.params):
         done = folder.outcome(params["scenario_id"])
@@ -208,6 +220,7 @@ def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
         "selection": {k: (str(v) if isinstance(v, Path) else v)
                       for k, v in asdict(selection).items()},
         "mode": "no-llm" if settings.no_llm else "agent",
+        "map": settings.map or "Town04",
         "top_n": settings.top_n,
         "agent": agent_settings.to_dict() if hasattr(agent_settings, "to_dict") else None,
     }

@@ -42,7 +42,8 @@ from scenweave.runner import round_robin, run_description, summarize
 QUEUE_NAME = "scenweave"
 QUEUE_ENV = "SCENWEAVE_QUEUE"
 DEFAULT_QUEUE_URL = "redis://127.0.0.1:6379/0"
-DEFAULT_MATCHER = "spawn_db:SpawnMatcher"
+#: ``module:callable`` making a job's spawn matcher, called with the map's name (None: Town04)
+DEFAULT_MATCHER = "scenweave.runner:default_matcher"
 LOCK_FILE = ".summary.lock"
 #: RQ job states in which a job will still run: such a job is not enqueued a second time
 PENDING_STATES = ("queued", "started", "scheduled", "deferred")
@@ -71,6 +72,8 @@ class WorkerOptions:
     heartbeat_s: int = 30
     maintenance_interval_s: int = 60
     preload_matcher: str | None = DEFAULT_MATCHER
+    #: the map whose matcher is preloaded (a bundled town or an .xodr path; None: Town04)
+    preload_map: str | None = None
     #: imported once in the worker so each forked work horse starts warm (~1 s per job saved)
     preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.corpus.corpus_utils",
                                        "scenweave.schemas", "scenweave.agent")
@@ -189,15 +192,18 @@ def _queue(connection: Any) -> Any:
 
 # --- the job -------------------------------------------------------------------------------
 
-_matchers: dict[str, Any] = {}
+_matchers: dict[tuple[str, str | None], Any] = {}
 
 
-def matcher_for(factory: str) -> Any:
-    """The spawn matcher made by ``module:callable``, made once per process."""
-    if factory not in _matchers:
+def matcher_for(factory: str, map_name: str | None = None) -> Any:
+    """The spawn matcher ``module:callable`` makes for ``map_name``, made once per process."""
+    from scenweave.spawn_db import DEFAULT_MAP
+
+    key = (factory, map_name or DEFAULT_MAP)
+    if key not in _matchers:
         module, _, name = factory.partition(":")
-        _matchers[factory] = getattr(importlib.import_module(module), name)()
-    return _matchers[factory]
+        _matchers[key] = getattr(importlib.import_module(module), name)(map_name)
+    return _matchers[key]
 
 
 def run_job(spec: dict) -> str:
@@ -212,10 +218,11 @@ def run_job(spec: dict) -> str:
     if done is None or _redo(done, spec):
         # the scenario's staging folder is emptied first: leftovers of a dead attempt go
         staging = folder.staging(scenario_id)
+        settings = spec["settings"]
+        matcher = matcher_for(spec.get("matcher") or DEFAULT_MATCHER,
+                              getattr(settings, "map", None))
         try:
-            outcome = process_scenario(spec["params"], spec["index"], staging,
-                                       spec["settings"],
-                                       matcher_for(spec.get("matcher") or DEFAULT_MATCHER))
+            outcome = process_scenario(spec["params"], spec["index"], staging, settings, matcher)
         finally:
             _close_agent()
         outcome.update(worker=os.environ.get("RQ_WORKER_ID"), submission=spec.get("submission"))
@@ -342,7 +349,7 @@ def preload(options: WorkerOptions) -> None:
         with suppress(ImportError):
             importlib.import_module(module)
     if options.preload_matcher:
-        matcher_for(options.preload_matcher)
+        matcher_for(options.preload_matcher, options.preload_map)
 
 
 def work(url: str | None, options: WorkerOptions) -> bool:

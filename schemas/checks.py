@@ -230,7 +230,7 @@ def _other_start_speeds(params: dict, *profiles: SpeedProfile) -> bool:
 def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     """Distance from the ego to the NPC at t = 0, as the file places them.
 
-    Both on LanePositions of Town04: measured along the NPC's lane from beside the ego
+    Both on LanePositions of the scenario's map: measured along the NPC's lane from beside the ego
     (``spawn_db.distance_along_lane``). Otherwise the params' start gap (the recorded gap
     minus the lead-in drift), corrected by how far a WorldPosition moves the NPC from its
     spawn along its heading.
@@ -264,14 +264,15 @@ def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findi
     change = doc.events.get("npc_lane_change")
     target = None if change is None else number(change.action.find(".//RelativeTargetLane"),
                                                  "value")
-    if None in keys or target is None:
+    if None in keys or target is None or doc.map_path is None:
         return []
     ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
     from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
 
     try:
-        road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance)
-    except spawn_db.SpawnDbError:  # not a Town04 lane position: nothing to compare with
+        road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance,
+                                                    map_path=doc.map_path)
+    except spawn_db.SpawnDbError:  # not a lane position of the map: nothing to compare with
         return []
     if str(road) != str(npc_road):
         return []

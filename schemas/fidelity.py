@@ -66,6 +66,7 @@ class _Check:
 def fidelity(doc: ScenarioDoc, params: dict) -> list[Finding]:
     """FIDELITY_* findings: every value the scenario takes from ``params`` must match it."""
     check = _Check(doc, params, [])
+    _map(check)
     _spawns(check)
     _init_speeds(check)
     _events(check)
@@ -75,6 +76,23 @@ def fidelity(doc: ScenarioDoc, params: dict) -> list[Finding]:
                 TIME_TOL_S, doc.root.find("Storyboard/StopTrigger"))
     _weather(check)
     return check.found
+
+
+def _map(check: _Check) -> None:
+    """``RoadNetwork/LogicFile`` must name the map the params were made for (params ``map``),
+    and that map must be known (its lanes are what the gaps are measured on)."""
+    want = check.params.get("map")
+    if not want:
+        return
+    logic = check.doc.root.find("RoadNetwork/LogicFile")
+    line = None if logic is None else logic.sourceline
+    if check.doc.logic_file != want:
+        check.found.append(Finding("FIDELITY_MAP", f"RoadNetwork/LogicFile names "
+                                   f"{check.doc.logic_file!r}, params say map {want!r}",
+                                   "error", line))
+    elif check.doc.map_path is None:
+        check.found.append(Finding("FIDELITY_MAP", f"map {want!r} is neither a bundled town nor "
+                                   "an existing .xodr file", "error", line))
 
 
 def _weather(check: _Check) -> None:
@@ -141,9 +159,9 @@ def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
 def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._Element) -> None:
     """A highway NPC stands at t = 0 where its recorded gap holds at ``maneuver_start_s``: the
     recorded gap minus the lead-in drift (``start_gap_m``) ahead of the ego, along its lane
-    (Town04). Measured from beside the ego (``ScenarioDoc.lane_gap``); where the NPC's lane
-    id is not found there, walking back that far along the NPC's lane must reach the ego's
-    ``s``."""
+    (on the scenario's map). Measured from beside the ego (``ScenarioDoc.lane_gap``); where the
+    NPC's lane id is not found there, walking back that far along the NPC's lane must reach
+    the ego's ``s``."""
     params = check.params
     keys = [number_of(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
                                         "ego_speed_ms", "maneuver_start_s")]
@@ -159,7 +177,7 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
                 "FIDELITY_GAP", f"{entity} starts {along:.2f} m ahead of the ego along its "
                 f"lane, params say {gap:.2f} m at t = 0 {why}", "error", position.sourceline))
         return
-    walked = _walk_back(position, gap)
+    walked = _walk_back(check.doc, position, gap)
     ego_road, ego_s = params.get("ego_road_id"), number_of(params, "ego_s")
     if walked is None or ego_road is None or ego_s is None:
         return
@@ -171,16 +189,17 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
             f"ego starts at road {ego_road} s={ego_s:g}", "error", position.sourceline))
 
 
-def _walk_back(position: etree._Element, metres: float) -> tuple[str, float] | None:
-    """(road, s) ``metres`` back along the lane of a Town04 LanePosition, None off the map."""
+def _walk_back(doc: ScenarioDoc, position: etree._Element, metres: float
+               ) -> tuple[str, float] | None:
+    """(road, s) ``metres`` back along the lane of a LanePosition, None off the map."""
     lane, s = number(position, "laneId"), number(position, "s")
-    if lane is None or s is None:
+    if lane is None or s is None or doc.map_path is None:
         return None
     from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
 
     try:
         road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s,
-                                                      -metres)
+                                                      -metres, map_path=doc.map_path)
     except spawn_db.SpawnDbError:
         return None
     return str(road), back_s

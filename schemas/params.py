@@ -55,6 +55,8 @@ class Params(TypedDict, total=False):
     gap_behind_m: float
     spawn_id: int | None
     description: str
+    #: the map the scenario is made for: a bundled CARLA town's name or an .xodr path
+    map: str
 
     # -- highway ---------------------------------------------------------------------------
     npc_speed_ms: float

@@ -235,7 +235,7 @@ def _lane_changes(judge: _Judge) -> None:
     cut_in = maneuver.npc_ends_in_ego_lane
     if actor == "npc" and cut_in is not None:
         end = judge.playback.duration_s
-        same = _same_lane(judge.playback, "npc", "hero", end)
+        same = _same_lane(judge.playback, "npc", "hero", end, judge.map_path)
         if same is not None and same != cut_in:
             judge.fail("REPLAY_LANE_CHANGE", "the NPC ends " + ("in" if same else "out of")
                        + " the ego's lane; a " + ("cut-in" if cut_in else "cut-out")
@@ -392,16 +392,20 @@ def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
     A crossing is a step where the lane id changes and the offset from the lane centre jumps
     by more than ``LANE_JUMP_M`` (it flips from one edge of the old lane to the other side of
     the new one; entering the next road keeps it continuous). Offsets are along OpenDRIVE's
-    ``t`` (left of the road's direction): cars in negative lanes drive along ``s``, so a jump
-    toward negative ``t`` is a change to the left; in positive lanes they drive against ``s``.
+    ``t`` (left of the road's direction): cars in negative lanes drive along ``s``, in positive
+    lanes against it, so each is turned into the offset left of the car's own travel first;
+    a jump of that toward the right is a change to the left. Turning each sample by its own
+    lane keeps the offset continuous where a road meets one whose reference line runs the
+    other way (lane -6 continuing as lane 6), as CARLA's Town06 highways do mid-manoeuvre.
     """
     track, found = playback.tracks[entity], []
+    left_of_travel = [offset if lane < 0 else -offset
+                      for offset, lane in zip(track["lane_offset"], track["lane"], strict=True)]
     for i in range(1, len(playback.times)):
-        jump = track["lane_offset"][i] - track["lane_offset"][i - 1]
+        jump = left_of_travel[i] - left_of_travel[i - 1]
         if track["lane"][i] == track["lane"][i - 1] or abs(jump) < LANE_JUMP_M:
             continue
-        left = jump < 0 if track["lane"][i - 1] < 0 else jump > 0
-        found.append((playback.times[i], "left" if left else "right"))
+        found.append((playback.times[i], "left" if jump < 0 else "right"))
     return found
 
 
@@ -463,12 +467,24 @@ def _first_time(playback, entity: str, from_s: float, test) -> float | None:
     return None
 
 
-def _same_lane(playback, a: str, b: str, time_s: float) -> bool | None:
+def _same_lane(playback, a: str, b: str, time_s: float, map_path) -> bool | None:
+    """Whether ``b`` drives in ``a``'s lane at ``time_s``: ``a``'s lane, followed along the map
+    either way (across lane sections, where lane ids are renumbered, and road ends), reaches
+    ``b``. None when it does not and they are on different roads (e.g. overlapping junction
+    roads)."""
+    from scenweave import spawn_db
+
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[a], playback.tracks[b]
-    if ta["road"][i] != tb["road"][i]:
-        return None
-    return ta["lane"][i] == tb["lane"][i]
+    try:
+        along = spawn_db.distance_along_lane(ta["road"][i], ta["lane"][i], ta["s"][i],
+                                             tb["road"][i], tb["lane"][i], tb["s"][i],
+                                             map_path=map_path)
+    except spawn_db.SpawnDbError:
+        along = None
+    if along is not None:
+        return True
+    return False if ta["road"][i] == tb["road"][i] else None
 
 
 def replay_codes(findings: Iterable[Finding]) -> list[str]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 
 from lxml import etree
 
@@ -23,16 +24,38 @@ class Event:
 
 
 class ScenarioDoc:
-    """Read-only views on one OpenSCENARIO tree."""
+    """Read-only views on one OpenSCENARIO tree.
 
-    def __init__(self, tree: etree._ElementTree):
+    ``map_name`` is the map the scenario was made for (params ``map``); without it the map is
+    the one ``RoadNetwork/LogicFile`` names (default Town04).
+    """
+
+    def __init__(self, tree: etree._ElementTree, map_name: str | None = None):
         self.tree = tree
         self.root = tree.getroot()
+        self.map_name = map_name
         self._lane_gaps: dict[str, float | None] = {}
 
     def first(self, path: str) -> etree._Element | None:
         found = self.root.find(path)
         return found
+
+    @cached_property
+    def logic_file(self) -> str | None:
+        """``RoadNetwork/LogicFile filepath``: the map the file names."""
+        logic = self.root.find("RoadNetwork/LogicFile")
+        return None if logic is None else logic.get("filepath")
+
+    @cached_property
+    def map_path(self) -> Path | None:
+        """The OpenDRIVE file lane positions are read on (``spawn_db.resolve_map`` of
+        ``map_name`` or else ``logic_file``); None when that names no known map."""
+        from scenweave import spawn_db
+
+        try:
+            return spawn_db.resolve_map(self.map_name or self.logic_file).path
+        except spawn_db.UnknownMapError:
+            return None
 
     @cached_property
     def entities(self) -> list[str]:
@@ -91,10 +114,10 @@ class ScenarioDoc:
     def lane_gap(self, entity: str) -> float | None:
         """Metres along ``entity``'s lane from beside the ego to ``entity`` at t = 0.
 
-        Both must stand on LanePositions of the bundled Town04 map, the entity's lane must exist
-        on the ego's road at the ego's ``s`` (beside it, or the ego's own lane) and lead to the
-        entity within 1 km; otherwise ``None``. Measured once per entity (the map walk is the
-        costly part of a check).
+        Both must stand on LanePositions of the scenario's map (``map_path``), the entity's
+        lane must exist on the ego's road at the ego's ``s`` (beside it, or the ego's own lane)
+        and lead to the entity within 1 km; otherwise ``None``. Measured once per entity (the
+        map walk is the costly part of a check).
         """
         if entity not in self._lane_gaps:
             self._lane_gaps[entity] = self._measure_lane_gap(entity)
@@ -106,7 +129,7 @@ class ScenarioDoc:
         if ego is None or other is None or {ego.tag, other.tag} != {"LanePosition"}:
             return None
         values = [_number(ego, "s"), _number(other, "laneId"), _number(other, "s")]
-        if None in values:
+        if None in values or self.map_path is None:
             return None
         ego_s, lane, other_s = values
         from scenweave import (
@@ -115,8 +138,9 @@ class ScenarioDoc:
 
         try:
             return spawn_db.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
-                                                other.get("roadId"), int(lane), other_s)
-        except spawn_db.SpawnDbError:  # not a Town04 lane position
+                                                other.get("roadId"), int(lane), other_s,
+                                                map_path=self.map_path)
+        except spawn_db.SpawnDbError:  # not a lane position of the map
             return None
 
     @cached_property

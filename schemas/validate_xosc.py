@@ -33,7 +33,8 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
     With ``params`` the scenario's values are checked against them (parameter fidelity) and
     the manoeuvre class and domain come from them; without, they are read from the file.
     With ``replay`` (``player.ReplaySettings``) and params, a file that passes every static
-    check is also played headless on ``map_path`` (default: the bundled Town04) and judged
+    check is also played headless on ``map_path`` (default: the map params ``map`` names, else
+    the file's ``LogicFile``, else Town04) and judged
     against the params (``REPLAY_*``, ``schemas.replay``); ``result.playback`` holds what
     happened.
     """
@@ -60,11 +61,17 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
 
 def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._ElementTree,
                       params: dict, settings, map_path: Path | None) -> None:
-    from scenweave import player, spawn_db
+    from scenweave import player
 
-    map_path = map_path or spawn_db.DEFAULT_MAP_PATH
+    doc = ScenarioDoc(tree, params.get("map"))
+    map_path = map_path or doc.map_path
+    if map_path is None:
+        result.errors.append(Finding("REPLAY_MAP", f"LogicFile {doc.logic_file!r} names no "
+                                     "known map: nothing to play the scenario on"))
+        result.valid = False
+        return
     playback = player.replay_file(path, map_path, settings)
-    findings = judge_replay(playback, params, ScenarioDoc(tree), map_path)
+    findings = judge_replay(playback, params, doc, map_path)
     result.errors += findings
     result.valid = not any(f.severity == "error" for f in result.errors)
     result.playback = playback
@@ -76,7 +83,7 @@ def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._Element
 def validate_tree(tree: etree._ElementTree, params: dict | None = None,
                   fixes: list[str] | None = None) -> ValidationResult:
     """Every check on a parsed scenario (``validate_xosc`` without the file and the fixes)."""
-    doc = ScenarioDoc(tree)
+    doc = ScenarioDoc(tree, (params or {}).get("map"))
     domain = (params or {}).get("domain") or detect_domain(doc)
     code = (params or {}).get("maneuver_class") or _class_from_header(doc)
     findings = structural(doc, domain, code)

@@ -1,12 +1,18 @@
-"""Spawn points: an OpenDRIVE reader, the Town04 spawn database and the SpawnMatcher.
+"""Spawn points: an OpenDRIVE reader, a spawn database per map and the SpawnMatcher.
 
 Public API:
-- ``SpawnMatcher(db_path=DEFAULT_DB_PATH)`` with ``.find(params, top_n)`` (ranked
-  ``SpawnCandidate`` list), ``.assess(params)`` (every spawn's score or rejections) and
-  ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys filled).
+- ``resolve_map(name_or_path)`` -> ``MapRef`` (a bundled CARLA town by name, any ``.xodr``
+  file by path; default Town04; ``UnknownMapError`` otherwise), ``bundled_maps()``, and
+  ``spawn_database(map_ref, cache_dir)`` -> the map's database file (shipped for Town04,
+  else built on first use and cached under the map file's sha256).
+- ``SpawnMatcher(db_path=DEFAULT_DB_PATH)`` or ``SpawnMatcher.for_map(map_ref, cache_dir)``,
+  with ``.find(params, top_n)`` (ranked ``SpawnCandidate`` list), ``.assess(params)``
+  (every spawn's score or rejections) and
+  ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys and ``map``
+  filled).
 - ``lane_position_to_world(road_id, lane_id, s, offset=0)`` -> ``(x, y, z, h)`` and
   ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
-  bundled Town04 map, OpenSCENARIO frame (= OpenDRIVE frame);
+  bundled Town04 map or ``map_path=``, OpenSCENARIO frame (= OpenDRIVE frame);
   ``distance_along_lane(from_road, from_lane, from_s, to_road, to_lane, to_s)`` -> signed
   metres along the lane (``None`` when not reached); ``traffic_lights_carla()``
   (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
@@ -14,7 +20,7 @@ Public API:
   ``carry_reviews``.
 - ``load_opendrive(path)`` and ``RoadNetwork`` for any other map.
 - Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``OpenDriveError``,
-  ``LaneEndsError``, ``SpawnDatabaseError``.
+  ``LaneEndsError``, ``SpawnDatabaseError``, ``UnknownMapError``.
 """
 
 from __future__ import annotations
@@ -36,6 +42,16 @@ from scenweave.spawn_db.errors import (
     ParamsError,
     SpawnDatabaseError,
     SpawnDbError,
+)
+from scenweave.spawn_db.map_ref import (
+    BUNDLED_MAPS_DIR,
+    DEFAULT_MAP,
+    MapRef,
+    UnknownMapError,
+    bundled_maps,
+    database_path,
+    resolve_map,
+    spawn_database,
 )
 from scenweave.spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
 from scenweave.spawn_db.opendrive import load_opendrive
@@ -100,10 +116,13 @@ def _carla_xy(pose) -> tuple[float, float]:
 
 
 __all__ = [
-    "DEFAULT_DB_PATH", "DEFAULT_MAP_PATH", "Assessment", "LaneEndsError", "NoSpawnFits",
+    "BUNDLED_MAPS_DIR", "DEFAULT_DB_PATH", "DEFAULT_MAP", "DEFAULT_MAP_PATH", "Assessment",
+    "LaneEndsError", "NoSpawnFits",
     "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
     "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
     "distance_along_lane",
     "build_database", "carry_reviews", "lane_position_to_world", "load_database", "load_opendrive",
     "mark_reviewed", "road_network", "traffic_lights_carla", "write_database",
+    "MapRef", "UnknownMapError", "bundled_maps", "database_path", "resolve_map",
+    "spawn_database",
 ]

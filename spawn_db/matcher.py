@@ -5,7 +5,9 @@ a junction, (highway) an intersection or light nearby, (urban) no light where th
 needs one or a manoeuvre not in ``suitable_for``; and, beyond the thesis, the manoeuvre must
 fit: a same-direction lane on every side ``required_lane_sides`` names, for as long as the
 manoeuvre lasts, and enough drivable lane ahead for the gap plus the distance the fastest
-actor travels until the stop trigger, and behind for the gap to the rearmost actor. The
+actor travels until the stop trigger, and behind for the gap to the rearmost actor; on the
+highway no signalised junction until the manoeuvre ends (until the stop trigger where the map
+has such spawns), and a lane change whose lane keeps its id throughout. The
 survivors are scored with Table 5.3 and ranked (urban manoeuvres without a light get the
 light-distance points for room to drive before the next light instead); ``assign`` picks candidate
 ``index % len(candidates)`` (round robin) and fills the params' spawn keys in the
@@ -22,16 +24,17 @@ from __future__ import annotations
 import heapq
 import math
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 from scenweave import maneuvers
-from scenweave.corpus.kinematics import start_gap_m
+from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import load_database
 from scenweave.spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
+from scenweave.spawn_db.map_ref import MapRef, resolve_map, spawn_database
 from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
 from scenweave.spawn_db.signals import junction_approach
 
@@ -48,6 +51,10 @@ TURN_EXIT_KEYS = tuple(f"turn_exit_{key}" for key in ("x", "y", "z", "h", "road_
 NEEDS_POINTS_MAX = {"highway": 20.0, "urban": 20.0 + 30.0 + 15.0}
 #: free-ride slots and the lane each stands in relative to the ego
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
+#: lane walks for the lane-change check are made (and kept) this long at least (m)
+LANE_PATH_M = 500.0
+#: the params prefix of each lane changer (``Maneuver.lane_change``) for its speeds
+PREFIX_OF_CHANGER = {"npc": "npc", "hero": "ego"}
 
 
 @dataclass(frozen=True)
@@ -129,6 +136,9 @@ class Requirements:
     #: the movement whose light the manoeuvre plays with (``None``: no light needed); a right
     #: turn also gets the exit of its movement (``turn_exit_*`` keys)
     light_movement: str | None = None
+    #: metres ahead that must have no signalised junction (highway): the whole drive until
+    #: the stop trigger, or (``lights_after_manoeuvre``) until the manoeuvre ends
+    light_free_m: float = 0.0
 
     @classmethod
     def from_params(cls, params: dict[str, Any]) -> Requirements:
@@ -157,7 +167,17 @@ class Requirements:
             speed_limit_kmh=number.optional("speed_limit_kmh"),
             tfl_ds_m=number.optional("tfl_ds_m"),
             drive_distance_m=number.optional("drive_distance_m"),
-            light_movement=_light_movement(params) if domain == "urban" else None)
+            light_movement=_light_movement(params) if domain == "urban" else None,
+            light_free_m=ahead)
+
+    def lights_after_manoeuvre(self) -> Requirements:
+        """These needs with a light allowed on the route once the manoeuvre has ended.
+
+        A map whose highways end at signalised junctions every kilometre (Town06) has no
+        spawn light-free for the whole drive of a long record (the stop trigger comes at 2.5x
+        the manoeuvre's end); the record's manoeuvre must still never meet one.
+        """
+        return replace(self, light_free_m=self.side_ahead_m)
 
 
 
@@ -198,6 +218,8 @@ class SpawnMatcher:
         self.database = load_database(self.db_path)
         self.entries: list[dict[str, Any]] = self.database["spawn_points"]
         self.map_path = Path(map_path) if map_path else self._find_map()
+        #: the map the spawns stand on; ``assign`` names it in the params (key ``map``)
+        self.map = resolve_map(self.map_path)
         #: per context, ``(fixed score, entry)`` best first: ``find`` stops early down this list
         self._by_context: dict[str, list[tuple[float, dict[str, Any]]]] = {}
         for entry in self.entries:
@@ -205,6 +227,13 @@ class SpawnMatcher:
         for ranked in self._by_context.values():
             ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
         self._last_params: dict[str, Any] | None = None
+        #: lane walks of ``_lane_path``: start -> (metres walked, walk ended, path)
+        self._lane_paths: dict[tuple, tuple[float, bool, list]] = {}
+
+    @classmethod
+    def for_map(cls, map_ref: MapRef, cache_dir: Path) -> SpawnMatcher:
+        """The matcher of ``map_ref``'s spawn database (built and cached on first use)."""
+        return cls(spawn_database(map_ref, cache_dir), map_ref.path)
 
     def _find_map(self) -> Path:
         source = self.database["metadata"]["source_map"]
@@ -231,10 +260,13 @@ class SpawnMatcher:
 
     def assess(self, params: dict[str, Any]) -> list[Assessment]:
         """Every spawn point judged against ``params``, in database order."""
-        needs = Requirements.from_params(params)
+        return self._assess(Requirements.from_params(params), params)
+
+    def _assess(self, needs: Requirements, params: dict[str, Any]) -> list[Assessment]:
         assessments = []
         for entry in self.entries:
-            rejections = tuple(_hard_filters(entry, needs))
+            rejections = tuple(_hard_filters(entry, needs)) or self._route_rejections(entry,
+                                                                                      params)
             score = -1.0 if rejections else _score(entry, needs)
             assessments.append(Assessment(entry["spawn_id"], score, rejections))
         return assessments
@@ -248,6 +280,18 @@ class SpawnMatcher:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
         needs = Requirements.from_params(params)
         self._last_params = dict(params)
+        accepted = self._accepted(needs, params, top_n)
+        if not accepted and needs.domain == "highway":
+            # prefer a drive free of lights to the stop trigger, need one to the manoeuvre's end
+            needs = needs.lights_after_manoeuvre()
+            accepted = self._accepted(needs, params, top_n)
+        if not accepted:
+            raise NoSpawnFits(_no_fit_message(params, self.map.name, self._assess(needs, params)))
+        return _spread_over_roads(accepted)[:top_n]
+
+    def _accepted(self, needs: Requirements, params: dict[str, Any],
+                  top_n: int) -> list[SpawnCandidate]:
+        """The spawn points passing every filter, as far down the ranking as the top N go."""
         accepted, top_scores = [], []  # top_scores: a min-heap of the best top_n scores
         for fixed, entry in self._by_context.get(needs.domain, []):
             if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
@@ -256,17 +300,20 @@ class SpawnMatcher:
             if next(_hard_filters(entry, needs), None) is not None:
                 continue
             score = fixed + _needs_score(entry, needs)
+            if len(top_scores) == top_n and score < top_scores[0]:
+                continue  # N better ones are in: it cannot make the top N, so skip the walk
+            if self._route_rejections(entry, params):
+                continue
             accepted.append(SpawnCandidate(entry["spawn_id"], score, entry))
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
-        if not accepted:
-            raise NoSpawnFits(_no_fit_message(params, self.db_path, self.assess(params)))
-        return _spread_over_roads(accepted)[:top_n]
+        return accepted
 
     def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
         candidates = self.find(params, top_n)
         candidate = candidates[index % len(candidates)]
         result = dict(params)
+        result["map"] = self.map.logic_file
         result["spawn_id"] = candidate.spawn_id
         ego = candidate.lane_point
         result.update(_pose_keys("ego", candidate.x, candidate.y, candidate.z, candidate.h))
@@ -318,6 +365,76 @@ class SpawnMatcher:
         return network.advance(exit_lane.road_id, exit_lane.lane_id,
                                network.entry_s(exit_lane), TURN_EXIT_INTO_M)
 
+    def _route_rejections(self, entry: dict[str, Any], params: dict[str, Any]
+                          ) -> tuple[Rejection, ...]:
+        """Beyond the database's facts: a lane change must keep its lane ids.
+
+        A lane change names its target relative to the car's lane at its start, and players
+        follow lanes by id; where a road ends, the next road may number the same lanes
+        differently (Town06's highway: road 52's lane -7 goes on as junction road 415's lane
+        -6), and a change under way there ends in the wrong lane. The changing car's lane,
+        from where it starts the change (``maneuver_start_s`` at its start speed) over the
+        change's length plus a car length, must keep one lane id.
+        """
+        maneuver = maneuvers.find(params.get("maneuver_class"))
+        actor = PREFIX_OF_CHANGER.get(maneuver.lane_change) if maneuver else None
+        if actor is None or entry["context"] != "highway":
+            return ()
+        lane_start, offset = self._changer_lane(entry, actor, params)
+        if lane_start is None:
+            return ()  # the hard filters' sides judge this
+        number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+        v0 = number(f"{actor}_speed_ms")
+        begin = max(0.0, offset + v0 * number("maneuver_start_s", 0.0))
+        end = begin + VEHICLE_MARGIN_M + lane_change_length_m(
+            v0, number(f"{actor}_end_speed_ms", v0), number("duration_s", 0.0))
+        lanes = list(dict.fromkeys((road, lane) for road, lane, low, high
+                                   in self._lane_path(lane_start, end)
+                                   if high >= begin and low <= end))
+        if len({lane for _, lane in lanes}) <= 1:
+            return ()
+        path = ", ".join(f"road {road} lane {lane}" for road, lane in lanes)
+        return (Rejection("lane_change_lane_ids", f"the {actor}'s lane changes its id during "
+                          f"the lane change ({begin:.0f}-{end:.0f} m on: {path})"),)
+
+    def _changer_lane(self, entry: dict[str, Any], actor: str, params: dict[str, Any]
+                      ) -> tuple[LanePoint | None, float]:
+        """The lane the lane-changing actor starts in, at the spawn's ``s``, and how far along
+        it the actor stands at t = 0."""
+        geometry = entry["geometry"]
+        ego = LanePoint(str(geometry["road_id"]), geometry["lane_id"], geometry["s"])
+        if actor == "ego":
+            return ego, 0.0
+        side, distance = next(((side, distance) for name, side, distance
+                               in _placed_actors(params) if name == actor), (None, 0.0))
+        if side is None:
+            return ego, distance
+        neighbour = self.network.neighbour(self.network.key_at(ego.road_id, ego.lane_id, ego.s),
+                                           side)
+        if neighbour is None:
+            return None, 0.0
+        return LanePoint(neighbour.road_id, neighbour.lane_id, ego.s), distance
+
+    def _lane_path(self, start: LanePoint, upto_m: float
+                   ) -> list[tuple[str, int, float, float]]:
+        """``(road, lane, from, to)`` metres of the lane walked from ``start`` (straightest
+        on), at least ``upto_m`` far; kept per start, since batches reuse the best spawns."""
+        key = (start.road_id, start.lane_id, start.s)
+        cached = self._lane_paths.get(key)
+        if cached is not None and (cached[0] >= upto_m or cached[1]):
+            return cached[2]
+        path, travelled, ended = [], 0.0, True
+        reach = max(upto_m, LANE_PATH_M)
+        for segment in self.network.walk(start.road_id, start.lane_id, start.s):
+            path.append((segment.key.road_id, segment.key.lane_id, travelled,
+                         travelled + segment.length))
+            travelled += segment.length
+            if travelled >= reach:
+                ended = False
+                break
+        self._lane_paths[key] = (travelled, ended, path)
+        return path
+
     def _place(self, ego: LanePoint, side: str | None, distance: float,
                params: dict[str, Any]) -> LanePoint:
         if side == ONCOMING:
@@ -333,15 +450,17 @@ class SpawnMatcher:
 
     def _place_oncoming(self, ego: LanePoint, distance: float,
                         params: dict[str, Any]) -> LanePoint:
-        """In the nearest lane of the other direction, ``distance`` ahead along the ego's lane
-        (or, where the road there has none, as far ahead as one is, in 5 m steps)."""
+        """In the nearest lane of the other direction whose traffic does not turn left across
+        the ego's path, ``distance`` ahead along the ego's lane (or, where the road there has
+        none, as far ahead as one is, in 5 m steps)."""
         ahead = distance
         while ahead >= 0.0:
             try:
                 point = self.network.advance(ego.road_id, ego.lane_id, ego.s, ahead)
             except LaneEndsError:
                 point = None
-            found = None if point is None else _oncoming_lane_point(self.network, point)
+            found = None if point is None else _oncoming_lane_point(self.network, point,
+                                                                    distance)
             if found is not None:
                 return found
             ahead -= ONCOMING_SEARCH_STEP_M
@@ -349,9 +468,33 @@ class SpawnMatcher:
                           f"{distance:.0f} m ahead of the spawn for the recorded oncoming car")
 
 
-def _oncoming_lane_point(network: Any, point: LanePoint) -> LanePoint | None:
-    lane = network.oncoming_lane(network.key_at(point.road_id, point.lane_id, point.s))
-    return None if lane is None else LanePoint(point.road_id, lane.lane_id, point.s)
+def _oncoming_lane_point(network: Any, point: LanePoint, reach_m: float) -> LanePoint | None:
+    """The lane of the other direction at ``point`` nearest the centre line whose traffic does
+    not turn left within ``reach_m`` (a recorded oncoming car passes the ego; Town06's inner
+    lanes are left-turn lanes that would send it across the ego's path); None if none."""
+    for lane in network.oncoming_lanes(network.key_at(point.road_id, point.lane_id, point.s)):
+        candidate = LanePoint(point.road_id, lane.lane_id, point.s)
+        if not _turns_left(network, candidate, reach_m):
+            return candidate
+    return None
+
+
+def _turns_left(network: Any, start: LanePoint, reach_m: float) -> bool:
+    """Whether the walk from ``start`` (straightest on, as players drive) turns left at a
+    junction within ``reach_m``."""
+    travelled, approach = 0.0, None
+    for segment in network.walk(start.road_id, start.lane_id, start.s):
+        place = (segment.key.road_id, segment.key.lane_id)
+        if approach is not None and any(
+                m.movement == "left" and (m.connecting_lane.road_id,
+                                          m.connecting_lane.lane_id) == place
+                for m in approach.movements):
+            return True
+        approach = junction_approach(network, segment.key)
+        travelled += segment.length
+        if travelled > reach_m:
+            return False
+    return False
 
 
 def _hard_filters(entry: dict[str, Any], needs: Requirements):
@@ -365,10 +508,10 @@ def _hard_filters(entry: dict[str, Any], needs: Requirements):
         if features["is_intersection"] or features["is_intersection_w_traffic_light"]:
             yield Rejection("intersection", "an intersection or traffic light is within reach")
         signal = drivable["signal_ahead_m"]
-        if signal is not None and signal < needs.ahead_m:
+        if signal is not None and signal < needs.light_free_m:
             yield Rejection("traffic_light_on_route",
                             f"a signalised junction {signal:.0f} m ahead, inside the "
-                            f"{needs.ahead_m:.0f} m the scenario drives")
+                            f"{needs.light_free_m:.0f} m that must be free of lights")
     else:
         yield from _urban_filters(entry, needs)
     for side in needs.sides:
@@ -523,17 +666,19 @@ def _light_keys(entry: dict[str, Any], needs: Requirements) -> dict[str, Any]:
     }
 
 
-def _no_fit_message(params: dict[str, Any], db_path: Path,
+def _no_fit_message(params: dict[str, Any], map_name: str,
                     assessments: list[Assessment]) -> str:
     scenario = params.get("scenario_id", "<no scenario_id>")
     in_context = [a for a in assessments
                   if not any(r.constraint == "context" for r in a.rejections)]
     if not in_context:
-        return (f"{scenario}: no {params.get('domain')} spawn point in {db_path.name}")
+        return (f"{scenario} ({params.get('maneuver_class')}): map {map_name} has no "
+                f"{params.get('domain')} lane that fits (no {params.get('domain')} spawn point "
+                "in its spawn database)")
     counts = Counter(r.constraint for a in in_context for r in a.rejections)
     constraint, count = counts.most_common(1)[0]
     example = next(r for a in in_context for r in a.rejections if r.constraint == constraint)
-    return (f"{scenario} ({params.get('maneuver_class')}): no spawn point of {db_path.name} "
+    return (f"{scenario} ({params.get('maneuver_class')}): no spawn point on map {map_name} "
             f"fits; {constraint} rules out {count} of {len(in_context)} "
             f"{params.get('domain')} spawn points (e.g. {example.detail})")
 

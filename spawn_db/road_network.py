@@ -189,12 +189,15 @@ class RoadNetwork:
 
     def oncoming_lane(self, key: LaneKey) -> LaneKey | None:
         """The drivable lane nearest the centre line whose traffic comes the other way."""
+        return next(iter(self.oncoming_lanes(key)), None)
+
+    def oncoming_lanes(self, key: LaneKey) -> list[LaneKey]:
+        """The drivable lanes whose traffic comes the other way, nearest the centre first."""
         section = self.road(key.road_id).sections[key.section]
         sign = 1 if key.lane_id < 0 else -1
-        for lane_id in sorted((i for i in section.lanes if i * sign > 0), key=abs):
-            if section.lanes[lane_id].drivable:
-                return LaneKey(key.road_id, key.section, lane_id)
-        return None
+        return [LaneKey(key.road_id, key.section, lane_id)
+                for lane_id in sorted((i for i in section.lanes if i * sign > 0), key=abs)
+                if section.lanes[lane_id].drivable]
 
     # --- walks --------------------------------------------------------------------------------
     def walk(self, road_id: str | int, lane_id: int, s: float,
@@ -250,18 +253,32 @@ class RoadNetwork:
             if length > cap:
                 return None
             return length if ahead or length == 0.0 else -length
-        for forward in (True, False):
+        # the car behind drives the straightest way on, as players do, so walking forward from
+        # each end finds the way driven; walking back from the car ahead may take another
+        # branch at a junction and, on a map with loops (Town06), come round the long way
+        found = [d for d in (self._walked_to(start, end, True, cap),
+                             _negated(self._walked_to(end, start, True, cap))) if d is not None]
+        if found:
+            return min(found, key=abs)
+        return _negated(self._walked_to(start, end, False, cap))
+
+    def _walked_to(self, start: LanePoint, end: LanePoint, forward: bool,
+                   cap: float) -> float | None:
+        """Metres walked from ``start`` (ahead or behind) until ``end``, None beyond ``cap``."""
+        try:
+            walk = self.walk(start.road_id, start.lane_id, start.s, forward)
             travelled = 0.0
-            for segment in self.walk(start.road_id, start.lane_id, start.s, forward):
+            for segment in walk:
                 low, high = sorted((segment.s_from, segment.s_to))
                 key = segment.key
                 if (key.road_id, key.lane_id) == (str(end.road_id), end.lane_id) \
                         and low - 1e-6 <= end.s <= high + 1e-6:
-                    part = self.segment_length(key, segment.s_from, end.s)
-                    return (travelled + part) * (1 if forward else -1)
+                    return travelled + self.segment_length(key, segment.s_from, end.s)
                 travelled += segment.length
                 if travelled > cap:
                     break
+        except OpenDriveError:  # ``end`` named as a start is not a lane position
+            return None
         return None
 
     def _in_section(self, key: LaneKey, s: float) -> bool:
@@ -347,3 +364,7 @@ def _order(option: tuple[LaneKey, float]) -> tuple:
 
 def _numeric(road_id: str) -> tuple[int, str]:
     return (int(road_id), "") if road_id.lstrip("-").isdigit() else (0, road_id)
+
+
+def _negated(distance: float | None) -> float | None:
+    return None if distance is None else -distance

@@ -1,4 +1,5 @@
-"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``.
+"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``, and the
+``--map`` option of every command that makes, serves or plays scenarios.
 
 Choices are spelled out here (not imported from ``agent``) so ``scenweave --help`` does not
 load LangGraph; ``pipeline_settings`` turns the options into settings and checks them.
@@ -57,6 +58,29 @@ AGENT_OPTIONS = [
 ]
 
 
+MAP_HELP = ("Map: a bundled CARLA town (Town01, Town02, Town04, Town06, Town07, Town10HD) or a "
+            "path to an OpenDRIVE .xodr file; its spawn database is built on first use and "
+            "cached in $SCENWEAVE_HOME  [default: Town04]")
+
+
+def map_option(optional: bool = False, help: str = MAP_HELP
+               ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--map NAME|FILE.xodr``, passed to the command as ``map_ref``: the
+    ``spawn_db.MapRef`` it names (not given: Town04, or None when ``optional``)."""
+    def resolve(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+        if value is None and optional:
+            return None
+        from scenweave.spawn_db import UnknownMapError, resolve_map
+
+        try:
+            return resolve_map(value)
+        except UnknownMapError as err:
+            raise click.BadParameter(str(err), ctx=ctx, param=param) from err
+
+    return click.option("--map", "map_ref", metavar="NAME|FILE.xodr", callback=resolve,
+                        help=help)
+
+
 def agent_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """Add every agent option to a click command function."""
     for decls, attrs in reversed(AGENT_OPTIONS):
@@ -69,12 +93,14 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                       sandbox: str = "auto", ollama_host: str | None = None,
                       llm_timeout: float = 300.0, num_ctx: int = 8192,
                       max_tokens: int | None = None, replay_file: Path | None = None,
-                      on_llm_error: str = "raise", replay: bool | None = None
-                      ) -> PipelineSettings:
-    """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts."""
+                      on_llm_error: str = "raise", replay: bool | None = None,
+                      map_ref: Any = None) -> PipelineSettings:
+    """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts;
+    ``map_ref`` (``--map``) is the map scenarios are made for (None: Town04)."""
     replay_settings = replay_settings_for(replay)
+    map_name = None if map_ref is None else map_ref.logic_file
     if no_llm or llm == "none":
-        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings)
+        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings, map=map_name)
     from scenweave.agent import AgentSettings
     from scenweave.agent.repair import get_strategy
     from scenweave.agent.settings import batch_sandbox
@@ -90,7 +116,8 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           max_tokens=max_tokens, ollama_host=ollama_host,
                           replay_file=replay_file, on_llm_error=on_llm_error,
                           sandbox=batch_sandbox(sandbox), replay=replay_settings)
-    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings)
+    return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings,
+                            map=map_name)
 
 
 def replay_settings_for(wanted: bool | None) -> Any:

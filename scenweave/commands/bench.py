@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import click
 
 from scenweave.bench import LLM_BACKENDS, THESIS_CLASSES, BenchError, BenchSettings, run_bench
-from scenweave.commands.agent_options import replay_settings_for
+from scenweave.commands.agent_options import map_option, replay_settings_for
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -38,16 +39,17 @@ def _names(text: str) -> tuple[str, ...]:
 @click.option("--replay/--no-replay", default=None,
               help="Play every scenario in esmini and judge it [default: on when found].")
 @click.option("--json", "as_json", is_flag=True, help="Print bench.json instead of a line.")
+@map_option()
 def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
           replay_file: Path | None, data: Path | None, seed: int, out_root: Path,
-          bench_id: str | None, replay: bool | None, as_json: bool) -> None:
+          bench_id: str | None, replay: bool | None, as_json: bool, map_ref: Any) -> None:
     """Benchmark models on the same records: SR, first-attempt rate, latency, tokens, errors."""
     if not _names(models):
         raise click.BadParameter("give at least one model", param_hint="--models")
     settings = BenchSettings(models=_names(models), classes=_names(classes),
                              per_class=per_class, llm=llm, seed=seed,
                              repair=repair.replace("-", "_"), replay_file=replay_file,
-                             replay=replay_settings_for(replay))
+                             replay=replay_settings_for(replay), map=map_ref.logic_file)
     try:
         result = run_bench(settings, out_root, bench_id=bench_id, data=data)
     except BenchError as err:

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import click
 
+from scenweave.commands.agent_options import map_option
 from scenweave.progress import progress
 
 
@@ -24,8 +26,11 @@ from scenweave.progress import progress
               help="Seconds one replay may take before its player is killed.")
 @click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per scenario.")
+@map_option(optional=True, help="Map to play on instead of the one each scenario names (its "
+                               "params' map, else its LogicFile): a bundled CARLA town or an "
+                               ".xodr path.")
 def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures: bool,
-           as_json: bool) -> None:
+           as_json: bool, map_ref: Any) -> None:
     """Play each scenario (a run folder's, or .xosc files) and say whether it replays as
     recorded."""
     from scenweave.player import ReplaySettings, find_esmini
@@ -35,7 +40,9 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
     files = scenario_files(paths)
     if not files:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
-    results = [replay_one(xosc, settings, figures) for xosc in progress(files, desc="replay")]
+    map_path = None if map_ref is None else map_ref.path
+    results = [replay_one(xosc, settings, figures, map_path)
+               for xosc in progress(files, desc="replay")]
     for result in results:
         if as_json:
             click.echo(json.dumps(result))
@@ -59,29 +66,45 @@ def scenario_files(paths: tuple[Path, ...]) -> list[Path]:
     return files
 
 
-def replay_one(xosc: Path, settings, figures: bool) -> dict:
-    """Play ``xosc``; judge it against its folder's params.json when there is one."""
+def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None) -> dict:
+    """Play ``xosc`` (on ``map_path``, default: the map the scenario names); judge it against
+    its folder's params.json when there is one."""
     from scenweave.player import REPLAY_NAME, replay_file
     from scenweave.schemas import validate_xosc
+    from scenweave.schemas.findings import Finding
     from scenweave.schemas.replay import judge_collisions_only
-    from scenweave.spawn_db import DEFAULT_MAP_PATH
 
     params_path = xosc.parent / "params.json"
     if params_path.is_file():
         params = json.loads(params_path.read_text(encoding="utf-8"))
-        result = validate_xosc(xosc, params, fix=False, replay=settings)
+        result = validate_xosc(xosc, params, fix=False, replay=settings, map_path=map_path)
         playback, findings = result.playback, [f for f in result.errors
                                                if f.severity == "error"]
-    else:
-        playback = replay_file(xosc, DEFAULT_MAP_PATH, settings)
+    elif (map_path := map_path or _named_map(xosc)) is not None:
+        playback = replay_file(xosc, map_path, settings)
         findings = judge_collisions_only(playback)
+    else:
+        playback, findings = None, [Finding("REPLAY_MAP", "its LogicFile names no known map; "
+                                            "give one with --map")]
     if playback is not None:
         playback.write(xosc.parent / REPLAY_NAME)
     if figures and playback is not None:
         from scenweave.replay_figures import draw_replay_figure
 
-        draw_replay_figure(xosc.parent)
+        draw_replay_figure(xosc.parent, map_path)
     return {"scenario": xosc.parent.name if xosc.name == "scenario.xosc" else str(xosc),
             "played": playback is not None and not playback.engine_error,
             "passed": not findings, "codes": sorted({f.code for f in findings}),
             "errors": [f"{f.code}: {f.message}" for f in findings]}
+
+
+def _named_map(xosc: Path) -> Path | None:
+    """The map the scenario's ``LogicFile`` names (None: no known map, or unreadable)."""
+    from lxml import etree
+
+    from scenweave.schemas.scenario_doc import ScenarioDoc
+
+    try:
+        return ScenarioDoc(etree.parse(str(xosc))).map_path
+    except (OSError, etree.XMLSyntaxError):
+        return None

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from scenweave.commands.agent_options import agent_options, pipeline_settings
+from scenweave.commands.agent_options import agent_options, map_option, pipeline_settings
 from scenweave.inputs import InputSelection
 from scenweave.runner import run_batch
 
@@ -32,6 +32,7 @@ from scenweave.runner import run_batch
 @click.option("--jobs", default=1, show_default=True, type=click.IntRange(1),
               help="Make scenarios in N processes (e.g. one per core).")
 @click.option("--json", "as_json", is_flag=True, help="Print summary.json instead of a line.")
+@map_option()
 @agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: str | None,
         per_class: int | None, limit: int | None, variants: int, seed: int,
@@ -53,4 +54,14 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: s
     else:
         for issue in result.input_issues[:10]:
             click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
+        for line in spawn_failures(result.summary):
+            click.echo(line, err=True)
         click.echo(result.line())
+
+
+def spawn_failures(summary: dict) -> list[str]:
+    """One line per scenario no spawn point fits (e.g. a highway record on a map without a
+    highway), naming the record and why."""
+    return [f"spawn: {outcome['error'].removeprefix('NoSpawnFits: ')}"
+            for outcome in summary["scenarios"]
+            if "spawn" in outcome.get("error_taxonomy", []) and outcome.get("error")]

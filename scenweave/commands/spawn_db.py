@@ -8,14 +8,18 @@ from pathlib import Path
 
 import click
 
+from scenweave.commands.agent_options import map_option
+from scenweave.runner import spawn_db_cache
 from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
-    DEFAULT_MAP_PATH,
+    MapRef,
     build_database,
     carry_reviews,
+    database_path,
     load_database,
     mark_reviewed,
     road_network,
+    spawn_database,
     write_database,
 )
 
@@ -28,39 +32,40 @@ def spawn_db() -> None:
 
 
 @spawn_db.command("build")
-@click.option("--map", "map_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              default=DEFAULT_MAP_PATH, show_default=True, help="OpenDRIVE map (.xodr).")
-@click.option("--out", "out_path", type=FILE, default=DEFAULT_DB_PATH, show_default=True,
-              help="Database JSON to write.")
+@map_option()
+@click.option("--out", "out_path", type=FILE,
+              help="Database JSON to write [default: spawn_db/Town04.json for the bundled "
+                   "Town04, else the map's cached database in $SCENWEAVE_HOME].")
 @click.option("--keep-reviews/--no-keep-reviews", default=True, show_default=True,
               help="Carry manually_reviewed flags over from an existing --out file (same "
                    "road, lane and s).")
-def build(map_path: Path, out_path: Path, keep_reviews: bool) -> None:
-    """Generate the spawn database of MAP_PATH (deterministic: same map, same bytes)."""
-    database = build_database(map_path)
+def build(map_ref: MapRef, out_path: Path | None, keep_reviews: bool) -> None:
+    """Generate the spawn database of the map (deterministic: same map, same bytes)."""
+    out_path = out_path or database_path(map_ref, spawn_db_cache())
+    database = build_database(map_ref.path)
     kept = (carry_reviews(database, load_database(out_path))
             if keep_reviews and out_path.exists() else 0)
     write_database(database, out_path)
     counts = Counter(entry["context"] for entry in database["spawn_points"])
     summary = ", ".join(f"{n} {context}" for context, n in sorted(counts.items()))
     click.echo(f"spawn-db build: {len(database['spawn_points'])} spawn points ({summary}), "
-               f"{kept} reviews kept, from {map_path.name} -> {out_path}")
+               f"{kept} reviews kept, from {map_ref.path.name} -> {out_path}")
 
 
 @spawn_db.command("show")
-@click.option("--db", "db_path", type=FILE, default=DEFAULT_DB_PATH, show_default=True)
-@click.option("--map", "map_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              default=DEFAULT_MAP_PATH, show_default=True)
+@click.option("--db", "db_path", type=FILE,
+              help="Database JSON [default: the map's, built on first use].")
+@map_option()
 @click.option("--out", "out_path", type=FILE, default=Path("spawn_points.png"),
               show_default=True, help="PNG to write.")
 @click.option("--json", "as_json", is_flag=True,
               help="Also print the spawn points as JSON lines (id, context, place, review).")
-def show(db_path: Path, map_path: Path, out_path: Path, as_json: bool) -> None:
+def show(db_path: Path | None, map_ref: MapRef, out_path: Path, as_json: bool) -> None:
     """Draw the map and its spawn points (by context and priority) into a PNG for review."""
     from scenweave.spawn_db.map_plot import plot_spawn_points  # matplotlib only when drawing
 
-    database = load_database(db_path)
-    plot_spawn_points(road_network(map_path), database, out_path)
+    database = load_database(db_path or spawn_database(map_ref, spawn_db_cache()))
+    plot_spawn_points(road_network(map_ref.path), database, out_path)
     entries = database["spawn_points"]
     if as_json:
         for entry in entries:

@@ -18,7 +18,8 @@ from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, su
 
 #: options of ``scenweave run`` that mean the same here
 SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",
-                  "variants", "seed", "layout", "top_n", "retry_failed", *AGENT_OPTION_NAMES)
+                  "variants", "seed", "layout", "top_n", "retry_failed", "map_ref",
+                  *AGENT_OPTION_NAMES)
 
 
 def _delays(text: str) -> tuple[int, ...]:
@@ -32,7 +33,7 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
             as_json: bool, no_llm: bool, top_n: int, **selection_and_run: object) -> None:
     """Enqueue one job per scenario of DATA; workers (``scenweave worker``) do them."""
     agent = {name: selection_and_run.pop(name) for name in AGENT_OPTION_NAMES}
-    settings = pipeline_settings(no_llm, top_n, **agent)
+    settings = pipeline_settings(no_llm, top_n, map_ref=selection_and_run.pop("map_ref"), **agent)
     data, out_root = selection_and_run.pop("data"), selection_and_run.pop("out_root")
     run_id, retry_failed = selection_and_run.pop("run_id"), selection_and_run.pop("retry_failed")
     classes = selection_and_run.pop("classes")

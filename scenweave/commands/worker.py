@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from scenweave.commands.agent_options import map_option
 from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, WorkerOptions, work, work_in_processes
 
 
@@ -19,13 +20,17 @@ from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, WorkerOptions, work, wo
               help="Seconds between looks for jobs of dead workers.")
 @click.option("--preload", default=DEFAULT_MATCHER, show_default=True,
               help="Spawn matcher (module:callable) to load once before work starts.")
+@map_option(help="Map whose spawn matcher is loaded (and database built) before work starts: "
+                 "a bundled CARLA town or an .xodr path. Jobs name their own map.  "
+                 "[default: Town04]")
 def worker(url: str | None, count: int, burst: bool, heartbeat: int, maintenance_interval: int,
-           preload: str) -> None:
+           preload: str, map_ref: object) -> None:
     """Run queued scenarios (from ``scenweave submit``) until stopped; Ctrl-C or SIGTERM
     stops after the current scenario."""
     options = WorkerOptions(burst=burst, heartbeat_s=heartbeat,
                             maintenance_interval_s=maintenance_interval,
-                            preload_matcher=preload or None)
+                            preload_matcher=preload or None,
+                            preload_map=getattr(map_ref, "logic_file", None))
     if count == 1:
         worked = work(url, options)
         click.echo(f"worker stopped ({'did some scenarios' if worked else 'no scenarios done'})")

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.run_folder import safe_name
-from scenweave.spawn_db import SpawnMatcher
+from scenweave.runner import default_matcher
 
 GATES_ENV = "SCENWEAVE_TEST_GATES"
 
@@ -24,8 +24,8 @@ GATES_ENV = "SCENWEAVE_TEST_GATES"
 class GatedMatcher:
     """SpawnMatcher.assign behind the file gates described in the module docstring."""
 
-    def __init__(self) -> None:
-        self.inner = SpawnMatcher()
+    def __init__(self, map_name: str | None = None) -> None:
+        self.inner = default_matcher(map_name)
 
     def assign(self, params: dict, index: int, top_n: int = 5) -> dict[str, Any]:
         gates = Path(os.environ[GATES_ENV])

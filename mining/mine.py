@@ -67,7 +67,7 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
         events = [e for e in detect(recording, thresholds) if not classes or e.code in classes]
         report.files[recording.source] = _file_entry(recording, events)
         for number, event in enumerate(events):
-            record = _checked_record(event, recording, number, report)
+            record = _checked_record(event, recording, number, report, thresholds)
             if record is not None:
                 found.setdefault(event.code, []).append(record)
         if on_recording:
@@ -81,10 +81,11 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
     return report
 
 
-def _checked_record(event: Event, recording: Recording, number: int,
-                    report: MiningReport) -> dict | None:
+def _checked_record(event: Event, recording: Recording, number: int, report: MiningReport,
+                    thresholds: dict[str, dict[str, float]]) -> dict | None:
     """The event's record if it is one ScenWeave can play back, else None and a reason."""
     try:
+        _moving_at_start(event, thresholds["records"]["min_start_speed_ms"])
         record = record_of(event, Path(recording.source), recording.reader, number)
         check_record(record)
         check_playable(extract_params(record))
@@ -98,6 +99,18 @@ def _checked_record(event: Event, recording: Recording, number: int,
         if isinstance(value, int | float):
             values.setdefault(name, []).append(value)
     return record
+
+
+def _moving_at_start(event: Event, least_ms: float) -> None:
+    if event.adscene is not None:
+        return
+    for key, values in event.series.items():
+        if key.endswith("_speed_ms") and values and (values[0] or 0.0) < least_ms:
+            role = key.removesuffix("_speed_ms")
+            raise RecordIssue(f"the {role} moves at {values[0] or 0.0:.1f} m/s when the event "
+                              f"starts: a highway scenario needs every car moving "
+                              f"(records.min_start_speed_ms = {least_ms:g})",
+                              field=f"series.{key}")
 
 
 def _reported_values(event: Event, record: dict) -> dict:

@@ -26,11 +26,14 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: str,
     manoeuvres of the MOOVE classes in them and write each as a canonical record."""
     from scenweave.mining.mine import REPORT_NAME, mine_recordings
     from scenweave.mining.readers import read_recordings
-    from scenweave.mining.thresholds import load_thresholds
+    from scenweave.mining.thresholds import ThresholdsError, load_thresholds
     from scenweave.mining_report import write_mining_report
 
     warnings: list[str] = []
-    limits = load_thresholds(thresholds, warnings)
+    try:
+        limits = load_thresholds(thresholds, warnings)
+    except ThresholdsError as err:
+        raise click.BadParameter(str(err), param_hint="--thresholds") from err
     wanted = tuple(c.strip().upper() for c in classes.split(",") if c.strip())
     report = mine_recordings(progress(read_recordings(data), desc="mining"), out_dir, limits,
                              wanted)

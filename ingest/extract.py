@@ -11,7 +11,7 @@ from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
 from scenweave.maneuvers.free_ride import SLOTS
-from scenweave.maneuvers.sampling import RecordFieldError
+from scenweave.maneuvers.maneuver import RecordFieldError
 from scenweave.schemas.params import ParamsInvalid, check_params
 
 HIGHWAY_MANEUVER_START_S = 2.0

@@ -5,7 +5,13 @@ See ``docs/adding-a-manoeuvre.md``. ``get("BRAKE")`` -> :class:`Maneuver`;
 This package imports nothing else of ScenWeave's.
 """
 
-from scenweave.maneuvers.maneuver import Domain, Maneuver, SameLane, no_lane_sides
+from scenweave.maneuvers.maneuver import (
+    Domain,
+    Maneuver,
+    RecordFieldError,
+    SameLane,
+    no_lane_sides,
+)
 from scenweave.maneuvers.registry import (
     PLUGINS_ENV,
     UnknownManeuver,
@@ -19,6 +25,6 @@ from scenweave.maneuvers.registry import (
     unregister,
 )
 
-__all__ = ["PLUGINS_ENV", "Domain", "Maneuver", "SameLane", "UnknownManeuver", "by_tag",
+__all__ = ["PLUGINS_ENV", "Domain", "Maneuver", "RecordFieldError", "SameLane", "UnknownManeuver", "by_tag",
            "codes", "find", "get", "maneuvers", "no_lane_sides", "register", "seeding_order",
            "unregister"]

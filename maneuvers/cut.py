@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver, SameLane
+from scenweave.maneuvers.maneuver import Maneuver, RecordFieldError, SameLane
 from scenweave.maneuvers.sampling import (
     KMH,
     Columns,
-    RecordFieldError,
     left_right,
     speeds_kmh,
     vehicle_types,

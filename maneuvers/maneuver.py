@@ -22,6 +22,15 @@ Extractor = Callable[[Mapping[str, Any], str, Mapping[str, Any]], dict]
 Sampler = Callable[[np.random.Generator, int, str], dict[str, np.ndarray]]
 
 
+class RecordFieldError(ValueError):
+    """A record a class cannot read: the message and the field at fault (ingest turns it into
+    an input issue naming file and row)."""
+
+    def __init__(self, message: str, field: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
 def no_lane_sides(params: Mapping[str, Any]) -> list[str]:
     """Most classes need no neighbour lane."""
     return []

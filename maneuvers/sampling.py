@@ -10,15 +10,6 @@ VEHICLE_TYPES = np.array(["Car", "Truck", "Van", "Motorcycle"], dtype=object)
 VEHICLE_WEIGHTS = [0.78, 0.14, 0.06, 0.02]
 
 
-class RecordFieldError(ValueError):
-    """A record a class cannot read: the message and the field at fault (ingest turns it into
-    an input issue naming file and row)."""
-
-    def __init__(self, message: str, field: str) -> None:
-        super().__init__(message)
-        self.field = field
-
-
 def yes_no(rng: np.random.Generator, n: int, p_yes: float = 0.6) -> np.ndarray:
     return np.where(rng.random(n) < p_yes, "Yes", "No").astype(object)
 

@@ -25,6 +25,6 @@ from scenweave.maneuvers.registry import (
     unregister,
 )
 
-__all__ = ["PLUGINS_ENV", "Domain", "Maneuver", "RecordFieldError", "SameLane", "UnknownManeuver", "by_tag",
-           "codes", "find", "get", "maneuvers", "no_lane_sides", "register", "seeding_order",
-           "unregister"]
+__all__ = ["PLUGINS_ENV", "Domain", "Maneuver", "RecordFieldError", "SameLane",
+           "UnknownManeuver", "by_tag", "codes", "find", "get", "maneuvers", "no_lane_sides",
+           "register", "seeding_order", "unregister"]

@@ -21,6 +21,11 @@ if [ ! -x .venv/bin/python ]; then
     python3.11 -m venv .venv 2>/dev/null || python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --upgrade pip 2>&1 | grep -v "^WARNING: Location" || true
+# the llama.cpp compile is the longest step of a first setup: start it now, beside the rest
+# (its install step, scripts/setup.d/30-embedded-llm.sh, waits for it); its log is kept
+mkdir -p build
+bash scripts/setup.d/30-embedded-llm.sh prebuild > build/llama-prebuild.log 2>&1 &
+prebuild=$!
 # an editable install: scenweave.agent, scenweave.corpus, ... map to the top-level folders
 .venv/bin/python -m pip install -q -e ".[$(tr -d ' \n' < scripts/extras.txt)]"
 
@@ -29,4 +34,5 @@ for step in scripts/setup.d/*.sh; do
     echo "setup: $(basename "$step")"
     bash "$step"
 done
+wait "$prebuild" || { echo "setup: the llama.cpp prebuild failed, see build/llama-prebuild.log" >&2; }
 echo "setup: done"

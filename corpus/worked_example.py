@@ -94,6 +94,18 @@ def worked_example(script: Path, params: Mapping[str, Any]) -> str:
     return write_values_in(source, record_values(script, params))
 
 
+def adaptation(script: Path, params: Mapping[str, Any]) -> tuple[str, dict]:
+    """What the LLM is given for ``params``'s record: ``script``'s worked example and the
+    record's values to write into it. A script without a stored example (a plugin class's)
+    is its own example, written out with the record's values."""
+    example = example_params(script)
+    try:
+        values = record_values(script, params)
+    except Exception:  # noqa: BLE001 - params the reference cannot use: the fallback says why
+        values = {k: v for k, v in params.items() if k not in PROVENANCE_KEYS}
+    return worked_example(script, params if example is None else example), values
+
+
 def write_values_in(source: str, values: Mapping[str, Any]) -> str:
     """``source`` with ``params[k]``/``params.get(k...)`` inside ``generate`` replaced by
     ``values[k]``'s literal, other uses of ``params`` there by ``record``, the first line of

@@ -1,9 +1,10 @@
 """Remake ``corpus/worked_examples.json``: the example each reference script was written for.
 
 The brake script's example is thesis Appendix B.3 (a BR_BK row); every other script's is the
-seeded sample record (seed 7) of the first class that uses it. Each goes through the real
-extraction and the Town04 spawn matcher, so the example carries its spawn keys like any
-record. Run it when a script starts reading a new params key:
+seeded sample record (seed 15: not the demo's and benchmarks' 7, so an example is never the
+record being adapted) of the first class that uses it. Each goes through the real extraction
+and the Town04 spawn matcher, so the example carries its spawn keys like any record.
+Run it when a script starts reading a new params key:
 
     .venv/bin/python scripts/make_worked_examples.py
 """
@@ -31,7 +32,7 @@ THESIS_B3 = {
                "other_dir_traffic": "Yes", "lead_vehicle_type": "Car"},
     "conventions": {"gaps_between": "bumpers"},
 }
-SEED = 7
+SEED = 15
 
 
 def sample_records() -> dict[str, dict]:

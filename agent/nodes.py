@@ -46,10 +46,13 @@ def node(body: NodeBody) -> Callable[[AgentState, Runtime[AgentContext]], dict]:
 def retrieve(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Pick the reference script for the manoeuvre (keyword, tag, semantic fallback)."""
     from scenweave import corpus
+    from scenweave.corpus.worked_example import adaptation
 
     found = corpus.retrieve(state["params"])
+    example, values = adaptation(found.script_path, state["params"])
     reference = {"name": found.script_path.name, "path": str(found.script_path),
-                 "method": found.method, "source": found.source}
+                 "method": found.method, "source": found.source, "example": example,
+                 "values": values}
     return {"reference": reference, "attempts": []}, {"script": reference["name"],
                                                       "method": found.method}
 
@@ -68,7 +71,8 @@ def repair(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 
 @node
 def execute(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
-    """Run the attempt's code in the sandbox (after a compile-only check on the host)."""
+    """Run the attempt's code in the sandbox (after a compile-only check on the host), given
+    only the record's provenance: the values are the ones the LLM wrote in."""
     attempt = dict(state["attempts"][-1])
     if attempt.get("error") is None:
         problem = static_check(attempt.get("code", ""))
@@ -145,7 +149,8 @@ def _new_attempt(state: AgentState, ctx: AgentContext, node_name: str,
     attempt: Attempt = {"number": len(attempts) + 1, "made_by": node_name,
                         "strategy": ctx.strategy.name, "execution": None, "validation": None,
                         "error": None, "taxonomy": None}
-    request = Request(state["params"], state["reference"]["source"], attempts)
+    reference = state["reference"]
+    request = Request(state["params"], _adapted(reference), attempts, reference.get("values"))
     try:
         candidate = make(request, ctx.llm)
     except LLMUnavailable as err:
@@ -160,6 +165,11 @@ def _new_attempt(state: AgentState, ctx: AgentContext, node_name: str,
     return {"attempts": [*attempts, attempt]}, event
 
 
+def _adapted(reference: dict) -> str:
+    """What the LLM adapts: the worked example (the reference in older checkpoints)."""
+    return reference.get("example") or reference["source"]
+
+
 def _describe(candidate: Candidate, reference: dict) -> dict:
     prompt, reply = candidate.prompt, candidate.reply
     return {
@@ -171,15 +181,17 @@ def _describe(candidate: Candidate, reference: dict) -> dict:
         "extraction": candidate.extraction,
         "corrections": candidate.corrections,
         "code": candidate.code,
-        "diff": diff_to_reference(reference["source"], candidate.code,
-                                  f"corpus/{reference['name']}", "attempt"),
+        "diff": diff_to_reference(_adapted(reference), candidate.code,
+                                  f"worked example of corpus/{reference['name']}", "attempt"),
     }
 
 
 def _run_in_sandbox(attempt: dict, state: AgentState, ctx: AgentContext) -> None:
+    from scenweave.corpus.worked_example import provenance
+
     out_dir = Path(state["out_dir"])
     attempt_dir = out_dir / ATTEMPTS_DIR / str(attempt["number"])
-    result = ctx.sandbox.run(attempt["code"], state["params"], attempt_dir)
+    result = ctx.sandbox.run(attempt["code"], provenance(state["params"]), attempt_dir)
     execution = result.to_dict()
     execution["files"] = [str(Path(f).relative_to(out_dir)) for f in result.files]
     attempt["execution"] = execution

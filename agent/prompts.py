@@ -1,10 +1,15 @@
 """The prompts: thesis Table 5.5 (six sections), the error-aware re-prompt (Table 5.6) and
-the patch prompt, which asks for a small edit to the reference instead of the whole script."""
+the patch prompt, which asks for a small edit to the reference instead of the whole script.
+
+The script shown is the reference's worked example (``corpus.worked_example``): another
+record's values written in. The PARAMETERS JSON holds the values of this record the script
+plays, by the same keys; the LLM writes them in place of the example's."""
 
 from __future__ import annotations
 
 import json
 
+from scenweave.agent.edits import edit_grammar, edit_schema
 from scenweave.agent.llm.base import Prompt
 
 #: params keys that describe where a record came from, not the scenario (kept from the LLM)
@@ -13,32 +18,36 @@ METADATA_KEYS = frozenset({"scenario_id", "source_file", "source_row", "record_i
 
 SYSTEM = ("You output only Python code. No explanations. "
           "Start directly with import statements.")
-PATCH_SYSTEM = ("You output only edit blocks in the exact format you are shown. "
+PATCH_SYSTEM = ("You output only JSON edits in the exact format you are shown. "
                 "No explanations.")
 
-TASK = "You are given a complete, working Python script for a CARLA {maneuver} scenario."
-CONSTRAINTS = ("OUTPUT THE ENTIRE SCRIPT BELOW, replacing ONLY the numeric parameter values "
-               "with those in the JSON. DO NOT simplify, summarize, or stub any function. "
-               "Keep the function generate(params, out_path) and every import.")
+TASK = ("You are given a complete, working Python script for a CARLA {maneuver} scenario, "
+        "written for another record: its values are written into RECORD and into generate().")
+CONSTRAINTS = ("OUTPUT THE ENTIRE SCRIPT BELOW, replacing ONLY the values: RECORD must hold "
+               "exactly the keys and values of the PARAMETERS JSON, and every value written "
+               "into generate() must be the JSON's value of the same key. generate() is given "
+               "only scenario_id in params: never read a value from params. DO NOT simplify, "
+               "summarize, or stub any function. Keep generate(params, out_path) and every "
+               "import.")
 OUTPUT_CUE = "Output the complete Python script starting with imports."
 
 ERROR_TASK = ("Your previous script for this CARLA {maneuver} scenario failed. "
               "The error and your script are below.")
-ERROR_CONSTRAINTS = ("Reproduce the REFERENCE SCRIPT VERBATIM, replacing ONLY numeric values "
-                     "with those in the JSON. Do not invent functions, attributes or modules: "
-                     "use only what the reference script uses.")
+ERROR_CONSTRAINTS = ("Reproduce the REFERENCE SCRIPT VERBATIM, replacing ONLY its values "
+                     "with those of the same keys in the JSON. Do not invent functions, "
+                     "attributes or modules: use only what the reference script uses.")
 
-PATCH_FORMAT = """Each edit is one block:
-<<<<<<< SEARCH
-(lines copied exactly from the reference script)
-=======
-(the lines that replace them)
->>>>>>> REPLACE
-If the reference script already fits the parameters, output only: NO CHANGES"""
+PATCH_FORMAT = """JSON, one edit per line to change:
+{"edits": [{"search": "    \"speed\": 1.0,", "replace": "    \"speed\": 2.5,"}]}
+Change every line of RECORD whose value differs from the JSON, and every value written into
+generate() that differs. If the script already fits the parameters: {"edits": []}"""
 
 
-def llm_params(params: dict) -> dict:
-    """The params the LLM sees: everything but metadata (thesis Table 5.5)."""
+def llm_params(params: dict, values: dict | None = None) -> dict:
+    """The params the LLM sees: the record's ``values`` the script plays, else everything
+    but metadata (thesis Table 5.5)."""
+    if values is not None:
+        return values
     return {k: v for k, v in params.items() if k not in METADATA_KEYS}
 
 
@@ -47,20 +56,21 @@ def maneuver_name(params: dict) -> str:
     return str(name).replace("_", " ")
 
 
-def generation_prompt(params: dict, reference: str) -> Prompt:
+def generation_prompt(params: dict, reference: str, values: dict | None = None) -> Prompt:
     """Attempt 1: the six sections of thesis Table 5.5."""
-    user = _sections(*_shared_head(params, reference), ("OUTPUT", OUTPUT_CUE))
+    user = _sections(*_shared_head(params, reference, values), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "generate")
 
 
-def error_prompt(params: dict, reference: str, failed_code: str, error: str) -> Prompt:
+def error_prompt(params: dict, reference: str, failed_code: str, error: str,
+                 values: dict | None = None) -> Prompt:
     """Attempts 2 and 3 (thesis Table 5.6): previous code and its error injected.
 
     It begins exactly like the first prompt, so a local model reuses its cached prefix
     (llama.cpp keeps the longest common prefix) and reads only the new sections.
     """
     user = _sections(
-        *_shared_head(params, reference),
+        *_shared_head(params, reference, values),
         ("YOUR PREVIOUS SCRIPT FAILED", ERROR_TASK.format(maneuver=maneuver_name(params))),
         ("ERROR", _fenced(error, "text")),
         ("YOUR PREVIOUS SCRIPT", _fenced(failed_code)),
@@ -70,28 +80,31 @@ def error_prompt(params: dict, reference: str, failed_code: str, error: str) -> 
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "repair")
 
 
-def patch_prompt(params: dict, reference: str, error: str | None = None) -> Prompt:
-    """Ask for edit blocks against the reference; after a failure, with the error."""
+def patch_prompt(params: dict, reference: str, error: str | None = None,
+                 values: dict | None = None) -> Prompt:
+    """Ask for JSON edits against the worked example (their schema rides along for backends
+    that constrain decoding); after a failure, with the error."""
     sections = [
         ("TASK", TASK.format(maneuver=maneuver_name(params))
          + " Adapt it to the parameters with the smallest edit."),
         ("FORMAT", PATCH_FORMAT),
         ("REFERENCE SCRIPT", _fenced(reference)),
-        ("PARAMETERS JSON", _params_json(params)),
+        ("PARAMETERS JSON", _params_json(params, values)),
     ]
     if error:
         sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
-    sections.append(("OUTPUT", "Output only the edit blocks, or NO CHANGES."))
+    sections.append(("OUTPUT", "Output only the JSON edits."))
     return Prompt(PATCH_SYSTEM, _sections(*sections), params.get("scenario_id", ""),
-                  "repair" if error else "generate")
+                  "repair" if error else "generate", edit_schema(reference),
+                  edit_grammar(reference))
 
 
-def _shared_head(params: dict, reference: str) -> list[tuple[str, str]]:
+def _shared_head(params: dict, reference: str, values: dict | None) -> list[tuple[str, str]]:
     return [
         ("TASK", TASK.format(maneuver=maneuver_name(params))),
         ("CONSTRAINTS", CONSTRAINTS),
         ("REFERENCE SCRIPT", _fenced(reference)),
-        ("PARAMETERS JSON", _params_json(params)),
+        ("PARAMETERS JSON", _params_json(params, values)),
     ]
 
 
@@ -103,5 +116,5 @@ def _fenced(text: str, lang: str = "python") -> str:
     return f"```{lang}\n{text.rstrip()}\n```"
 
 
-def _params_json(params: dict) -> str:
-    return _fenced(json.dumps(llm_params(params), indent=1), "json")
+def _params_json(params: dict, values: dict | None = None) -> str:
+    return _fenced(json.dumps(llm_params(params, values), indent=1), "json")

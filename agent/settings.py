@@ -14,8 +14,9 @@ LLM_CHOICES = ("ollama", "embedded", "replay", "none")
 DEFAULT_MODELS = {"ollama": "qwen2.5-coder:7b", "embedded": "smollm2-135m-instruct",
                   "replay": "replay", "none": "none"}
 #: SPEC §6: a small embedded model loops on long outputs; cap what it may write. The longest
-#: reference script is 365 SmolLM2 tokens, so 512 leaves room for the fences and a line of prose.
-DEFAULT_MAX_TOKENS = {"ollama": 4096, "embedded": 512, "replay": 4096, "none": 0}
+#: worked example (the reference with its values written in) is 874 SmolLM2 tokens, so 1024
+#: leaves room for the fences and a line of prose.
+DEFAULT_MAX_TOKENS = {"ollama": 4096, "embedded": 1024, "replay": 4096, "none": 0}
 DEFAULT_OLLAMA_HOST = "http://localhost:11434"
 #: sandboxes a batch keeps started ahead (interpreter up, scenariogeneration imported): each
 #: attempt still gets its own, but pays ~0.2 s instead of a cold start's 1-2.5 s, the next one
@@ -43,7 +44,7 @@ class AgentSettings:
     temperature: float = 0.1
     top_p: float = 0.9
     max_tokens: int | None = None
-    """Output cap per call; None = 4096 for Ollama, 512 for the embedded model."""
+    """Output cap per call; None = 4096 for Ollama, 1024 for the embedded model."""
     num_ctx: int = 8192
     """Context window asked of the model (prompt + reply tokens)."""
     repeat_penalty: float = 1.1

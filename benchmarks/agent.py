@@ -1,5 +1,7 @@
-"""Output tokens and wall time per scenario of the agent with the embedded model, for the
-whole-script strategy (thesis, ``error_feedback``) and the ``patch`` strategy.
+"""What the agent with the embedded model reaches on the sample data: success (ok or
+repaired), first-attempt success and fallback rate per class and per strategy, with output
+tokens and wall time per scenario, for the whole-script strategy (thesis, ``error_feedback``)
+and the ``patch`` strategy (JSON line edits held to a grammar).
 
 The same seeded sample records go through each strategy (one record per class of
 ``--classes``); the LLM log is switched off so only the agent is measured. Prints one table
@@ -80,6 +82,29 @@ def row(repair: str, outcomes: list[dict], calls: list[dict], wall_s: float) -> 
     }
 
 
+def rates(outcomes: list[dict]) -> dict:
+    """Success (ok or repaired), first-attempt success and fallback rate of ``outcomes``."""
+    n = len(outcomes) or 1
+    return {"n": len(outcomes),
+            "success": round(sum(o["status"] in ("ok", "repaired") for o in outcomes) / n, 2),
+            "first_attempt": round(sum(o["status"] == "ok" for o in outcomes) / n, 2),
+            "fallback": round(sum(o["status"] == "fallback" for o in outcomes) / n, 2)}
+
+
+def per_class(outcomes: list[dict]) -> dict[str, dict]:
+    classes = sorted({o["maneuver_class"] for o in outcomes})
+    return {c: rates([o for o in outcomes if o["maneuver_class"] == c]) for c in classes}
+
+
+def print_rates(rows: list[dict]) -> None:
+    print("strategy | class | n | success | first-attempt success | fallback")
+    for r in rows:
+        label = STRATEGY_LABELS.get(r["strategy"], r["strategy"])
+        for name, found in [*r["per_class"].items(), ("all", r["rates"])]:
+            print(f"{label} | {name} | {found['n']} | {found['success']:.0%} | "
+                  f"{found['first_attempt']:.0%} | {found['fallback']:.0%}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--classes", default="BRAKE,CINF,LCF,U4_1,U1_1")
@@ -103,7 +128,8 @@ def main() -> None:
             outcomes, wall = run_strategy(raw, Path(tmp) / "runs", classes, repair,
                                           args.max_attempts, args.sandbox)
             calls = llm_calls(outcomes, Path(tmp) / "runs" / repair)
-            rows.append(row(repair, outcomes, calls, wall))
+            rows.append(row(repair, outcomes, calls, wall)
+                        | {"rates": rates(outcomes), "per_class": per_class(outcomes)})
             if args.verbose:
                 for o in outcomes:
                     print(json.dumps({k: o[k] for k in ("scenario_id", "status", "attempts",
@@ -121,6 +147,7 @@ def main() -> None:
             r["tokens_out_per_scenario"], r["tokens_out_per_call"], r["tokens_in_per_call"],
             r["llm_s_per_call"], r["tokens_per_s"],
             f"{r['wall_s_per_scenario_mean']}, {r['wall_s_per_scenario_p50']}")))
+    print_rates(rows)
     print(json.dumps(rows))
 
 

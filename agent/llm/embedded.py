@@ -8,6 +8,7 @@ are kept per process, so a batch loads each once.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import threading
 import time
@@ -45,6 +46,17 @@ def _end_after(deadline: float, eos: int) -> Any:
         return scores
 
     return process
+
+
+@functools.lru_cache(maxsize=32)
+def reply_grammar(gbnf: str | None) -> Any:
+    """llama.cpp's grammar from the prompt's GBNF text (None: free text): sampling then only
+    ever picks tokens that keep the reply valid, so it parses whatever the model says."""
+    if gbnf is None:
+        return None
+    from llama_cpp import LlamaGrammar
+
+    return LlamaGrammar.from_string(gbnf, verbose=False)
 
 
 class EmbeddedLLM(LLM):
@@ -87,7 +99,8 @@ class EmbeddedLLM(LLM):
                 result = llama.create_chat_completion(
                     messages=prompt.messages(), max_tokens=s.output_tokens,
                     temperature=s.temperature, top_p=s.top_p, repeat_penalty=s.repeat_penalty,
-                    seed=0, logits_processor=[_end_after(deadline, llama.token_eos())])
+                    seed=0, logits_processor=[_end_after(deadline, llama.token_eos())],
+                    grammar=reply_grammar(prompt.reply_grammar))
         except ValueError as err:  # e.g. the prompt does not fit the context window
             raise LLMUnavailable(f"embedded model: {err} "
                                  "(AgentSettings.num_ctx / --num-ctx)") from err

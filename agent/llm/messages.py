@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -13,6 +14,10 @@ class Prompt:
     user: str
     scenario_id: str = ""
     purpose: str = "generate"  # "generate" or "repair": which node asked
+    reply_schema: dict[str, Any] | None = field(default=None, compare=False, hash=False)
+    """A JSON schema the reply must follow (Ollama's structured output holds it to it)."""
+    reply_grammar: str | None = None
+    """The same as a GBNF grammar (the embedded llama.cpp model is held to it)."""
 
     def messages(self) -> list[dict[str, str]]:
         """The chat messages of this prompt."""

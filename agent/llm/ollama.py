@@ -44,7 +44,8 @@ class OllamaLLM(LLM):
 
     def _complete(self, prompt: Prompt) -> LLMReply:
         response = self._call(self.client.chat, self.model, messages=prompt.messages(),
-                              options=self.options(), stream=False)
+                              options=self.options(), stream=False,
+                              format=prompt.reply_schema)  # structured output when given
         meta = {key: getattr(response, key, None)
                 for key in ("done_reason", "total_duration", "eval_duration")}
         return LLMReply(text=response.message.content or "",

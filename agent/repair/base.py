@@ -20,6 +20,8 @@ class Request:
     """Source of the retrieved reference script."""
     attempts: list[Attempt]
     """The attempts so far (empty for the first generation)."""
+    values: dict | None = None
+    """The record's values the script must have written in (None: params but metadata)."""
 
     @property
     def last(self) -> Attempt:
@@ -54,7 +56,8 @@ class RepairStrategy(ABC):
 
     def generate(self, request: Request, llm: LLM) -> Candidate:
         """The first attempt: thesis Table 5.5, whole script."""
-        return ask_for_script(llm, generation_prompt(request.params, request.reference))
+        return ask_for_script(llm, generation_prompt(request.params, request.reference,
+                                                     request.values))
 
     @abstractmethod
     def repair(self, request: Request, llm: LLM) -> Candidate:

@@ -14,7 +14,7 @@ class ErrorFeedback(RepairStrategy):
 
     def repair(self, request: Request, llm: LLM) -> Candidate:
         prompt = error_prompt(request.params, request.reference, request.last.get("code", ""),
-                              request.last_error_text())
+                              request.last_error_text(), request.values)
         return ask_for_script(llm, prompt)
 
 

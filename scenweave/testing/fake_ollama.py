@@ -1,8 +1,11 @@
 """A real HTTP server on loopback that answers like Ollama: ``/api/chat`` and ``/api/tags``.
 
 It answers every chat with the same ``reply`` after ``delay_s`` (an LLM server with a fixed
-latency), serves requests in parallel like a server with several slots, and records every
-request it gets. ``fail_status`` makes chats fail with that HTTP status instead.
+latency) or, when ``answer`` is set, with ``answer(request_body)`` (a stand-in model that
+reads the prompt: recorded replies of good and bad kinds), serves requests in parallel like a
+server with several slots, and records every request it gets (a structured-output request
+carries its JSON schema under ``format``). ``fail_status`` makes chats fail with that HTTP
+status instead.
 
     with FakeOllama(reply="NO CHANGES", delay_s=1.0) as server:
         AgentSettings(llm="ollama", ollama_host=server.url, ...)
@@ -13,6 +16,7 @@ from __future__ import annotations
 import json
 import threading
 import time
+from collections.abc import Callable
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
@@ -32,6 +36,7 @@ class FakeOllama(ThreadingHTTPServer):
         super().__init__(("127.0.0.1", port), OllamaHandler)
         self.requests: list[tuple[str, dict]] = []
         self.reply = reply
+        self.answer: Callable[[dict], str] | None = None
         self.delay_s = delay_s
         self.fail_status = 0
         self._thread: threading.Thread | None = None
@@ -82,10 +87,14 @@ class OllamaHandler(BaseHTTPRequestHandler):
             self._send(404, {"error": f"model '{body.get('model')}' not found"})
         else:
             self._send(200, {"model": PULLED, "created_at": "2026-11-22T00:00:00Z",
-                             "message": {"role": "assistant", "content": self.server.reply},
+                             "message": {"role": "assistant", "content": self._reply(body)},
                              "done": True, "done_reason": "stop",
                              "prompt_eval_count": TOKENS_IN, "eval_count": TOKENS_OUT,
                              "total_duration": 1_000_000, "eval_duration": 500_000})
+
+    def _reply(self, body: dict) -> str:
+        answer = self.server.answer
+        return answer(body) if answer is not None else self.server.reply
 
     def _send(self, status: int, data: dict) -> None:
         payload = json.dumps(data).encode()

@@ -11,6 +11,7 @@ import pytest
 
 from scenweave import corpus
 from scenweave.agent import AgentSettings
+from scenweave.corpus.worked_example import worked_example
 from scenweave.sandbox import SandboxSettings
 from tests.corpus.params_examples import example_params
 
@@ -31,7 +32,15 @@ def sandbox_settings() -> SandboxSettings:
 
 
 def reference_source(code: str) -> str:
+    """The parametric reference script of ``code`` (what the fallback runs)."""
     return corpus.retrieve(example_params(code)).source
+
+
+def adapted_source(code: str, params: dict | None = None) -> str:
+    """The right answer for ``params`` (default: the class's test example): the worked
+    example with this record's values written in."""
+    params = params or example_params(code)
+    return worked_example(corpus.retrieve(params).script_path, params)
 
 
 def fenced(code: str) -> str:

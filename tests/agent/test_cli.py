@@ -7,15 +7,24 @@ import json
 from click.testing import CliRunner
 
 from scenweave.cli import cli
-from tests.agent.conftest import fenced, reference_source
+from tests.agent.conftest import adapted_source, fenced
 
 
 def invoke(*args: str):
     return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
+def placed_params(tmp_path, sample_raw, code: str) -> dict:
+    """The params (spawn included) a run gives the first ``code`` record: what the LLM's
+    script must write in, read from a ``--no-llm`` run of the same record."""
+    invoke("run", str(sample_raw), "--out", str(tmp_path / "placed"), "--no-llm", "--no-replay",
+           "--classes", code, "--limit", "1", "--run-id", "p")
+    found = next((tmp_path / "placed" / "p").glob("*/params.json"))
+    return json.loads(found.read_text())
+
+
 def test_run_with_replay_then_trace(tmp_path, sample_raw):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE", placed_params(tmp_path, sample_raw, "BRAKE"))
     replies = tmp_path / "replies.json"
     replies.write_text(json.dumps(["no code here", fenced(reference)]))
     runs = tmp_path / "runs"

@@ -10,6 +10,7 @@ import json
 import pytest
 
 from scenweave.agent import AgentSettings, run_scenario
+from scenweave.agent.edits import searchable_lines
 from scenweave.agent.llm.log import recent_calls
 from scenweave.schemas import validate_xosc
 from tests.corpus.params_examples import example_params
@@ -25,7 +26,7 @@ if importlib.util.find_spec("llama_cpp") is None or importlib.util.find_spec("ll
 def test_embedded_model_end_to_end(code, repair, tmp_path, sandbox_settings):
     params = example_params(code)
     settings = AgentSettings(llm="embedded", repair=repair, sandbox=sandbox_settings)
-    assert settings.output_tokens == 512  # room for the longest reference script and fences
+    assert settings.output_tokens == 1024  # room for the longest worked example and fences
     out = tmp_path / "scenario"
     out.mkdir()
     outcome = run_scenario(params, out, settings)
@@ -47,3 +48,9 @@ def test_embedded_model_end_to_end(code, repair, tmp_path, sandbox_settings):
     if outcome.status == "fallback":
         assert outcome.attempts == 3 and len(outcome.error_taxonomy) == 3
         assert [e["node"] for e in events][-1] == "fallback"
+    if repair == "patch":  # held to the grammar: every reply parses, every edit names a line
+        for event in asked:
+            assert event.get("error") is None or event["error"]["type"] != "PatchError"
+            edits = json.loads(event["reply"])["edits"]
+            lines = searchable_lines(event["prompt"]["user"].split("### REFERENCE SCRIPT")[1])
+            assert all(edit["search"] in lines for edit in edits)

@@ -18,7 +18,7 @@ from scenweave.agent.run import CHECKPOINTS_NAME
 from scenweave.pipeline import is_infrastructure_error
 from scenweave.sandbox import SandboxSettings
 from scenweave.schemas import validate_xosc
-from tests.agent.conftest import fenced, reference_source
+from tests.agent.conftest import adapted_source, fenced, reference_source
 from tests.corpus.params_examples import example_params
 
 NODES = {"retrieve", "generate", "execute", "validate", "repair", "fallback"}
@@ -31,6 +31,14 @@ EDGES = {
     ("repair", "execute", True), ("repair", "fallback", True),
     ("fallback", "__end__", False),
 }
+
+
+def corpus_example(code: str) -> dict:
+    """The stored example the class's reference script was written for."""
+    from scenweave import corpus
+    from scenweave.corpus.worked_example import example_params as stored
+
+    return stored(corpus.retrieve(example_params(code)).script_path)
 
 
 def run(code: str, settings, tmp_path: Path, params: dict | None = None):
@@ -82,7 +90,7 @@ def test_routers_repair_while_attempts_are_left_then_fall_back():
 
 @pytest.mark.parametrize("code", ["BRAKE", "U4_1"])
 def test_first_attempt_success(code, replay, tmp_path):
-    reference = reference_source(code)
+    reference = adapted_source(code)
     outcome, out = run(code, replay([fenced(reference)]), tmp_path)
     assert outcome.status == "ok"
     assert (outcome.attempts, outcome.first_attempt_success, outcome.fallback) == (1, True, False)
@@ -90,11 +98,12 @@ def test_first_attempt_success(code, replay, tmp_path):
     assert nodes_in_trace(out) == ["retrieve", "generate", "execute", "validate"]
     assert (out / "scenario.py").read_text() == reference
     assert validate_xosc(out / "scenario.xosc", example_params(code)).valid
-    assert events(out, "generate")[0]["diff"] == ""
+    diff = events(out, "generate")[0]["diff"]  # from the worked example: the values only
+    assert f'+    "ego_speed_ms": {example_params(code)["ego_speed_ms"]!r},' in diff
 
 
 def test_success_after_repair_shows_the_error_to_the_llm(replay, tmp_path):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     broken = reference.replace("def generate(params: dict, out_path: str) -> Path:",
                                "def generate(params: dict, out_path: str) -> Path")
     outcome, out = run("BRAKE", replay([fenced(broken), fenced(reference)]), tmp_path)
@@ -130,10 +139,11 @@ def test_fallback_after_three_failures(replay, tmp_path):
 
 
 def test_a_changed_number_fails_parameter_fidelity(replay, tmp_path):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     params = example_params("BRAKE")
-    assert 'params["ego_speed_ms"]' in reference
-    hard_coded = reference.replace('params["ego_speed_ms"]', str(params["ego_speed_ms"] + 5))
+    speed = f'"ego_speed_ms": {params["ego_speed_ms"]!r},'
+    assert speed in reference
+    hard_coded = reference.replace(speed, f'"ego_speed_ms": {params["ego_speed_ms"] + 5},')
     outcome, out = run("BRAKE", replay([fenced(hard_coded)], max_attempts=1), tmp_path, params)
     assert outcome.status == "fallback"
     assert outcome.error_taxonomy == ["fidelity"]
@@ -158,31 +168,57 @@ def test_llm_failure_can_fall_back_instead(failure, taxonomy, error_type, replay
     assert events(out, "generate")[0]["error"]["type"] == error_type.__name__
 
 
-def test_patch_strategy_edits_the_reference(replay, tmp_path):
-    reference = reference_source("BRAKE")
-    old = '    """Build the braking scenario from ``params`` and write it to ``out_path``."""\n'
-    assert old in reference
-    edit = (f"<<<<<<< SEARCH\n{old}=======\n    \"\"\"Adapted to the record.\"\"\"\n"
-            ">>>>>>> REPLACE\n")
+def mapped(code: str) -> dict:
+    """The test record of ``code`` with its map named, as the spawn stage names it."""
+    return example_params(code) | {"map": "Town04"}
+
+
+def line_edits(code: str) -> list[dict]:
+    """The JSON edits from the stored worked example of ``code`` to the test record's answer
+    (both read the same keys, so they differ line for line)."""
+    example = adapted_source(code, corpus_example(code))
+    wanted = adapted_source(code, mapped(code))
+    return [{"search": old, "replace": new} for old, new in
+            zip(example.splitlines(), wanted.splitlines(), strict=True) if old != new]
+
+
+def test_patch_strategy_edits_the_worked_example(replay, tmp_path):
+    edits = line_edits("BRAKE")
+    blocks = "".join(f"<<<<<<< SEARCH\n{e['search']}\n=======\n{e['replace']}\n"
+                     ">>>>>>> REPLACE\n" for e in edits)  # the older block format
     bad_edit = "<<<<<<< SEARCH\nnot in the script\n=======\nx = 1\n>>>>>>> REPLACE\n"
-    outcome, out = run("BRAKE", replay([bad_edit, edit], repair="patch"), tmp_path)
+    outcome, out = run("BRAKE", replay([bad_edit, blocks], repair="patch"), tmp_path,
+                       mapped("BRAKE"))
     assert outcome.status == "repaired" and outcome.error_taxonomy == ["syntax"]
     assert nodes_in_trace(out) == ["retrieve", "generate", "execute", "repair", "execute",
                                    "validate"]
     assert "PatchError" in events(out, "repair")[0]["prompt"]["user"]
-    assert (out / "scenario.py").read_text() == reference.replace(
-        old, '    """Adapted to the record."""\n')
-    assert "+    \"\"\"Adapted to the record.\"\"\"" in events(out, "repair")[0]["diff"]
+    assert (out / "scenario.py").read_text() == adapted_source("BRAKE", mapped("BRAKE"))
+    assert f"+{edits[0]['replace']}" in events(out, "repair")[0]["diff"]
 
 
-def test_patch_no_changes_is_the_reference(replay, tmp_path):
-    outcome, out = run("U4_1", replay(["NO CHANGES"], repair="patch"), tmp_path)
-    assert outcome.status == "ok"
-    assert (out / "scenario.py").read_text() == reference_source("U4_1")
+def test_patch_json_edits_write_the_record_in(replay, tmp_path):
+    """The structured reply: one edit per line that differs between example and record."""
+    edits = line_edits("BRAKE")
+    assert len(edits) > 5  # the spawn and every value differ
+    outcome, out = run("BRAKE", replay([json.dumps({"edits": edits})], repair="patch"),
+                       tmp_path, mapped("BRAKE"))
+    assert (outcome.status, outcome.attempts) == ("ok", 1)
+    assert (out / "scenario.py").read_text() == adapted_source("BRAKE", mapped("BRAKE"))
+    prompt = events(out, "generate")[0]["prompt"]["user"]
+    assert '"edits"' in prompt and "RECORD = {" in prompt
+
+
+def test_patch_no_changes_keeps_the_example_s_values_and_fails(replay, tmp_path):
+    outcome, out = run("U4_1", replay(['{"edits": []}'], repair="patch", max_attempts=1),
+                       tmp_path)
+    assert outcome.status == "fallback" and outcome.error_taxonomy in (["fidelity"],
+                                                                       ["validation"])
+    assert any(e["code"].startswith("FIDELITY") for e in events(out, "validate")[0]["errors"])
 
 
 def test_code_corrections_repairs_without_asking_the_llm_again(replay, tmp_path):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     body = reference[reference.index("TAG = "):]
     # one recorded reply only: a second LLM call would raise LLMUnavailable
     outcome, out = run("BRAKE", replay([fenced(body)], repair="code_corrections"), tmp_path)
@@ -195,7 +231,7 @@ def test_code_corrections_repairs_without_asking_the_llm_again(replay, tmp_path)
 
 def test_every_node_is_checkpointed_in_the_scenario_thread(replay, tmp_path):
     params = example_params("BRAKE")
-    _, out = run("BRAKE", replay([fenced(reference_source("BRAKE"))]), tmp_path, params)
+    _, out = run("BRAKE", replay([fenced(adapted_source("BRAKE"))]), tmp_path, params)
     with sqlite3.connect(out / CHECKPOINTS_NAME) as db:
         threads = db.execute("SELECT DISTINCT thread_id FROM checkpoints").fetchall()
         count = db.execute("SELECT COUNT(*) FROM checkpoints").fetchone()[0]
@@ -206,7 +242,7 @@ def test_every_node_is_checkpointed_in_the_scenario_thread(replay, tmp_path):
 def test_a_past_trace_replays_to_the_same_outcome(replay, tmp_path, sandbox_settings):
     from scenweave.agent import AgentSettings
 
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     first, out = run("BRAKE", replay(["no code at all, sorry", fenced(reference)]), tmp_path)
     again_settings = AgentSettings(llm="replay", replay_file=out / "trace.jsonl",
                                    sandbox=sandbox_settings)
@@ -218,7 +254,7 @@ def test_a_past_trace_replays_to_the_same_outcome(replay, tmp_path, sandbox_sett
 
 
 def test_a_script_that_never_ends_is_killed_and_repaired(replay, tmp_path, sandbox_settings):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     endless = reference.replace('    """Build the braking', '    while True:\n        pass\n'
                                 '    """Build the braking')
     assert endless != reference
@@ -232,7 +268,7 @@ def test_a_script_that_never_ends_is_killed_and_repaired(replay, tmp_path, sandb
 
 
 def test_an_import_of_a_missing_module_is_an_import_error(replay, tmp_path):
-    reference = reference_source("U4_1")
+    reference = adapted_source("U4_1")
     wrong = reference.replace("from pathlib import Path\n",
                               "from pathlib import Path\n\nimport carla_helpers\n", 1)
     assert wrong != reference
@@ -244,7 +280,7 @@ def test_an_import_of_a_missing_module_is_an_import_error(replay, tmp_path):
 
 
 def test_code_corrections_fixes_an_invented_class_member_in_the_sandbox(replay, tmp_path):
-    reference = reference_source("BRAKE")
+    reference = adapted_source("BRAKE")
     invented = reference.replace(
         "from pathlib import Path\n", "from pathlib import Path\n\n"
         "from scenariogeneration import xosc\n", 1).replace(

@@ -171,10 +171,10 @@ def test_live_ollama(tmp_path, sandbox_settings):
 
 def test_the_agent_runs_on_ollama(server, tmp_path, sandbox_settings):
     from scenweave.agent import run_scenario
-    from tests.agent.conftest import fenced, reference_source
+    from tests.agent.conftest import adapted_source, fenced
     from tests.corpus.params_examples import example_params
 
-    server.reply = fenced(reference_source("CINF"))
+    server.reply = fenced(adapted_source("CINF"))
     settings = AgentSettings(llm="ollama", ollama_host=server.url, sandbox=sandbox_settings)
     outcome = run_scenario(example_params("CINF"), tmp_path, settings)
     assert (outcome.status, outcome.attempts) == ("ok", 1)

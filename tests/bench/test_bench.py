@@ -109,9 +109,10 @@ def test_an_unknown_backend_is_refused_by_name():
 
 
 def replayed_bench(tmp_path, models: str, repair: str, classes: str, out, bench_id: str):
-    """``scenweave bench`` with every model answering "NO CHANGES" to the patch prompt."""
+    """``scenweave bench`` with every model answering "NO CHANGES" to the patch prompt: the
+    worked example's values kept, so every scenario ends in the fallback."""
     replies = tmp_path / "replies.json"
-    replies.write_text(json.dumps({"*": ["NO CHANGES"]}))
+    replies.write_text(json.dumps({"*": ["NO CHANGES"] * 3}))
     result = CliRunner().invoke(cli, ["bench", "--models", models, "--llm", "replay",
                                       "--replay-file", str(replies), "--repair", repair,
                                       "--classes", classes, "--per-class", "1",
@@ -123,8 +124,8 @@ def test_agent_benchmark_with_replayed_models(tmp_path):
     result, replies = replayed_bench(tmp_path, "model-a,model-b", "patch", "BRAKE,LCF",
                                      tmp_path, "replay")
     assert result.exit_code == 0, result.output
-    assert "model-a: SR 100%, 1st 100%" in result.output
-    assert "model-b: SR 100%, 1st 100%" in result.output
+    assert "model-a: SR 0%, 1st 0%" in result.output  # a fallback is no LLM success
+    assert "model-b: SR 0%, 1st 0%" in result.output
     aggregate = json.loads((tmp_path / "replay" / "bench.json").read_text())
     outcomes = json.loads((tmp_path / "replay" / "runs" / "model-a" / "summary.json")
                           .read_text())["scenarios"]

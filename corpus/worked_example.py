@@ -23,7 +23,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from scenweave.corpus.retrieval import CORPUS_DIR, _load_script
+from scenweave import maneuvers
+from scenweave.corpus.retrieval import CORPUS_DIR, _load_script, script_path
 
 EXAMPLES_FILE = CORPUS_DIR / "worked_examples.json"
 #: the only params an adapted script is given: where the record came from, never a value the
@@ -40,8 +41,12 @@ def _examples() -> dict[str, dict]:
 
 
 def example_params(script: Path) -> dict | None:
-    """The example params the reference script ``script`` was written for (None if none)."""
-    found = _examples().get(Path(script).name)
+    """The example params the reference script ``script`` was written for: the corpus's
+    stored example, or the one a plugin class brings (``Maneuver.example``); None if none."""
+    found = _examples().get(Path(script).name) if Path(script).parent == CORPUS_DIR else None
+    if found is None:
+        found = next((m.example for m in maneuvers.maneuvers() if m.example is not None
+                      and script_path(m) == Path(script)), None)
     return dict(found) if found is not None else None
 
 

@@ -66,6 +66,9 @@ class Maneuver:
     family: str | None = None
     #: the layout fields extraction reads; a custom layout must keep these names
     layout_fields: tuple[str, ...] = ()
+    #: the params its reference script's worked example shows the LLM (``corpus.
+    #: worked_example``); built-in classes keep theirs in ``corpus/worked_examples.json``
+    example: Mapping[str, Any] | None = None
     #: the layout-file entry (``tag``, ``npc_position``, ``columns``...) used when the layout
     #: file has none for this class (built-in classes live in schemas/highway_layouts.json)
     layout: Mapping[str, Any] | None = None

@@ -52,3 +52,25 @@ def test_without_the_plugin_the_class_is_unknown_in_one_line(tmp_path):
     with pytest.raises(maneuvers.UnknownManeuver, match="unknown manoeuvre class 'ACCEL'.*"
                        "SCENWEAVE_MANEUVERS"):
         maneuvers.get("ACCEL")
+
+
+def test_a_plugin_class_ships_the_example_its_worked_example_shows(toy_class, tmp_path,
+                                                                   monkeypatch):
+    """The LLM adapts a worked example: a plugin's comes from its own ``example`` params."""
+    import dataclasses
+
+    from scenweave.corpus.retrieval import script_path
+    from scenweave.corpus.worked_example import adaptation
+    from scenweave.inputs import InputSelection, load_input
+    from scenweave.spawn_db import SpawnMatcher
+
+    CliRunner().invoke(cli, ["sample-data", str(tmp_path / "raw"), "--per-class", "2"])
+    loaded = load_input(tmp_path / "raw", InputSelection(classes=("ACCEL",)))
+    example, record = (SpawnMatcher().assign(p, i) for i, p in enumerate(loaded.params))
+    monkeypatch.delenv(maneuvers.PLUGINS_ENV)  # registered by hand now, with its example
+    maneuvers.unregister("ACCEL")
+    maneuvers.register(dataclasses.replace(toy_class, example=example))
+    shown, values = adaptation(script_path(toy_class), record)
+    assert repr(example["npc_end_speed_ms"]) in shown  # the example's values, written in
+    assert repr(record["npc_end_speed_ms"]) not in shown
+    assert values["npc_end_speed_ms"] == record["npc_end_speed_ms"]  # the record's, by key

@@ -11,7 +11,7 @@ from scenweave.agent import run_scenario
 from scenweave.inputs import InputSelection, load_input
 from scenweave.player import ReplaySettings
 from scenweave.spawn_db import SpawnMatcher
-from tests.agent.conftest import fenced
+from tests.agent.conftest import adapted_source, fenced
 from tests.agent.test_graph import events, nodes_in_trace
 
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("esmini")]
@@ -51,11 +51,8 @@ def _run(params: dict, settings, tmp_path):
 
 def test_a_replay_failure_is_repaired_with_what_the_engine_showed(replay, stop_at_red,
                                                                   tmp_path):
-    from scenweave import corpus
-
-    reference = corpus.retrieve(stop_at_red).source
-    settings = replay([fenced(reference + RISING_EDGES), fenced(reference)],
-                      replay=ReplaySettings())
+    right = adapted_source("U4_1", stop_at_red)  # the record's values written in
+    settings = replay([fenced(right + RISING_EDGES), fenced(right)], replay=ReplaySettings())
     outcome, out = _run(stop_at_red, settings, tmp_path)
     assert outcome.status == "repaired"
     assert outcome.error_taxonomy == ["replay"]

@@ -125,8 +125,11 @@ def optional_events(p: dict) -> dict[str, tuple]:
     code, end = p["maneuver_class"], p["maneuver_start_s"] + p["duration_s"]
     optional = {}
     if code.startswith("U") and p.get("lead_present"):
-        optional["lead_speed_change"] = ("speed", max(p["ego_speed_ms"], p["ego_end_speed_ms"]),
-                                         None, 0.0)
+        # the lead keeps ahead of the ego driving as the scenario drives it: at most its
+        # fastest, which for a stop at the line (U4_1) is its start speed
+        fastest = p["ego_speed_ms"] if code == "U4_1" else max(p["ego_speed_ms"],
+                                                                p["ego_end_speed_ms"])
+        optional["lead_speed_change"] = ("speed", fastest, None, 0.0)
     followers = {"FLF": "npc", "FLB": "npc", "CINB": "npc", "FRF": "npc_center",
                  "FRB": "npc_center"}
     if code in followers and (code not in ("FRF", "FRB") or p.get("center_present")):

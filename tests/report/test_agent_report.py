@@ -1,8 +1,9 @@
 """``report.html`` of an agent run with every outcome — ok, repaired, fallback and a poisoned
 record that fails — read in headless Chromium: what a reader sees, not what the HTML says.
 
-The LLM is replayed (patch strategy: ``NO CHANGES`` is the reference as is), the scripts run
-in the real bubblewrap sandbox and are validated for real."""
+The LLM is replayed (whole-script strategy: the right reply is each record's worked example
+with its values written in), the scripts run in the real bubblewrap sandbox and are validated
+for real."""
 
 from __future__ import annotations
 
@@ -22,14 +23,15 @@ from scenweave.report import REPORT_FILE
 from scenweave.run_folder import safe_name
 from scenweave.runner import run_batch
 from scenweave.sandbox import SandboxSettings
+from tests.replies import right_replies
 from tests.report.chromium import dump_dom, probe
 from tests.worker.records import BRAKE, LCF, POISONED, ingest_with_poisoned_record
 
-#: a SEARCH/REPLACE edit whose SEARCH text is in no script: a PatchError (taxonomy syntax)
-NO_MATCH = "<<<<<<< SEARCH\nnot in the script\n=======\nx = 1\n>>>>>>> REPLACE\n"
-#: an edit that applies to every reference script and makes it raise NameError when run
-NAME_ERROR = ("<<<<<<< SEARCH\nfrom pathlib import Path\n=======\nfrom pathlib import Path\n"
-              "undefined_helper()\n>>>>>>> REPLACE\n")
+#: not a script at all (taxonomy syntax)
+NO_CODE = "I cannot help with that."
+#: a script that raises NameError when run
+NAME_ERROR = ("```python\nfrom pathlib import Path\n\n\ndef generate(params, out_path):\n"
+              "    undefined_helper()\n```\n")
 
 
 @pytest.fixture(scope="module")
@@ -41,16 +43,18 @@ def run(sample_raw, tmp_path_factory) -> tuple[Path, dict[str, str]]:
     records = ingest_with_poisoned_record(sample_raw, tmp / "records")
     urban = json.loads((records / "urban" / "U4_1.json").read_text())
     u4_1 = [record["scenario_id"] for record in urban]
+    selection = InputSelection(classes=("BRAKE", "LCF", "U4_1"), per_class=2)
+    right = right_replies(records, selection)
     replies = tmp / "replies.json"
-    replies.write_text(json.dumps({LCF[0]: [NO_MATCH, "NO CHANGES"],
-                                   u4_1[0]: [NO_MATCH, NAME_ERROR, NO_MATCH],
-                                   "*": ["NO CHANGES"]}))
-    agent = AgentSettings(llm="replay", replay_file=replies, repair="patch",
+    replies.write_text(json.dumps({**{sid: [reply] for sid, reply in right.items()},
+                                   LCF[0]: [NO_CODE, right[LCF[0]]],
+                                   u4_1[0]: [NO_CODE, NAME_ERROR, NO_CODE],
+                                   POISONED: [NAME_ERROR] * 3}))
+    agent = AgentSettings(llm="replay", replay_file=replies, repair="error-feedback",
                           sandbox=SandboxSettings(backend="bwrap", wall_time_s=30))
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("SCENWEAVE_HOME", str(tmp / "home"))
-        result = run_batch(records, tmp / "runs",
-                           InputSelection(classes=("BRAKE", "LCF", "U4_1"), per_class=2),
+        result = run_batch(records, tmp / "runs", selection,
                            PipelineSettings(no_llm=False, agent=agent), run_id="mixed")
     expected = {BRAKE[0]: "ok", POISONED: "failed", LCF[0]: "repaired", LCF[1]: "ok",
                 u4_1[0]: "fallback", u4_1[1]: "ok"}
@@ -95,7 +99,7 @@ def test_the_reader_sees_one_count_per_outcome(page):
 
 def test_the_reader_sees_the_error_taxonomy(page):
     rows = {row["error"]: row["count"] for row in _table_after(page, "Error taxonomy")}
-    # LCF 0: one bad edit; U4_1 0: bad edit, NameError, bad edit; the poisoned record: spawn
+    # LCF 0: no code; U4_1 0: no code, NameError, no code; the poisoned record: spawn
     assert rows == {"name": "1", "spawn": "1", "syntax": "3"}
 
 
@@ -115,9 +119,9 @@ def test_the_error_column_says_what_went_wrong(run, page):
     assert {sid: row["status"] for sid, row in rows.items()} == expected
     assert "NoSpawnFits" in rows[POISONED]["error"]
     fallback = next(sid for sid, status in expected.items() if status == "fallback")
-    assert rows[fallback]["error"].startswith("PatchError:")  # the last failed attempt
+    assert rows[fallback]["error"].startswith("EmptyCode:")  # the last failed attempt
     assert rows[fallback]["attempts"] == "3"
-    assert rows[LCF[0]]["error"].startswith("PatchError:")
+    assert rows[LCF[0]]["error"].startswith("EmptyCode:")
     assert all(rows[sid]["error"] == "" for sid, status in expected.items() if status == "ok")
 
 

@@ -65,7 +65,7 @@ def test_a_batch_runs_its_attempts_in_warm_sandboxes(tmp_path):
                                  replay=False).agent
     try:
         box = shared_sandbox(settings)
-        time.sleep(2)  # the LLM's turn: the pool starts a sandbox and imports in it
+        time.sleep(5)  # the LLM's turn: the pool starts a sandbox and imports in it (~1 s idle)
         result = box.run(PROBE, {}, tmp_path)
         assert result.ok, result
         assert (tmp_path / "scenario.xosc").read_text() == "False True"

@@ -13,10 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from scenweave.cli import cli
+from scenweave.inputs import InputSelection
 from scenweave.pipeline import is_infrastructure_error
 from scenweave.run_folder import safe_name
 from scenweave.testing.redis_server import free_port
 from scenweave.worker import QueueError, connect
+from tests.replies import right_replies
 from tests.worker.conftest import GATED_MATCHER
 from tests.worker.records import BRAKE, LCF, POISONED
 
@@ -203,13 +205,14 @@ def test_the_agent_runs_in_the_workers(records, tmp_path, gates, workers, redis_
 
     if shutil.which("bwrap") is None:
         pytest.skip("AGENT IN WORKER NOT TESTED: bubblewrap is not installed")
+    right = right_replies(records, InputSelection(classes=("BRAKE", "U4_1")))
     replies = tmp_path / "replies.json"
-    replies.write_text(json.dumps({BRAKE[0]: ["no edit blocks here", "NO CHANGES"],
-                                   "*": ["NO CHANGES"]}))
+    replies.write_text(json.dumps({**{sid: [reply] for sid, reply in right.items()},
+                                   BRAKE[0]: ["no code here", right[BRAKE[0]]]}))
     result = CliRunner().invoke(cli, [
         "submit", str(records), "--out", str(tmp_path / "runs"), "--queue", redis_url,
         "--matcher", GATED_MATCHER, "--run-id", "agent", "--classes", "BRAKE,U4_1",
-        "--llm", "replay", "--replay-file", str(replies), "--repair", "patch",
+        "--llm", "replay", "--replay-file", str(replies), "--repair", "error-feedback",
         "--sandbox", "bwrap"])
     assert result.exit_code == 0, result.output
     assert workers.start("--burst").wait(timeout=180) == 0
@@ -220,7 +223,8 @@ def test_the_agent_runs_in_the_workers(records, tmp_path, gates, workers, redis_
     assert statuses.pop(POISONED) == "failed"
     assert set(statuses.values()) == {"ok"} and len(statuses) == 3
     brake = outcome(run, BRAKE[0])
-    assert brake["llm"] == {"backend": "replay", "model": "replay"} and brake["repair"] == "patch"
+    assert brake["llm"] == {"backend": "replay", "model": "replay"}
+    assert brake["repair"] == "error_feedback"
     folder = run / safe_name(BRAKE[0])
     nodes = [json.loads(line)["node"] for line in (folder / "trace.jsonl").read_text().splitlines()]
     assert nodes == ["spawn", "retrieve", "generate", "execute", "repair", "execute", "validate"]

@@ -118,3 +118,30 @@ def _fenced(text: str, lang: str = "python") -> str:
 
 def _params_json(params: dict, values: dict | None = None) -> str:
     return _fenced(json.dumps(llm_params(params, values), indent=1), "json")
+
+
+VARIANT_TASK = ("You are given a working Python script for a CARLA {maneuver} scenario that "
+                "plays back a recorded manoeuvre. Write a variant of it.")
+VARIANT_CONSTRAINTS = ("Every number of the manoeuvre stays as it is: speeds, distances, times, "
+                       "lanes and positions of the recorded vehicles, the light. Change only "
+                       "what is asked below. Keep the function generate(params, out_path) and "
+                       "every import.")
+#: what each aspect of a variant asks for (schemas.variation.ASPECTS)
+VARIANT_CHANGES = {
+    "weather": ("Change only the weather and time of day: set the \"weather_key\" value to "
+                "another of Day_Clear, Day_Cloudy, Day_Rain, Day_Fog, Night_Clear, Night_Rain, "
+                "Night_Fog."),
+    "vehicles": ("Change only a vehicle model: set one \"*_vehicle_type\" value to another of "
+                 "car, truck, van."),
+    "traffic": ("Add one background vehicle that keeps clear of the manoeuvre: with npc(), in "
+                "a lane no recorded vehicle uses, far ahead of or behind them, at a constant "
+                "speed, and add it to the actors."),
+}
+
+
+def variant_prompt(params: dict, code: str, aspect: str) -> Prompt:
+    """A variant of the delivered scenario script that changes one ``aspect`` only."""
+    user = _sections(("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
+                     ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", VARIANT_CHANGES[aspect]),
+                     ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
+    return Prompt(SYSTEM, user, params.get("scenario_id", ""), f"vary-{aspect}")

@@ -35,6 +35,8 @@ class PipelineSettings:
     replay: Any = None
     #: the map scenarios are made for: a bundled town's name or an .xodr path (None: Town04)
     map: str | None = None
+    #: variants the LLM writes of each delivered scenario (``agent.variants``; agent only)
+    vary: int = 0
 
 
 def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,
@@ -144,7 +146,14 @@ def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
 
     result = _timed(timings, "agent",
                     lambda: agent.run_scenario(params, out_dir, settings.agent, trace))
-    return result.to_dict()
+    outcome = result.to_dict()
+    if settings.vary and outcome["status"] != "failed":
+        from scenweave.agent.variants import make_variants
+
+        outcome["variants"] = _timed(timings, "vary", lambda: make_variants(
+            params, out_dir, settings.agent, settings.vary, settings.replay,
+            parametric=bool(outcome.get("fallback")), trace=trace))
+    return outcome
 
 
 def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:

@@ -43,8 +43,11 @@ class RunResult:
         replay = self.summary.get("replay") or {}
         played = (f"; replay: {replay['passed']}/{replay['played']} played as recorded"
                   if replay.get("played") else "")
+        variants = self.summary.get("variants") or {}
+        varied = (f"; variants: {variants['kept']}/{variants['asked']} kept"
+                  if variants.get("asked") else "")
         return (f"run {self.folder.run_id}: {self.summary['total']} scenarios: {parts}{resumed}"
-                f"{issues}{played} -> {self.folder.root} "
+                f"{issues}{played}{varied} -> {self.folder.root} "
                 f"(open {self.folder.root / 'report.html'})")
 
 
@@ -179,9 +182,21 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
         "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
         "node_latency_s": node_latency(outcomes),
         "replay": replay_summary(outcomes),
+        "variants": variant_summary(outcomes),
         "input_issues": input_issues,
         "scenarios": outcomes,
     }
+
+
+def variant_summary(outcomes: list[dict]) -> dict:
+    """The variants the LLM wrote (``run --vary``): asked, kept, the records with at least one
+    kept, and what the kept ones changed."""
+    variants = [v for o in outcomes for v in o.get("variants", [])]
+    kept = [v for v in variants if v.get("kept")]
+    return {"asked": len(variants), "kept": len(kept),
+            "records_with_a_variant": sum(any(v.get("kept") for v in o.get("variants", []))
+                                          for o in outcomes),
+            "changed": dict(sorted(Counter(c for v in kept for c in v["changed"]).items()))}
 
 
 def replay_summary(outcomes: list[dict]) -> dict:

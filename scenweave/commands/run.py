@@ -24,6 +24,10 @@ from scenweave.runner import run_batch
 @click.option("--variants", default=0, show_default=True, type=click.IntRange(0),
               help="Perturbed copies per record (extract_with_variants).")
 @click.option("--seed", default=0, show_default=True, help="Seed for the variants.")
+@click.option("--vary", default=0, show_default=True, type=click.IntRange(0),
+              help="Variants the LLM writes of each delivered scenario, changing only what the "
+                   "record does not fix (weather, vehicle models, background traffic); each "
+                   "must still replay the record.")
 @click.option("--layout", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Highway column-layout JSON for raw .npy input.")
 @click.option("--top-n", default=5, show_default=True, type=click.IntRange(1),
@@ -35,7 +39,7 @@ from scenweave.runner import run_batch
 @map_option()
 @agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: str | None,
-        per_class: int | None, limit: int | None, variants: int, seed: int,
+        per_class: int | None, limit: int | None, variants: int, seed: int, vary: int,
         layout: Path | None, top_n: int, retry_failed: bool, jobs: int, as_json: bool,
         **agent: object) -> None:
     """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios.
@@ -44,6 +48,9 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: s
     uses an Ollama server, --no-llm runs the reference scripts directly.
     """
     settings = pipeline_settings(no_llm, top_n, **agent)
+    if vary and settings.no_llm:
+        raise click.UsageError("--vary needs an LLM: the LLM writes the variants (drop --no-llm)")
+    settings.vary = vary
     selection = InputSelection(
         classes=tuple(c.strip() for c in classes.split(",")) if classes else (),
         per_class=per_class, limit=limit, variants=variants, seed=seed, layout=layout)

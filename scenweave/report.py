@@ -353,6 +353,9 @@ def render_run_report(run_dir: Path) -> str:
         parts += ["<h2>Figures</h2>", *_run_figures(run_dir, outcomes)]
     if replayed:
         parts += ["<h2>Replay figures</h2>", *_replay_figures(run_dir, replayed)]
+    varied = [o for o in outcomes if o.get("variants")]
+    if varied:
+        parts += ["<h2>Variants</h2>", _variant_table(varied)]
     parts += ["<h2>Scenarios</h2>", _scenario_table(run_dir, outcomes)]
     issues = summary.get("input_issues") or []
     if issues:
@@ -361,6 +364,20 @@ def render_run_report(run_dir: Path) -> str:
                         [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
                          for i in issues], text_columns=4)]
     return page(f"ScenWeave run {summary.get('run_id', run_dir.name)}", "\n".join(parts))
+
+
+def _variant_table(varied: list[dict]) -> str:
+    """Each record's variants (``run --vary``): the distinct ones kept and what each changed,
+    or why a variant was not kept."""
+    rows = []
+    for o in varied:
+        kept = [v for v in o["variants"] if v.get("kept")]
+        notes = "; ".join(f"{v['id']} {', '.join(v['changed'])}" if v.get("kept") else
+                          f"{v['id']} ({v['aspect']}) not kept: {(v.get('errors') or ['?'])[0]}"
+                          for v in o["variants"])
+        rows.append([o["scenario_id"], len(kept), len(o["variants"]), notes])
+    return table(["scenario", "kept", "asked", "variants"], rows, text_columns=1,
+                 column_classes={3: "text"})
 
 
 def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> str:

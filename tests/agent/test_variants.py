@@ -70,3 +70,12 @@ def test_compare_names_what_changed(varied):
     assert compare(folder / "scenario.xosc", folder / "variants" / "v01" / "scenario.xosc"
                    ).changed == ["weather"]
     assert compare(folder / "scenario.xosc", folder / "scenario.xosc").changed == []
+
+
+def test_the_report_lists_each_records_variants(varied):
+    from scenweave.report import _variant_table
+
+    outcome, _ = varied
+    html = _variant_table([outcome])
+    assert outcome["scenario_id"] in html and "v01 weather" in html
+    assert "v02 (vehicles) not kept: VARY_RECORDED" in html

@@ -136,6 +136,8 @@ VARIANT_CHANGES = {
     "traffic": ("Add one background vehicle that keeps clear of the manoeuvre: with npc(), in "
                 "a lane no recorded vehicle uses, far ahead of or behind them, at a constant "
                 "speed, and add it to the actors."),
+    "lane": ("Move the whole scenario one lane over: change every \"*_lane_id\" value by the "
+             "same amount (+1 or -1), nothing else."),
 }
 
 

@@ -1,6 +1,7 @@
 """Variants of a delivered scenario (``scenweave run --vary N``): the LLM rewrites the final
 script changing one thing the record does not fix (weather and time of day, a vehicle model,
-background traffic; ``schemas.variation.ASPECTS`` in turn), and a variant is kept only when
+background traffic, the lane; ``schemas.variation.ASPECTS`` in turn), and a variant is kept
+only when
 
 - it runs in the sandbox, given what the delivered script was given;
 - it changes what it may and nothing the record fixes (``schemas.variation.compare``);
@@ -72,12 +73,21 @@ def _variant(params: dict, code: str, aspect: str, given: dict, folder: Path, ou
     errors = [f"{f.code}: {f.message}" for f in variation.violations]
     if not variation.changed:
         errors.append("VARY_NOTHING: the variant is the faithful scenario")
-    errors += _replay_errors(scenario, params, replay)
+    errors += _replay_errors(scenario, _shifted_params(params, variation.lane_shift), replay)
     digest = _digest(scenario)
     if not errors and digest in seen:
         errors.append("VARY_DUPLICATE: an earlier variant is the same file")
     seen.add(digest)
     return found | {"kept": not errors, "errors": errors}
+
+
+def _shifted_params(params: dict, lanes: int) -> dict:
+    """The record's params with every placed actor's lane moved by ``lanes`` (a lane
+    variant); the spawn keys name lanes as OpenDRIVE ids."""
+    if not lanes:
+        return params
+    return {**params, **{key: value + lanes for key, value in params.items()
+                         if key.endswith("_lane_id") and isinstance(value, int)}}
 
 
 def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:

@@ -31,9 +31,12 @@ def varied(replay, esmini, tmp_path):
     replies = [fenced(right),  # the faithful scenario, ok on attempt 1
                fenced(right.replace('"Day_Clear"', '"Night_Rain"')),  # weather: kept
                fenced(right.replace('"npc_speed_ms": 25.0', '"npc_speed_ms": 30.0')),  # fixed
-               fenced(right)]  # nothing changed
+               fenced(right),  # nothing changed
+               fenced(right.replace('"ego_lane_id": -3', '"ego_lane_id": -2')
+                      .replace('"npc_lane_id": -3', '"npc_lane_id": -2')),  # one lane over
+               fenced(right.replace('"ego_lane_id": -3', '"ego_lane_id": -2'))]  # ego alone
     settings = PipelineSettings(no_llm=False, agent=replay(replies), replay=ReplaySettings(),
-                                vary=3)
+                                vary=5)
     outcome = process_scenario(params, 0, tmp_path, settings, AlreadyPlaced())
     return outcome, tmp_path
 
@@ -61,8 +64,22 @@ def test_a_copy_of_the_faithful_scenario_is_no_variant(varied):
     same = outcome["variants"][2]
     assert not same["kept"] and same["changed"] == []
     assert any(e.startswith("VARY_NOTHING") for e in same["errors"])
-    assert variant_summary([outcome]) == {"asked": 3, "kept": 1, "records_with_a_variant": 1,
+    assert variant_summary([outcome]) == {"asked": 5, "kept": 1, "records_with_a_variant": 1,
                                           "changed": {"weather": 1}}
+
+
+def test_the_whole_scenario_one_lane_over_is_judged_one_car_alone_is_not_a_variant(varied):
+    """Every recorded car one lane over is a lane variant; on Town04's curved road 45 the same
+    s no longer gives the recorded gap along the new lane, so fidelity refuses it (a kept
+    lane variant needs the spawn stage to place the record in that lane)."""
+    outcome, folder = varied
+    lane, alone = outcome["variants"][3], outcome["variants"][4]
+    assert (lane["aspect"], lane["changed"]) == ("lane", ["lane"]), lane
+    assert 'laneId="-2"' in (folder / "variants" / "v04" / "scenario.xosc").read_text()
+    assert not lane["kept"] and any(e.startswith("FIDELITY_GAP") for e in lane["errors"])
+    assert not alone["kept"]
+    assert any(e.startswith("VARY_RECORDED: the variant changes hero's start")
+               for e in alone["errors"]), alone["errors"]
 
 
 def test_compare_names_what_changed(varied):
@@ -70,6 +87,8 @@ def test_compare_names_what_changed(varied):
     assert compare(folder / "scenario.xosc", folder / "variants" / "v01" / "scenario.xosc"
                    ).changed == ["weather"]
     assert compare(folder / "scenario.xosc", folder / "scenario.xosc").changed == []
+    lane = compare(folder / "scenario.xosc", folder / "variants" / "v04" / "scenario.xosc")
+    assert (lane.changed, lane.lane_shift, lane.violations) == (["lane"], 1, [])
 
 
 def test_the_report_lists_each_records_variants(varied):

@@ -136,14 +136,27 @@ VARIANT_CHANGES = {
     "traffic": ("Add one background vehicle that keeps clear of the manoeuvre: with npc(), in "
                 "a lane no recorded vehicle uses, far ahead of or behind them, at a constant "
                 "speed, and add it to the actors."),
-    "lane": ("Move the whole scenario one lane over: change every \"*_lane_id\" value by the "
-             "same amount (+1 or -1), nothing else."),
+    "lane": ("Move the whole scenario one lane over, where the map has room for it: change "
+             "these values wherever the script has them, from the old value to the new one, "
+             "and nothing else:\n{moves}"),
 }
 
 
-def variant_prompt(params: dict, code: str, aspect: str) -> Prompt:
-    """A variant of the delivered scenario script that changes one ``aspect`` only."""
+def variant_prompt(params: dict, code: str, aspect: str, moved: dict | None = None) -> Prompt:
+    """A variant of the delivered scenario script that changes one ``aspect`` only;
+    ``moved``: for the lane, the record's params placed one lane over
+    (``SpawnMatcher.lane_over``), whose new values the change lists."""
+    change = VARIANT_CHANGES[aspect].format(moves=_moves(params, moved or params, code))
     user = _sections(("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
-                     ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", VARIANT_CHANGES[aspect]),
+                     ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", change),
                      ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), f"vary-{aspect}")
+
+
+def _moves(params: dict, moved: dict, code: str) -> str:
+    """``- key: old -> new`` for each value ``moved`` changes that ``code`` names."""
+    changed = [key for key, value in moved.items()
+               if params.get(key) != value and key not in METADATA_KEYS]
+    named = [key for key in changed if f'"{key}"' in code or f"'{key}'" in code] or changed
+    return "\n".join(f"- {key}: {json.dumps(params.get(key))} -> {json.dumps(moved[key])}"
+                      for key in named)

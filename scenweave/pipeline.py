@@ -55,7 +55,7 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
         if settings.no_llm:
             outcome.update(_reference_scenario(placed, out_dir, settings, timings, trace))
         else:
-            outcome.update(_agent_scenario(placed, out_dir, settings, timings, trace))
+            outcome.update(_agent_scenario(placed, out_dir, settings, timings, trace, matcher))
     except Exception as err:  # noqa: BLE001 - a scenario's failure is a value, not a crash
         if is_infrastructure_error(err):
             trace.event("infrastructure_error", error=f"{type(err).__name__}: {err}")
@@ -141,7 +141,7 @@ def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
 
 
 def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
-                    timings: dict, trace: Trace) -> dict:
+                    timings: dict, trace: Trace, matcher: Any) -> dict:
     from scenweave import agent
 
     result = _timed(timings, "agent",
@@ -152,7 +152,8 @@ def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
 
         outcome["variants"] = _timed(timings, "vary", lambda: make_variants(
             params, out_dir, settings.agent, settings.vary, settings.replay,
-            parametric=bool(outcome.get("fallback")), trace=trace))
+            parametric=bool(outcome.get("fallback")), trace=trace,
+            lane_over=lambda index: matcher.lane_over(params, index)))
     return outcome
 
 

@@ -372,12 +372,18 @@ def _variant_table(varied: list[dict]) -> str:
     rows = []
     for o in varied:
         kept = [v for v in o["variants"] if v.get("kept")]
-        notes = "; ".join(f"{v['id']} {', '.join(v['changed'])}" if v.get("kept") else
-                          f"{v['id']} ({v['aspect']}) not kept: {(v.get('errors') or ['?'])[0]}"
-                          for v in o["variants"])
+        notes = "; ".join(f"{v['id']} {', '.join(v['changed'])}{_placed(v)}" if v.get("kept")
+                          else f"{v['id']} ({v['aspect']}) not kept: "
+                          f"{(v.get('errors') or ['?'])[0]}" for v in o["variants"])
         rows.append([o["scenario_id"], len(kept), len(o["variants"]), notes])
     return table(["scenario", "kept", "asked", "variants"], rows, text_columns=1,
                  column_classes={3: "text"})
+
+
+def _placed(variant: dict) -> str:
+    """Where a kept lane variant put the ego (`` (road 35 lane -1)``), else nothing."""
+    placed = variant.get("placed") if "lane" in variant.get("changed", ()) else None
+    return f" (road {placed['ego_road_id']} lane {placed['ego_lane_id']})" if placed else ""
 
 
 def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> str:

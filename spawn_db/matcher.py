@@ -33,7 +33,13 @@ from scenweave import maneuvers
 from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import load_database
-from scenweave.spawn_db.errors import LaneEndsError, NoSpawnFits, ParamsError, SpawnDatabaseError
+from scenweave.spawn_db.errors import (
+    LaneEndsError,
+    NoSpawnFits,
+    OpenDriveError,
+    ParamsError,
+    SpawnDatabaseError,
+)
 from scenweave.spawn_db.map_ref import MapRef, resolve_map, spawn_database
 from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
 from scenweave.spawn_db.signals import junction_approach
@@ -311,7 +317,55 @@ class SpawnMatcher:
     def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
         candidates = self.find(params, top_n)
-        candidate = candidates[index % len(candidates)]
+        return self._placed(params, candidates[index % len(candidates)])
+
+    def lane_over(self, placed: dict[str, Any], index: int = 0) -> dict[str, Any]:
+        """``placed`` (params ``assign`` filled) with the whole scenario one lane over: the ego
+        from a spawn point in a same-direction lane beside its own on the same road that fits
+        the scenario, and every other actor placed from there as ``assign`` places it, so gaps
+        hold along the new lanes. Each neighbouring lane offers the spawn point nearest the
+        ego's ``s``; ``index`` picks among them, the nearer first (left on a tie).
+
+        Raises :class:`NoSpawnFits` when neither neighbouring lane has such a spawn point.
+        """
+        needs = Requirements.from_params(placed)
+        ego = LanePoint(str(placed.get("ego_road_id")), placed.get("ego_lane_id"),
+                        placed.get("ego_s"))
+        try:
+            here = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
+        except (KeyError, TypeError, ValueError, OpenDriveError) as err:
+            raise ParamsError(f"{needs.scenario_id}: ego_road_id/ego_lane_id/ego_s do not name "
+                              f"a lane of map {self.map.name}: {err}") from err
+        lanes = {(neighbour.road_id, neighbour.lane_id): side for side in ("left", "right")
+                 if (neighbour := self.network.neighbour(here, side)) is not None}
+        nearest: dict[tuple[str, int], tuple[float, int, dict[str, Any]]] = {}
+        for _, entry in self._by_context.get(needs.domain, []):
+            lane = (str(entry["geometry"]["road_id"]), entry["geometry"]["lane_id"])
+            if lane not in lanes:
+                continue
+            found = (abs(entry["geometry"]["s"] - ego.s), list(lanes).index(lane), entry)
+            if found[:2] < nearest.get(lane, (math.inf, 0))[:2] and self._fits(entry, needs,
+                                                                                placed):
+                nearest[lane] = found
+        if not nearest:
+            beside = ", ".join(f"{side}: lane {lane}" for (_, lane), side in lanes.items())
+            raise NoSpawnFits(f"{needs.scenario_id}: no spawn point beside road {ego.road_id} "
+                              f"lane {ego.lane_id} on map {self.map.name} fits the scenario "
+                              f"({beside or 'no same-direction lane beside it'})")
+        ranked = sorted(nearest.values(), key=lambda found: found[:2])
+        entry = ranked[index % len(ranked)][2]
+        return self._placed(placed, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
+
+    def _fits(self, entry: dict[str, Any], needs: Requirements, params: dict[str, Any]) -> bool:
+        if next(_hard_filters(entry, needs), None) is None and not self._route_rejections(entry,
+                                                                                         params):
+            return True
+        relaxed = needs.lights_after_manoeuvre()  # as ``find`` falls back to
+        return (needs.domain == "highway" and next(_hard_filters(entry, relaxed), None) is None
+                and not self._route_rejections(entry, params))
+
+    def _placed(self, params: dict[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
+        """``params`` with the spawn keys filled from ``candidate``."""
         result = dict(params)
         result["map"] = self.map.logic_file
         result["spawn_id"] = candidate.spawn_id

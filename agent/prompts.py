@@ -131,8 +131,10 @@ VARIANT_CHANGES = {
     "weather": ("Change only the weather and time of day: set the \"weather_key\" value to "
                 "another of Day_Clear, Day_Cloudy, Day_Rain, Day_Fog, Night_Clear, Night_Rain, "
                 "Night_Fog."),
-    "vehicles": ("Change only a vehicle model: set one \"*_vehicle_type\" value to another of "
-                 "car, truck, van."),
+    "vehicles": ("Change one vehicle model. The record's distances are between bumpers, so "
+                 "a longer or shorter vehicle stands elsewhere: change these values wherever "
+                 "the script has them, from the old value to the new one, and nothing "
+                 "else:\n{moves}"),
     "traffic": ("Add one background vehicle that keeps clear of the manoeuvre: with npc(), in "
                 "a lane no recorded vehicle uses, far ahead of or behind them, at a constant "
                 "speed, and add it to the actors."),
@@ -142,11 +144,11 @@ VARIANT_CHANGES = {
 }
 
 
-def variant_prompt(params: dict, code: str, aspect: str, moved: dict | None = None) -> Prompt:
+def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = None) -> Prompt:
     """A variant of the delivered scenario script that changes one ``aspect`` only;
-    ``moved``: for the lane, the record's params placed one lane over
-    (``SpawnMatcher.lane_over``), whose new values the change lists."""
-    change = VARIANT_CHANGES[aspect].format(moves=_moves(params, moved or params, code))
+    ``asked``: the record as the variant must play it (``agent.variants.asked_params``), whose
+    changed values the request lists."""
+    change = VARIANT_CHANGES[aspect].format(moves=_moves(params, asked or params, code))
     user = _sections(("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
                      ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", change),
                      ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))

@@ -6,55 +6,73 @@ only when
 - it runs in the sandbox, given what the delivered script was given;
 - it changes what it may and nothing the record fixes (``schemas.variation.compare``);
 - it is valid and still plays the recorded manoeuvre (``validate_xosc`` with the replay,
-  against the record's params with the variant's own weather, and for the lane the params
-  the spawn stage placed one lane over);
+  against the record's params as the variant was asked to change them, with its own weather);
 - no kept variant of the record is the same file.
 
-A lane variant asks the spawn stage first (``lane_over``: ``SpawnMatcher.lane_over``, the
-record placed so its gaps hold along the neighbouring lanes); the LLM is given the values that
-moved, and the reference script played there (``lane_over.xosc``) is what the variant must
-start as. Where the map has no room one lane over, the variant is not asked for
-(``VARY_NO_LANE``).
+Weather and traffic are the LLM's to choose. A vehicle model and the lane change values the
+record's other values depend on, so ScenWeave works out what the record becomes first
+(``asked_params``) and hands the LLM the values that change:
+
+- another model for one vehicle keeps the free space between the bumpers the record fixes
+  (``ingest.extract.with_vehicle_type``), so the reference-point gaps move, and the scenario
+  is placed anew from the same spawn point (``SpawnMatcher.place_at``);
+- the lane: the spawn stage places the record one lane over (``SpawnMatcher.lane_over``), its
+  gaps measured along the new lanes.
+
+The reference script played with those values (``reference.xosc`` beside the variant, its
+params in ``params.json``) is what such a variant must match in everything the record fixes.
+Where the record has no room one lane over (``VARY_NO_LANE``), no vehicle but the ego
+(``VARY_NO_VEHICLE``) or its spawn no room for the other model (``VARY_NO_ROOM``), no LLM call
+is spent.
 
 Each variant gets ``variants/vNN/`` in the scenario folder: its script, its scenario when it
-ran, and ``variant.json`` (what it changed, kept or why not).
+ran, and ``variant.json`` (what it changed, what it was asked to change, kept or why not).
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from scenweave import corpus
 from scenweave.agent.code import extract_python_code
 from scenweave.agent.prompts import variant_prompt
 from scenweave.agent.run import shared_llm, shared_sandbox
 from scenweave.agent.settings import AgentSettings
-from scenweave.agent.trace import CODE_NAME, XOSC_NAME, Trace
+from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, XOSC_NAME, Trace
+from scenweave.corpus.corpus_utils import known_type
 from scenweave.corpus.worked_example import provenance
+from scenweave.ingest.extract import with_vehicle_type
 from scenweave.player import REPLAY_NAME
 from scenweave.schemas.variation import ASPECTS, compare
 from scenweave.spawn_db.errors import SpawnDbError
 
 VARIANTS_DIR = "variants"
 VARIANT_FILE = "variant.json"
-#: the reference scenario one lane over, which a lane variant must start as
-LANE_OVER_NAME = "lane_over.xosc"
-#: what ``variant.json`` says of where a lane variant put the record
+#: the reference script played with the values a variant was asked to change
+REFERENCE_NAME = "reference.xosc"
+#: where ``variant.json`` says a lane variant put the record
 PLACEMENT_KEYS = ("spawn_id", "ego_road_id", "ego_lane_id", "ego_s")
+#: the vehicle models a vehicles variant gives a recorded actor, in turn
+VEHICLE_TYPES = ("car", "van", "truck")
+
+
+class NotAsked(Exception):
+    """A variant of this aspect cannot be made of the record; ``code`` says why."""
+
+    def __init__(self, code: str, message: str):
+        super().__init__(message)
+        self.code = code
 
 
 def make_variants(params: dict, out_dir: Path, settings: AgentSettings, count: int,
-                  replay: Any, parametric: bool, trace: Trace,
-                  lane_over: Callable[[int], dict] | None = None) -> list[dict]:
+                  replay: Any, parametric: bool, trace: Trace, matcher: Any) -> list[dict]:
     """``count`` variants of the scenario in ``out_dir``; what each changed, kept or not.
 
     ``parametric``: the delivered script is the reference (a fallback), which reads params.
-    ``lane_over(n)``: the params placed one lane over for the n-th lane variant (raises
-    ``SpawnDbError`` where the map has no room; None: no lane variants).
+    ``matcher``: the spawn stage that placed ``params`` (``SpawnMatcher``).
     """
     code = (out_dir / CODE_NAME).read_text(encoding="utf-8")
     given = params if parametric else provenance(params)
@@ -64,52 +82,66 @@ def make_variants(params: dict, out_dir: Path, settings: AgentSettings, count: i
         aspect = ASPECTS[(number - 1) % len(ASPECTS)]
         folder = out_dir / VARIANTS_DIR / f"v{number:02d}"
         folder.mkdir(parents=True, exist_ok=True)
+        variant: dict[str, Any] = {"id": folder.name, "aspect": aspect, "kept": False,
+                                   "changed": [], "asked": {}, "errors": []}
         try:
-            target = _target(params, aspect, lane_over, folder, (number - 1) // len(ASPECTS))
-        except SpawnDbError as err:
-            variant = {"id": folder.name, "aspect": aspect, "kept": False, "changed": [],
-                       "errors": [f"VARY_NO_LANE: {err}"]}
+            asked = asked_params(params, aspect, matcher, (number - 1) // len(ASPECTS))
+        except NotAsked as err:
+            variant["errors"] = [f"{err.code}: {err}"]
         else:
-            variant = _variant(params, target, code, aspect, given, folder, out_dir, settings,
-                               replay, seen)
+            variant |= _variant(params, asked, code, aspect, given, folder, out_dir, settings,
+                                replay, seen)
         (folder / VARIANT_FILE).write_text(json.dumps(variant, indent=1), encoding="utf-8")
         trace.event("variant", **variant)
         found.append(variant)
     return found
 
 
-@dataclass(frozen=True)
-class _Target:
-    """Where a variant may play the record: as placed, or (the lane aspect) one lane over,
-    with the reference scenario there."""
-
-    #: the record's params the variant is judged against when it moved lanes
-    placed: dict
-    #: the reference played at ``placed`` (None: the variant stays where the record is)
-    moved: Path | None = None
-
-
-def _target(params: dict, aspect: str, lane_over: Callable[[int], dict] | None,
-            folder: Path, round_number: int) -> _Target:
-    if aspect != "lane":
-        return _Target(params)
-    if lane_over is None:
-        raise SpawnDbError("this run places no scenario one lane over")
-    from scenweave import corpus
-
-    placed = lane_over(round_number)
-    moved = folder / LANE_OVER_NAME
-    corpus.generate(placed, moved)
-    return _Target(placed, moved)
+def asked_params(params: dict, aspect: str, matcher: Any, round_number: int = 0) -> dict:
+    """The record as a variant of ``aspect`` must play it (``round_number``: how many of this
+    aspect were asked before): as it is for the weather and traffic, which the LLM chooses;
+    with one vehicle another model, or one lane over. Raises :class:`NotAsked`."""
+    if aspect == "lane":
+        try:
+            return matcher.lane_over(params, round_number)
+        except SpawnDbError as err:
+            raise NotAsked("VARY_NO_LANE", str(err)) from err
+    if aspect != "vehicles":
+        return params
+    actors = _vehicle_actors(params)
+    if not actors:
+        raise NotAsked("VARY_NO_VEHICLE", "the record has no vehicle but the ego")
+    actor = actors[round_number % len(actors)]
+    others = [t for t in VEHICLE_TYPES if t != known_type(params[f"{actor}_vehicle_type"])]
+    model = others[(round_number // len(actors)) % len(others)]
+    try:
+        return matcher.place_at(with_vehicle_type(params, actor, model))
+    except SpawnDbError as err:
+        raise NotAsked("VARY_NO_ROOM", str(err)) from err
 
 
-def _variant(params: dict, target: _Target, code: str, aspect: str, given: dict, folder: Path,
+def _vehicle_actors(params: dict) -> list[str]:
+    """The params prefixes of the recorded actors besides the ego (each has a model)."""
+    actors = []
+    for key in params:
+        actor = key.removesuffix("_vehicle_type")
+        present = params.get("has_npc") if actor == "npc" else params.get(f"{actor}_present")
+        if key.endswith("_vehicle_type") and present:
+            actors.append(actor)
+    return actors
+
+
+def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict, folder: Path,
              out_dir: Path, settings: AgentSettings, replay: Any, seen: set[str]) -> dict:
-    found: dict[str, Any] = {"id": folder.name, "aspect": aspect, "kept": False,
-                             "changed": [], "errors": []}
-    if target.moved is not None:
-        found["placed"] = {key: target.placed.get(key) for key in PLACEMENT_KEYS}
-    prompt = variant_prompt(params, code, aspect, target.placed)
+    found: dict[str, Any] = {"asked": _changes(params, asked)}
+    if "ego_lane_id" in found["asked"]:
+        found["placed"] = {key: asked.get(key) for key in PLACEMENT_KEYS}
+    reference = None
+    if found["asked"]:
+        (folder / PARAMS_NAME).write_text(json.dumps(asked, indent=1), encoding="utf-8")
+        reference = folder / REFERENCE_NAME
+        corpus.generate(asked, reference)
+    prompt = variant_prompt(params, code, aspect, asked)
     written = extract_python_code(shared_llm(settings).complete(prompt).text).code
     (folder / CODE_NAME).write_text(written, encoding="utf-8")
     if not written:
@@ -119,17 +151,22 @@ def _variant(params: dict, target: _Target, code: str, aspect: str, given: dict,
     if not result.ok or not scenario.is_file():
         return found | {"errors": [f"{result.error_type or 'NoOutput'}: "
                                    f"{result.error_message or 'no scenario written'}"]}
-    variation = compare(out_dir / XOSC_NAME, scenario, target.moved)
-    found["changed"] = variation.changed
+    variation = compare(out_dir / XOSC_NAME, scenario, reference)
     errors = [f"{f.code}: {f.message}" for f in variation.violations]
     if not variation.changed:
         errors.append("VARY_NOTHING: the variant is the faithful scenario")
-    errors += _replay_errors(scenario, target.placed if variation.moved else params, replay)
+    errors += _replay_errors(scenario, asked if variation.as_asked else params, replay)
     digest = _digest(scenario)
     if not errors and digest in seen:
         errors.append("VARY_DUPLICATE: an earlier variant is the same file")
     seen.add(digest)
-    return found | {"kept": not errors, "errors": errors}
+    return found | {"changed": variation.changed, "kept": not errors, "errors": errors}
+
+
+def _changes(params: dict, asked: dict) -> dict[str, list]:
+    """``key: [old, new]`` of each value ``asked`` changes."""
+    return {key: [params.get(key), value] for key, value in asked.items()
+            if params.get(key) != value}
 
 
 def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:

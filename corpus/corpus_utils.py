@@ -195,6 +195,18 @@ def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
     return bumper_gap_m - _rear_of(ego) - _front_of(other)
 
 
+def bumper_gap_m(reference_m: float, other_type: str | None) -> float | None:
+    """The free space between the facing bumpers of the ego and a vehicle of ``other_type``
+    whose reference point is ``reference_m`` ahead (negative: behind): ``reference_gap_m``
+    undone. ``None`` when the two overlap along the lane (side by side: no facing bumpers)."""
+    ego, other = VEHICLE_MODELS["ego"].length_m, VEHICLE_MODELS[known_type(other_type)].length_m
+    if reference_m >= _front_of(ego) + _rear_of(other):
+        return reference_m - _front_of(ego) - _rear_of(other)
+    if reference_m <= -(_rear_of(ego) + _front_of(other)):
+        return reference_m + _rear_of(ego) + _front_of(other)
+    return None
+
+
 def _front_of(length_m: float) -> float:
     """How far the front bumper lies ahead of the reference point (the box centre is
     ``BOX_CENTRE_AHEAD`` x length ahead of it)."""

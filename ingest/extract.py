@@ -7,7 +7,7 @@ from them (end speeds, timeout, the spawn footprint), so perturbed variants stay
 from __future__ import annotations
 
 from scenweave import maneuvers
-from scenweave.corpus.corpus_utils import reference_gap_m
+from scenweave.corpus.corpus_utils import bumper_gap_m, reference_gap_m
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
 from scenweave.maneuvers.free_ride import SLOTS
@@ -72,11 +72,33 @@ def _gaps_to_reference_points(params: dict) -> None:
     """Bumper gaps of the file -> the reference-point gaps params hold (docs/params.md)."""
     for prefix in ("npc", *SLOTS):
         kind = params.get(f"{prefix}_vehicle_type")
-        for key in (f"{prefix}_distance_m", f"{prefix}_end_distance_m",
-                    f"{prefix}_distance_end_m"):
+        for key in _gap_keys(prefix):
             present = prefix == "npc" or params.get(f"{prefix}_present")
             if present and isinstance(params.get(key), float | int):
                 params[key] = reference_gap_m(params[key], kind)
+
+
+def _gap_keys(prefix: str) -> tuple[str, ...]:
+    """The params keys holding the gaps between the ego and the highway actor ``prefix``."""
+    if prefix not in ("npc", *SLOTS):
+        return ()
+    return f"{prefix}_distance_m", f"{prefix}_end_distance_m", f"{prefix}_distance_end_m"
+
+
+def with_vehicle_type(params: dict, prefix: str, vehicle_type: str) -> dict:
+    """``params`` with actor ``prefix`` (``npc``, a free-ride slot, ``lead``, ...) driving
+    another model: the free space between the facing bumpers, which the record fixes, is
+    kept, so the reference-point gaps params hold move by the change in length; the values
+    that follow are derived anew (``finish``). The spawn keys are the caller's to redo."""
+    changed = {**params, f"{prefix}_vehicle_type": vehicle_type}
+    before = params.get(f"{prefix}_vehicle_type")
+    for key in _gap_keys(prefix):
+        value = params.get(key)
+        bumpers = (bumper_gap_m(value, before)
+                   if isinstance(value, float | int) and not isinstance(value, bool) else None)
+        if bumpers is not None:
+            changed[key] = reference_gap_m(bumpers, vehicle_type)
+    return finish(changed)
 
 
 def record_conventions(record: dict) -> dict:

@@ -152,8 +152,7 @@ def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
 
         outcome["variants"] = _timed(timings, "vary", lambda: make_variants(
             params, out_dir, settings.agent, settings.vary, settings.replay,
-            parametric=bool(outcome.get("fallback")), trace=trace,
-            lane_over=lambda index: matcher.lane_over(params, index)))
+            parametric=bool(outcome.get("fallback")), trace=trace, matcher=matcher))
     return outcome
 
 

@@ -381,9 +381,14 @@ def _variant_table(varied: list[dict]) -> str:
 
 
 def _placed(variant: dict) -> str:
-    """Where a kept lane variant put the ego (`` (road 35 lane -1)``), else nothing."""
-    placed = variant.get("placed") if "lane" in variant.get("changed", ()) else None
-    return f" (road {placed['ego_road_id']} lane {placed['ego_lane_id']})" if placed else ""
+    """What a kept variant was asked to change: `` (road 35 lane -1)`` for the lane,
+    `` (npc car → van)`` for a vehicle model; nothing for what the LLM chose itself."""
+    asked, placed = variant.get("asked") or {}, variant.get("placed")
+    if placed:
+        return f" (road {placed['ego_road_id']} lane {placed['ego_lane_id']})"
+    models = [f"{key.removesuffix('_vehicle_type')} {old} → {new}"
+              for key, (old, new) in asked.items() if key.endswith("_vehicle_type")]
+    return f" ({', '.join(models)})" if models else ""
 
 
 def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> str:

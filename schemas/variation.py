@@ -3,12 +3,13 @@
 A variant (``scenweave run --vary N``) may change only what the record does not say: the
 weather and time of day (the ``EnvironmentAction``), the vehicle models of the record's
 actors (their ``Vehicle``), background traffic (entities the faithful scenario does not
-have), and the lane: the whole scenario one lane over, where the spawn stage found the record
-room (``SpawnMatcher.lane_over``); the reference script played there is the ``moved``
-scenario, and a lane variant must start every recorded actor as it does. Everything else the
-record fixes must stay as the faithful scenario has it: the map, every recorded actor's start
-(``Init``), the stories of the recorded actors and the stop trigger. Whether the variant still
-plays the recorded manoeuvre is the replay's to judge (``schemas.replay``).
+have), and the lane (a recorded actor's start lane). Everything the record fixes must stay:
+the map, every recorded actor's start (``Init``), the stories of the recorded actors and the
+stop trigger, as the faithful scenario has them, or, for a variant asked to change values
+those depend on (another model keeps the gaps between bumpers, so the cars start elsewhere;
+the record one lane over), as the ``reference`` script played with those values has them.
+Whether the variant still plays the recorded manoeuvre is the replay's to judge
+(``schemas.replay``).
 """
 
 from __future__ import annotations
@@ -30,21 +31,18 @@ class Variation:
 
     changed: list[str] = field(default_factory=list)
     violations: list[Finding] = field(default_factory=list)
+    #: it matches the ``reference`` (what it was asked to change), not the faithful scenario
+    as_asked: bool = False
 
     @property
     def is_variant(self) -> bool:
         """It changed something allowed and nothing fixed."""
         return bool(self.changed) and not self.violations
 
-    @property
-    def moved(self) -> bool:
-        """It is the scenario one lane over (judged against the ``moved`` scenario)."""
-        return "lane" in self.changed
 
-
-def compare(faithful: Path, variant: Path, moved: Path | None = None) -> Variation:
-    """How ``variant`` differs from the ``faithful`` scenario file; ``moved``: the faithful
-    scenario one lane over (the reference played where ``SpawnMatcher.lane_over`` put it)."""
+def compare(faithful: Path, variant: Path, reference: Path | None = None) -> Variation:
+    """How ``variant`` differs from the ``faithful`` scenario file; ``reference``: the
+    reference script played with the values the variant was asked to change."""
     old, new = etree.parse(str(faithful)).getroot(), etree.parse(str(variant)).getroot()
     found = Variation()
     if _canonical(old.find(".//EnvironmentAction")) != _canonical(new.find(".//EnvironmentAction")):
@@ -60,22 +58,33 @@ def compare(faithful: Path, variant: Path, moved: Path | None = None) -> Variati
     kept = [name for name in recorded if name in present]
     if any(_canonical(_vehicle(old, n)) != _canonical(_vehicle(new, n)) for n in kept):
         found.changed.append("vehicles")
+    if any(_start_lanes(old, n) != _start_lanes(new, n) for n in kept):
+        found.changed.append("lane")
     fixed = _fixed_parts(kept)
-    base = old
-    if moved is not None:
-        lane_over = etree.parse(str(moved)).getroot()
-        if _starts(new, kept) == _starts(lane_over, kept) != _starts(old, kept):
-            found.changed.append("lane")
-            base = lane_over
+    asked = None if reference is None else etree.parse(str(reference)).getroot()
+    if asked is not None and _marks(new, kept) == _marks(asked, kept) != _marks(old, kept):
+        found.as_asked = True  # it made the asked change: the rest must follow as it does there
+        found.violations += [Finding("VARY_RECORDED", f"{what} is not as the reference script "
+                                     "plays the asked values") for what, path in fixed
+                             if _differs(asked, new, path)]
+        return found
     found.violations += [Finding("VARY_RECORDED", f"the variant changes {what}, which the "
-                                 "record fixes")
-                         for what, path in fixed
-                         if _canonical_all(base, path) != _canonical_all(new, path)]
+                                 "record fixes") for what, path in fixed
+                         if _differs(old, new, path)]
     return found
 
 
-def _starts(root: etree._Element, actors: list[str]) -> list[list[str]]:
-    return [_canonical_all(root, _start_path(name)) for name in actors]
+def _marks(root: etree._Element, actors: list[str]) -> list[tuple[str, list[str]]]:
+    """What a variant is asked to change itself: each actor's model and start lane."""
+    return [(_canonical(_vehicle(root, name)), _start_lanes(root, name)) for name in actors]
+
+
+def _differs(one: etree._Element, other: etree._Element, path: str) -> bool:
+    return _canonical_all(one, path) != _canonical_all(other, path)
+
+
+def _start_lanes(root: etree._Element, actor: str) -> list[str]:
+    return root.xpath(f"{_start_path(actor)}//LanePosition/@laneId")
 
 
 def _start_path(actor: str) -> str:

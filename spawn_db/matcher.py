@@ -356,6 +356,24 @@ class SpawnMatcher:
         entry = ranked[index % len(ranked)][2]
         return self._placed(placed, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
 
+    def place_at(self, params: dict[str, Any]) -> dict[str, Any]:
+        """``params`` placed anew from the spawn point they name (``spawn_id``): for a record
+        whose values changed but whose place did not (a variant with another vehicle model,
+        whose reference-point gaps differ). Raises :class:`NoSpawnFits` when that spawn point
+        no longer fits."""
+        needs = Requirements.from_params(params)
+        entry = next((e for _, e in self._by_context.get(needs.domain, [])
+                      if e["spawn_id"] == params.get("spawn_id")), None)
+        if entry is None or not self._fits(entry, needs, params):
+            why = "not in its database" if entry is None else self._why_not(entry, needs, params)
+            raise NoSpawnFits(f"{needs.scenario_id}: spawn point {params.get('spawn_id')} of map "
+                              f"{self.map.name} does not fit the changed scenario ({why})")
+        return self._placed(params, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
+
+    def _why_not(self, entry: dict[str, Any], needs: Requirements, params: dict[str, Any]) -> str:
+        rejections = (*_hard_filters(entry, needs), *self._route_rejections(entry, params))
+        return str(rejections[0]) if rejections else "no reason found"
+
     def _fits(self, entry: dict[str, Any], needs: Requirements, params: dict[str, Any]) -> bool:
         if next(_hard_filters(entry, needs), None) is None and not self._route_rejections(entry,
                                                                                          params):

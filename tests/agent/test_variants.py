@@ -9,7 +9,8 @@ import json
 import pytest
 
 from scenweave.agent.llm.log import recent_calls
-from scenweave.corpus.worked_example import provenance
+from scenweave.agent.variants import NotAsked, asked_params
+from scenweave.corpus.corpus_utils import bumper_gap_m
 from scenweave.inputs import InputSelection, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.player import ReplaySettings
@@ -19,7 +20,7 @@ from tests.agent.conftest import adapted_source, fenced
 
 
 class AlreadyPlaced:
-    """The record carries its spawn already; one lane over is the real matcher's answer."""
+    """The record carries its spawn already; all else is the real matcher's answer."""
 
     def __init__(self):
         self.matcher = default_matcher()
@@ -27,8 +28,8 @@ class AlreadyPlaced:
     def assign(self, params: dict, index: int, top_n: int = 5) -> dict:
         return params
 
-    def lane_over(self, params: dict, index: int = 0) -> dict:
-        return self.matcher.lane_over(params, index)
+    def __getattr__(self, name: str):
+        return getattr(self.matcher, name)
 
 
 @pytest.fixture(scope="module")
@@ -38,34 +39,49 @@ def brake(sample_raw) -> dict:
     return default_matcher().assign(loaded.params[0], 0)
 
 
+
+@pytest.fixture(scope="module")
+def asked(brake) -> dict[str, dict]:
+    """The record as its vehicles and lane variants must play it (first round; ``vehicles2``:
+    the second vehicles variant, another model)."""
+    matcher = default_matcher()
+    return {"vehicles": asked_params(brake, "vehicles", matcher),
+            "vehicles2": asked_params(brake, "vehicles", matcher, 1),
+            "lane": asked_params(brake, "lane", matcher)}
+
+
 @pytest.fixture
-def varied(brake, replay, esmini, tmp_path):
+def varied(brake, asked, replay, esmini, tmp_path):
     right = adapted_source("BRAKE", brake)
-    lane_over = default_matcher().lane_over(brake)
-    assert (brake["ego_lane_id"], lane_over["ego_lane_id"]) == (-2, -1)
+    model = f'"npc_vehicle_type": "{brake["npc_vehicle_type"]}"'
     speed = f'"npc_speed_ms": {brake["npc_speed_ms"]}'
-    assert '"weather_key": "Day_Clear"' in right and speed in right
-    literal_shift = right.replace('"ego_lane_id": -2', '"ego_lane_id": -1').replace(
-        '"npc_lane_id": -2', '"npc_lane_id": -1')
+    assert '"weather_key": "Day_Clear"' in right and speed in right and model in right
+    new_model = f'"npc_vehicle_type": "{asked["vehicles2"]["npc_vehicle_type"]}"'
+    assert (brake["ego_lane_id"], asked["lane"]["ego_lane_id"]) == (-2, -1)
     replies = [fenced(right),  # the faithful scenario, ok on attempt 1
-               fenced(right.replace('"Day_Clear"', '"Night_Rain"')),  # weather: kept
-               fenced(right.replace(speed, '"npc_speed_ms": 33.0')),  # what the record fixes
-               fenced(right),  # nothing changed
-               fenced(adapted_source("BRAKE", {**lane_over, **provenance(brake)})),  # kept
-               fenced(right.replace('"ego_lane_id": -2', '"ego_lane_id": -1')),  # ego alone
-               fenced(right),  # (vehicles: nothing changed)
-               fenced(right),  # (traffic: nothing changed)
-               fenced(literal_shift)]  # every lane id moved, the spawn stage not asked
+               fenced(right.replace('"Day_Clear"', '"Night_Rain"')),  # v01 weather: kept
+               fenced(adapted_source("BRAKE", asked["vehicles"])),  # v02 vehicles: kept
+               fenced(right.replace(speed, '"npc_speed_ms": 33.0')),  # v03: a recorded value
+               fenced(adapted_source("BRAKE", asked["lane"])),  # v04 lane: kept
+               fenced(right),  # v05 weather: nothing changed
+               fenced(right.replace(model, new_model)),  # v06 vehicles: the model alone
+               fenced(right.replace('"ego_lane_id": -2', '"ego_lane_id": -1')),  # v07 ego alone
+               fenced(right.replace('"ego_lane_id": -2', '"ego_lane_id": -1').replace(
+                   '"npc_lane_id": -2', '"npc_lane_id": -1'))]  # v08: lane ids moved by hand
     settings = PipelineSettings(no_llm=False, agent=replay(replies), replay=ReplaySettings(),
                                 vary=8)
     outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
     return outcome, tmp_path
 
 
+def _variant(outcome: dict, number: int) -> dict:
+    return outcome["variants"][number - 1]
+
+
 def test_a_variant_that_changes_the_weather_is_kept(varied):
     outcome, folder = varied
-    assert outcome["status"] == "ok"
-    weather = outcome["variants"][0]
+    assert outcome["status"] == "ok", outcome["error"]
+    weather = _variant(outcome, 1)
     assert (weather["aspect"], weather["kept"], weather["changed"]) == ("weather", True,
                                                                        ["weather"])
     assert 'name="Night_Rain"' in (folder / "variants" / "v01" / "scenario.xosc").read_text()
@@ -74,7 +90,7 @@ def test_a_variant_that_changes_the_weather_is_kept(varied):
 
 def test_a_variant_that_changes_what_the_record_fixes_is_not(varied):
     outcome, _ = varied
-    speed = outcome["variants"][1]
+    speed = _variant(outcome, 3)
     assert not speed["kept"]
     assert any(e.startswith("VARY_RECORDED: the variant changes npc's start") for e in
                speed["errors"]), speed["errors"]
@@ -82,32 +98,59 @@ def test_a_variant_that_changes_what_the_record_fixes_is_not(varied):
 
 def test_a_copy_of_the_faithful_scenario_is_no_variant(varied):
     outcome, _ = varied
-    same = outcome["variants"][2]
+    same = _variant(outcome, 5)
     assert not same["kept"] and same["changed"] == []
     assert any(e.startswith("VARY_NOTHING") for e in same["errors"])
-    assert variant_summary([outcome]) == {"asked": 8, "kept": 2, "records_with_a_variant": 1,
-                                          "changed": {"lane": 1, "weather": 1}}
+    assert variant_summary([outcome]) == {"asked": 8, "kept": 3, "records_with_a_variant": 1,
+                                          "changed": {"lane": 1, "vehicles": 1, "weather": 1}}
+
+
+def test_another_vehicle_model_keeps_the_gap_between_bumpers(brake, asked, varied):
+    """A longer or shorter vehicle at the recorded bumper gap stands elsewhere: the variant is
+    asked for the moved values and, written in, they replay the record."""
+    outcome, _ = varied
+    vehicles = _variant(outcome, 2)
+    assert (vehicles["changed"], vehicles["kept"]) == (["vehicles"], True), vehicles
+    before, after = (p["npc_vehicle_type"] for p in (brake, asked["vehicles"]))
+    assert vehicles["asked"]["npc_vehicle_type"] == [before, after]
+    bumpers = [bumper_gap_m(p["npc_distance_m"], p["npc_vehicle_type"])
+               for p in (brake, asked["vehicles"])]
+    assert bumpers[0] == pytest.approx(bumpers[1])
+    assert asked["vehicles"]["npc_distance_m"] != brake["npc_distance_m"]
+    assert "npc_distance_m" in vehicles["asked"] and "npc_s" in vehicles["asked"]
+    prompt = _prompts(outcome["scenario_id"], "vary-vehicles")[0]
+    assert f'- npc_vehicle_type: "{before}" -> "{after}"' in prompt
+    assert "- npc_distance_m: " in prompt
+
+
+def test_the_model_changed_alone_leaves_the_recorded_gap(varied):
+    outcome, _ = varied
+    alone = _variant(outcome, 6)
+    assert alone["changed"] == ["vehicles"] and not alone["kept"]
+    assert any(e.startswith("VARY_RECORDED: npc's start is not as the reference script plays")
+               for e in alone["errors"]), alone["errors"]
 
 
 def test_the_record_one_lane_over_where_the_spawn_stage_placed_it_is_kept(varied):
     """The lane variant is asked with the values the spawn stage moved (the neighbouring lane's
     spawn point, every gap measured along the new lanes), and the LLM writes them in."""
     outcome, folder = varied
-    lane = outcome["variants"][3]
+    lane = _variant(outcome, 4)
     assert (lane["aspect"], lane["changed"], lane["kept"]) == ("lane", ["lane"], True), lane
-    assert lane["placed"]["ego_lane_id"] == -1
+    assert lane["asked"]["ego_lane_id"] == [-2, -1]
     assert 'laneId="-1"' in (folder / "variants" / "v04" / "scenario.xosc").read_text()
-    prompt = _lane_prompts(outcome["scenario_id"])[0]
+    assert (folder / "variants" / "v04" / "reference.xosc").is_file()
+    prompt = _prompts(outcome["scenario_id"], "vary-lane")[0]
     assert "- ego_lane_id: -2 -> -1" in prompt and "- npc_lane_id: -2 -> -1" in prompt
 
 
-def test_one_car_alone_or_every_lane_id_moved_by_hand_is_not_a_lane_variant(varied):
-    """Moving lane ids without the spawn stage keeps each car's s: on a curve that breaks the
-    recorded gaps, and the starts differ from where the record fits one lane over."""
+def test_one_car_alone_or_lane_ids_moved_by_hand_are_not_lane_variants(varied):
+    """The second lane variant is asked for the other side (lane -3); lane ids moved by hand
+    to -1 are neither that nor the record."""
     outcome, _ = varied
-    alone, shifted = outcome["variants"][4], outcome["variants"][7]
-    assert shifted["aspect"] == "lane" and not shifted["kept"]
-    for variant in (alone, shifted):
+    alone, by_hand = _variant(outcome, 7), _variant(outcome, 8)
+    assert by_hand["aspect"] == "lane" and by_hand["asked"]["ego_lane_id"] == [-2, -3]
+    for variant in (alone, by_hand):
         assert not variant["kept"]
         assert any(e.startswith("VARY_RECORDED: the variant changes hero's start")
                    for e in variant["errors"]), variant["errors"]
@@ -118,10 +161,22 @@ def test_compare_names_what_changed(varied):
     faithful, lane = folder / "scenario.xosc", folder / "variants" / "v04"
     assert compare(faithful, folder / "variants" / "v01" / "scenario.xosc").changed == ["weather"]
     assert compare(faithful, faithful).changed == []
-    moved = compare(faithful, lane / "scenario.xosc", lane / "lane_over.xosc")
-    assert (moved.changed, moved.violations) == (["lane"], [])
+    moved = compare(faithful, lane / "scenario.xosc", lane / "reference.xosc")
+    assert (moved.changed, moved.violations, moved.as_asked) == (["lane"], [], True)
     unasked = compare(faithful, lane / "scenario.xosc")
-    assert unasked.changed == [] and unasked.violations
+    assert unasked.changed == ["lane"] and unasked.violations and not unasked.as_asked
+
+
+def test_the_report_lists_each_records_variants(varied):
+    from scenweave.report import _variant_table
+
+    outcome, _ = varied
+    html = _variant_table([outcome])
+    before, after = _variant(outcome, 2)["asked"]["npc_vehicle_type"]
+    assert outcome["scenario_id"] in html and "v01 weather" in html
+    assert f"v02 vehicles (npc {before} → {after})" in html
+    assert "v04 lane (road 35 lane -1)" in html
+    assert "v03 (traffic) not kept: VARY_RECORDED" in html
 
 
 def test_no_room_one_lane_over_asks_no_lane_variant(brake, replay, esmini, tmp_path):
@@ -134,13 +189,20 @@ def test_no_room_one_lane_over_asks_no_lane_variant(brake, replay, esmini, tmp_p
     settings = PipelineSettings(no_llm=False, agent=replay([fenced(right)] * 4),
                                 replay=ReplaySettings(), vary=4)
     outcome = process_scenario(brake, 0, tmp_path, settings, lone)
-    lane = outcome["variants"][3]
+    lane = _variant(outcome, 4)
     assert not lane["kept"] and lane["errors"][0].startswith("VARY_NO_LANE: "), lane
     assert "no same-direction lane beside it" in lane["errors"][0]
     assert not (tmp_path / "variants" / "v04" / "scenario.py").exists()
 
 
-def _lane_prompts(scenario_id: str) -> list[str]:
-    """The prompts of the lane variants, from the local LLM log, oldest first."""
+def test_a_record_without_another_vehicle_asks_no_vehicles_variant(brake):
+    alone = {**brake, "has_npc": False}
+    with pytest.raises(NotAsked) as raised:
+        asked_params(alone, "vehicles", default_matcher())
+    assert raised.value.code == "VARY_NO_VEHICLE"
+
+
+def _prompts(scenario_id: str, purpose: str) -> list[str]:
+    """The prompts of one purpose (``vary-lane``) from the local LLM log, oldest first."""
     return [call["prompt"] for call in reversed(recent_calls(50, scenario_id))
-            if call["purpose"] == "vary-lane"]
+            if call["purpose"] == purpose]

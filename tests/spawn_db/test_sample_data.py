@@ -12,7 +12,7 @@ import pytest
 
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
-from scenweave.spawn_db import SpawnMatcher, traffic_lights_carla
+from scenweave.spawn_db import NoSpawnFits, SpawnMatcher, traffic_lights_carla
 from scenweave.spawn_db.road_network import LanePoint
 from scenweave.spawn_db.signals import junction_approach
 
@@ -59,32 +59,68 @@ def test_every_class_of_the_sample_data_is_placed(assigned):
 
 def test_highway_spawns_fit_the_manoeuvre(assigned, town04):
     for params, result in assigned:
+        if params["domain"] == "highway":
+            _assert_highway_fit(params, result, town04)
+
+
+def test_the_record_one_lane_over_fits_the_neighbouring_lane(assigned, town04):
+    """``lane_over`` (lane variants): the ego in a same-direction lane beside its own, and the
+    whole record fits there as ``assign`` makes it fit."""
+    matcher, moved, no_room = SpawnMatcher(), 0, []
+    for params, result in assigned:
         if params["domain"] != "highway":
             continue
-        ego = (str(result["ego_road_id"]), result["ego_lane_id"], result["ego_s"])
-        key = town04.key_at(*ego)
-        assert town04.road(ego[0]).sections[key.section].lanes[ego[1]].type == "driving"
-        needed = params["gap_ahead_m"] + params["max_speed_ms"] * params["timeout_s"]
-        assert town04.drivable_length(*ego, forward=True, cap=needed + 1) > needed
-        assert town04.drivable_length(*ego, forward=False, cap=1000) > params["gap_behind_m"]
-        # the side lanes last until the manoeuvre ends, and no light stands in the way
-        manoeuvre_end = params["maneuver_start_s"] + params["duration_s"]
-        side_needed = params["gap_ahead_m"] + params["max_speed_ms"] * manoeuvre_end
-        for segment, _ in _segments_within(town04, *ego, side_needed):
-            for side in params["required_lane_sides"]:
-                assert town04.neighbour(segment.key, side) is not None, \
-                    (params["scenario_id"], side, segment.key)
-        for segment, to_end in _segments_within(town04, *ego, needed):
-            approach = junction_approach(town04, segment.key)
-            assert to_end >= needed or approach is None or not approach.signalised, \
-                (params["scenario_id"], "traffic light inside the drive", segment.key)
-        for actor in ("npc", "center", "right", "left"):
-            if f"{actor}_s" not in result:
-                continue
-            back = town04.advance(str(result[f"{actor}_road_id"]), result[f"{actor}_lane_id"],
-                                  result[f"{actor}_s"], -_start_gap(params, actor))
-            assert back.s == pytest.approx(ego[2], abs=1e-3), params["scenario_id"]
-            assert back.road_id == ego[0]
+        try:
+            over = matcher.lane_over(result)
+        except NoSpawnFits as err:
+            no_room.append(str(err))
+            continue
+        here = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
+        beside = {town04.neighbour(here, side) for side in ("left", "right")} - {None}
+        assert (str(over["ego_road_id"]), over["ego_lane_id"]) in {
+            (key.road_id, key.lane_id) for key in beside}, params["scenario_id"]
+        _assert_highway_fit(params, over, town04)
+        moved += 1
+    assert moved > 100 and len(no_room) < moved / 10, no_room
+    assert all("no spawn point beside road" in message for message in no_room)
+
+
+def test_place_at_places_a_changed_record_from_the_same_spawn(assigned):
+    matcher = SpawnMatcher()
+    params, result = next((p, r) for p, r in assigned if p["maneuver_class"] == "BRAKE")
+    farther = {**result, "npc_distance_m": result["npc_distance_m"] + 5.0}
+    again = matcher.place_at(farther)
+    assert again["spawn_id"] == result["spawn_id"] and again["ego_s"] == result["ego_s"]
+    assert again["npc_s"] != result["npc_s"]
+    _assert_highway_fit({**params, "npc_distance_m": farther["npc_distance_m"]}, again,
+                        matcher.network)
+
+
+def _assert_highway_fit(params: dict, result: dict, town04) -> None:
+    ego = (str(result["ego_road_id"]), result["ego_lane_id"], result["ego_s"])
+    key = town04.key_at(*ego)
+    assert town04.road(ego[0]).sections[key.section].lanes[ego[1]].type == "driving"
+    needed = params["gap_ahead_m"] + params["max_speed_ms"] * params["timeout_s"]
+    assert town04.drivable_length(*ego, forward=True, cap=needed + 1) > needed
+    assert town04.drivable_length(*ego, forward=False, cap=1000) > params["gap_behind_m"]
+    # the side lanes last until the manoeuvre ends, and no light stands in the way
+    manoeuvre_end = params["maneuver_start_s"] + params["duration_s"]
+    side_needed = params["gap_ahead_m"] + params["max_speed_ms"] * manoeuvre_end
+    for segment, _ in _segments_within(town04, *ego, side_needed):
+        for side in params["required_lane_sides"]:
+            assert town04.neighbour(segment.key, side) is not None, \
+                (params["scenario_id"], side, segment.key)
+    for segment, to_end in _segments_within(town04, *ego, needed):
+        approach = junction_approach(town04, segment.key)
+        assert to_end >= needed or approach is None or not approach.signalised, \
+            (params["scenario_id"], "traffic light inside the drive", segment.key)
+    for actor in ("npc", "center", "right", "left"):
+        if f"{actor}_s" not in result:
+            continue
+        back = town04.advance(str(result[f"{actor}_road_id"]), result[f"{actor}_lane_id"],
+                              result[f"{actor}_s"], -_start_gap(params, actor))
+        assert back.s == pytest.approx(ego[2], abs=1e-3), params["scenario_id"]
+        assert back.road_id == ego[0]
 
 
 def test_cut_ins_start_beside_the_ego_and_others_behind_or_ahead_of_it(assigned, town04):

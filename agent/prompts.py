@@ -135,9 +135,10 @@ VARIANT_CHANGES = {
                  "a longer or shorter vehicle stands elsewhere: change these values wherever "
                  "the script has them, from the old value to the new one, and nothing "
                  "else:\n{moves}"),
-    "traffic": ("Add one background vehicle that keeps clear of the manoeuvre: with npc(), in "
-                "a lane no recorded vehicle uses, far ahead of or behind them, at a constant "
-                "speed, and add it to the actors."),
+    "traffic": ("Add one background vehicle that keeps clear of the manoeuvre. "
+                "make_scenario() adds it when the params it is given hold these keys: add "
+                "each with its value to what generate() passes to make_scenario() (RECORD, "
+                "where the script has one), and change nothing else:\n{moves}"),
     "lane": ("Move the whole scenario one lane over, where the map has room for it: change "
              "these values wherever the script has them, from the old value to the new one, "
              "and nothing else:\n{moves}"),
@@ -160,5 +161,6 @@ def _moves(params: dict, moved: dict, code: str) -> str:
     changed = [key for key, value in moved.items()
                if params.get(key) != value and key not in METADATA_KEYS]
     named = [key for key in changed if f'"{key}"' in code or f"'{key}'" in code] or changed
-    return "\n".join(f"- {key}: {json.dumps(params.get(key))} -> {json.dumps(moved[key])}"
+    return "\n".join(f"- {key}: {json.dumps(params[key])} -> {json.dumps(moved[key])}"
+                      if params.get(key) is not None else f"- {key}: {json.dumps(moved[key])}"
                       for key in named)

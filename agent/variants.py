@@ -9,21 +9,24 @@ only when
   against the record's params as the variant was asked to change them, with its own weather);
 - no kept variant of the record is the same file.
 
-Weather and traffic are the LLM's to choose. A vehicle model and the lane change values the
-record's other values depend on, so ScenWeave works out what the record becomes first
-(``asked_params``) and hands the LLM the values that change:
+The weather is the LLM's to choose. A vehicle model, background traffic and the lane touch
+values the record's other values depend on, or must keep clear of it, so ScenWeave works out
+what the record becomes first (``asked_params``) and hands the LLM the values that change:
 
 - another model for one vehicle keeps the free space between the bumpers the record fixes
   (``ingest.extract.with_vehicle_type``), so the reference-point gaps move, and the scenario
   is placed anew from the same spawn point (``SpawnMatcher.place_at``);
+- background traffic: one vehicle in a same-direction lane the record neither starts in nor
+  moves into, a little ahead of the ego at its speed (``SpawnMatcher.background``; the
+  reference scripts play it through ``corpus_utils.make_scenario``);
 - the lane: the spawn stage places the record one lane over (``SpawnMatcher.lane_over``), its
   gaps measured along the new lanes.
 
 The reference script played with those values (``reference.xosc`` beside the variant, its
 params in ``params.json``) is what such a variant must match in everything the record fixes.
 Where the record has no room one lane over (``VARY_NO_LANE``), no vehicle but the ego
-(``VARY_NO_VEHICLE``) or its spawn no room for the other model (``VARY_NO_ROOM``), no LLM call
-is spent.
+(``VARY_NO_VEHICLE``), or no room for the other model or a free lane (``VARY_NO_ROOM``), no
+LLM call is spent.
 
 Each variant gets ``variants/vNN/`` in the scenario folder: its script, its scenario when it
 ran, and ``variant.json`` (what it changed, what it was asked to change, kept or why not).
@@ -99,13 +102,19 @@ def make_variants(params: dict, out_dir: Path, settings: AgentSettings, count: i
 
 def asked_params(params: dict, aspect: str, matcher: Any, round_number: int = 0) -> dict:
     """The record as a variant of ``aspect`` must play it (``round_number``: how many of this
-    aspect were asked before): as it is for the weather and traffic, which the LLM chooses;
-    with one vehicle another model, or one lane over. Raises :class:`NotAsked`."""
+    aspect were asked before): as it is for the weather, which the LLM chooses; with one
+    vehicle another model, with a background vehicle in a lane the record leaves free, or one
+    lane over. Raises :class:`NotAsked`."""
     if aspect == "lane":
         try:
             return matcher.lane_over(params, round_number)
         except SpawnDbError as err:
             raise NotAsked("VARY_NO_LANE", str(err)) from err
+    if aspect == "traffic":
+        try:
+            return matcher.background(params, round_number)
+        except SpawnDbError as err:
+            raise NotAsked("VARY_NO_ROOM", str(err)) from err
     if aspect != "vehicles":
         return params
     actors = _vehicle_actors(params)

@@ -1,12 +1,11 @@
 """What ``run --vary`` keeps when the model is right: every record of the sample data goes
-through the agent with recorded replies a perfect model would give (the faithful script,
-then the weather, the vehicle model and the lane changed as asked; no background vehicle,
-which has no mechanical right answer: the copy it gets is refused as no variant), with the
-real sandbox, validator and esmini replay.
+through the agent with recorded replies a perfect model would give (the faithful script, then
+the weather changed, and the vehicle model, the background vehicle and the lane changed to the
+values ``agent.variants.asked_params`` hands the LLM), with the real sandbox, validator and
+esmini replay.
 
-Prints per class and aspect how many variants were kept, and why the others were not; the
-lane variants show where the map gives the record room one lane over
-(``SpawnMatcher.lane_over``) and whether the record still plays there.
+Prints per class and aspect how many variants were kept, and why the others were not (where
+ScenWeave could not ask for an aspect of a record, no LLM call is made).
 
     .venv/bin/python benchmarks/variants.py [--per-class 3] [--seed 7] [--sandbox bwrap]
 """

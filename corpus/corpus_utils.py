@@ -185,6 +185,16 @@ def npc(name: str, position: Any, speed_ms: float, vehicle_type: str | None) -> 
                  finite(f"the start speed of {name}", speed_ms))
 
 
+def background_traffic(params: Mapping[str, Any]) -> list[Actor]:
+    """The background vehicle of a ``--vary`` traffic variant, when ``background_present``:
+    it starts where the spawn stage put it (a lane the record does not use), at
+    ``background_speed_ms``, and holds that speed."""
+    if not params.get("background_present"):
+        return []
+    return [npc("background", lane_position(params, "background"),
+                number(params, "background_speed_ms"), params.get("background_vehicle_type"))]
+
+
 def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
     """The distance between the ego's and another vehicle's reference points when the free
     space between their facing bumpers is ``bumper_gap_m`` (positive: the other ahead, its rear
@@ -572,8 +582,10 @@ def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
 
     ``tag`` is the script's corpus tag (names the Story and Act); ``actors`` start where and
     as fast as given, ``events`` run in the order given within their entity's ManeuverGroup,
-    and the scenario stops at ``timeout_s``.
+    and the scenario stops at ``timeout_s``. Background traffic the params name
+    (``background_traffic``) joins the actors.
     """
+    actors = [*actors, *background_traffic(params)]
     entities = xosc.Entities()
     for actor in actors:
         entities.add_scenario_object(actor.name, _vehicle(actor))

@@ -26,7 +26,8 @@ SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
 VehicleType = Literal["car", "truck", "van", "motorcycle"]
 Side = Literal["left", "right"]
 #: the actors the spawn stage places, each with a world pose and a lane position at t = 0
-PLACED_ACTORS = ("ego", "npc", "center", "right", "left", "lead", "oncoming", "turn_exit")
+PLACED_ACTORS = ("ego", "npc", "center", "right", "left", "lead", "oncoming", "turn_exit",
+                 "background")
 #: the free-ride slots (FRF, FRB)
 SLOTS = ("center", "right", "left")
 
@@ -103,6 +104,10 @@ class Params(TypedDict, total=False):
     tfl_y_carla: float | None
     spawn_tfl_distance_m: float | None
     spawn_stop_line_distance_m: float | None
+    # -- background traffic (a ``--vary`` traffic variant; SpawnMatcher.background) --------
+    background_present: bool
+    background_speed_ms: float
+    background_vehicle_type: VehicleType | None
 
 
 #: every params dict has these (spawn keys null until the spawn stage fills them)

@@ -3,13 +3,14 @@
 A variant (``scenweave run --vary N``) may change only what the record does not say: the
 weather and time of day (the ``EnvironmentAction``), the vehicle models of the record's
 actors (their ``Vehicle``), background traffic (entities the faithful scenario does not
-have), and the lane (a recorded actor's start lane). Everything the record fixes must stay:
-the map, every recorded actor's start (``Init``), the stories of the recorded actors and the
-stop trigger, as the faithful scenario has them, or, for a variant asked to change values
-those depend on (another model keeps the gaps between bumpers, so the cars start elsewhere;
-the record one lane over), as the ``reference`` script played with those values has them.
-Whether the variant still plays the recorded manoeuvre is the replay's to judge
-(``schemas.replay``).
+have), and the lane (a recorded actor's start lane); all but the weather only as asked, to
+the values ScenWeave worked out (``agent.variants.asked_params``), which the ``reference``
+script played with them shows. Everything the record fixes must stay: the map, every recorded
+actor's start (``Init``), the stories of the recorded actors and the stop trigger, as the
+faithful scenario has them, or, for a variant made as asked, as the reference has them
+(another model keeps the gaps between bumpers, so the cars start elsewhere; the record one
+lane over starts from another spawn point). Whether the variant still plays the recorded
+manoeuvre is the replay's to judge (``schemas.replay``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,12 @@ from scenweave.schemas.findings import Finding
 
 #: what a variant may change, by what the reader sees
 ASPECTS = ("weather", "vehicles", "traffic", "lane")
+#: the aspects a variant changes only as asked (to the ``reference``), and why
+UNASKED_WHY = {
+    "vehicles": "the record's gaps are between bumpers, so another model moves the cars",
+    "traffic": "an added vehicle must keep clear of the record, where the spawn stage puts it",
+    "lane": "the record fits one lane over only where the spawn stage places it",
+}
 
 
 @dataclass
@@ -47,8 +54,8 @@ def compare(faithful: Path, variant: Path, reference: Path | None = None) -> Var
     found = Variation()
     if _canonical(old.find(".//EnvironmentAction")) != _canonical(new.find(".//EnvironmentAction")):
         found.changed.append("weather")
-    recorded = [o.get("name") for o in old.findall(".//Entities/ScenarioObject")]
-    present = {o.get("name") for o in new.findall(".//Entities/ScenarioObject")}
+    recorded = _names(old)
+    present = set(_names(new))
     missing = [name for name in recorded if name not in present]
     if missing:
         found.violations.append(Finding("VARY_ACTOR_MISSING", f"the variant drops the "
@@ -64,19 +71,40 @@ def compare(faithful: Path, variant: Path, reference: Path | None = None) -> Var
     asked = None if reference is None else etree.parse(str(reference)).getroot()
     if asked is not None and _marks(new, kept) == _marks(asked, kept) != _marks(old, kept):
         found.as_asked = True  # it made the asked change: the rest must follow as it does there
+        added = sorted((present | set(_names(asked))) - set(recorded))
         found.violations += [Finding("VARY_RECORDED", f"{what} is not as the reference script "
-                                     "plays the asked values") for what, path in fixed
+                                     "plays the asked values")
+                             for what, path in [*fixed, *_added_parts(added)]
                              if _differs(asked, new, path)]
         return found
     found.violations += [Finding("VARY_RECORDED", f"the variant changes {what}, which the "
                                  "record fixes") for what, path in fixed
                          if _differs(old, new, path)]
+    found.violations += [Finding("VARY_UNASKED", f"the variant changes the {aspect} by itself: "
+                                 f"{UNASKED_WHY[aspect]}")
+                         for aspect in found.changed if aspect in UNASKED_WHY]
     return found
 
 
-def _marks(root: etree._Element, actors: list[str]) -> list[tuple[str, list[str]]]:
-    """What a variant is asked to change itself: each actor's model and start lane."""
-    return [(_canonical(_vehicle(root, name)), _start_lanes(root, name)) for name in actors]
+def _marks(root: etree._Element, actors: list[str]) -> tuple:
+    """What a variant is asked to change itself: each recorded actor's model and start lane,
+    and which vehicles it adds."""
+    return ([(_canonical(_vehicle(root, name)), _start_lanes(root, name)) for name in actors],
+            sorted(set(_names(root)) - set(actors)))
+
+
+def _names(root: etree._Element) -> list[str]:
+    return [o.get("name") for o in root.findall(".//Entities/ScenarioObject")]
+
+
+def _added_parts(names: list[str]) -> list[tuple[str, str]]:
+    """A vehicle the variant adds: as the reference has it, from model to story."""
+    parts = []
+    for name in names:
+        parts.append((f"the added {name}", f".//Entities/ScenarioObject[@name='{name}']"))
+        parts.append((f"the added {name}'s start", _start_path(name)))
+        parts.append((f"the added {name}'s story", _story_path(name)))
+    return parts
 
 
 def _differs(one: etree._Element, other: etree._Element, path: str) -> bool:
@@ -91,11 +119,15 @@ def _start_path(actor: str) -> str:
     return f".//Init//Private[@entityRef='{actor}']"
 
 
+def _story_path(actor: str) -> str:
+    return f".//ManeuverGroup[Actors/EntityRef/@entityRef='{actor}']"
+
+
 def _fixed_parts(actors: list[str]) -> list[tuple[str, str]]:
     parts = [("the map", "./RoadNetwork"), ("the stop trigger", ".//Storyboard/StopTrigger")]
     for name in actors:
         parts.append((f"{name}'s start", _start_path(name)))
-        parts.append((f"{name}'s story", f".//ManeuverGroup[Actors/EntityRef/@entityRef='{name}']"))
+        parts.append((f"{name}'s story", _story_path(name)))
     return parts
 
 

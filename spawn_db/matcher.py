@@ -41,7 +41,7 @@ from scenweave.spawn_db.errors import (
     SpawnDatabaseError,
 )
 from scenweave.spawn_db.map_ref import MapRef, resolve_map, spawn_database
-from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
+from scenweave.spawn_db.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.spawn_db.signals import junction_approach
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
@@ -59,6 +59,10 @@ NEEDS_POINTS_MAX = {"highway": 20.0, "urban": 20.0 + 30.0 + 15.0}
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 #: lane walks for the lane-change check are made (and kept) this long at least (m)
 LANE_PATH_M = 500.0
+#: a background vehicle (``SpawnMatcher.background``) starts this far ahead of the ego (m)
+BACKGROUND_AHEAD_M = 15.0
+#: the models background vehicles take, in turn
+BACKGROUND_MODELS = ("car", "van", "truck")
 #: the params prefix of each lane changer (``Maneuver.lane_change``) for its speeds
 PREFIX_OF_CHANGER = {"npc": "npc", "hero": "ego"}
 
@@ -329,13 +333,8 @@ class SpawnMatcher:
         Raises :class:`NoSpawnFits` when neither neighbouring lane has such a spawn point.
         """
         needs = Requirements.from_params(placed)
-        ego = LanePoint(str(placed.get("ego_road_id")), placed.get("ego_lane_id"),
-                        placed.get("ego_s"))
-        try:
-            here = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
-        except (KeyError, TypeError, ValueError, OpenDriveError) as err:
-            raise ParamsError(f"{needs.scenario_id}: ego_road_id/ego_lane_id/ego_s do not name "
-                              f"a lane of map {self.map.name}: {err}") from err
+        here = self._ego_key(placed, needs)
+        ego = LanePoint(here.road_id, here.lane_id, placed["ego_s"])
         lanes = {(neighbour.road_id, neighbour.lane_id): side for side in ("left", "right")
                  if (neighbour := self.network.neighbour(here, side)) is not None}
         nearest: dict[tuple[str, int], tuple[float, int, dict[str, Any]]] = {}
@@ -355,6 +354,64 @@ class SpawnMatcher:
         ranked = sorted(nearest.values(), key=lambda found: found[:2])
         entry = ranked[index % len(ranked)][2]
         return self._placed(placed, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
+
+    def background(self, placed: dict[str, Any], index: int = 0) -> dict[str, Any]:
+        """``placed`` with one background vehicle (the ``background_*`` keys) that keeps clear
+        of the record: in a same-direction lane no actor of the record starts in or moves
+        into (``required_lane_sides``), ``BACKGROUND_AHEAD_M`` ahead of the ego along it, at
+        the ego's start speed, with drivable lane for the whole drive. The free lanes are
+        ranked nearest the ego first (left on a tie); ``index`` picks one, in turn a
+        ``BACKGROUND_MODELS`` model.
+
+        Raises :class:`NoSpawnFits` when no lane beside the ego is free for it.
+        """
+        needs = Requirements.from_params(placed)
+        number = _NumberReader(placed, needs.scenario_id)
+        here = self._ego_key(placed, needs)
+        used = {(str(placed.get(f"{actor}_road_id")), placed.get(f"{actor}_lane_id"))
+                for actor in ("ego", *(name for name, _, _ in _placed_actors(placed)))}
+        used |= {(key.road_id, key.lane_id) for side in needs.sides
+                 if (key := self.network.neighbour(here, side)) is not None}
+        speed = number("ego_speed_ms")
+        needed = BACKGROUND_AHEAD_M + speed * number("timeout_s") + VEHICLE_MARGIN_M
+        free = [key for key in self._lanes_beside(here) if (key.road_id, key.lane_id) not in used]
+        for offset in range(len(free)):
+            key = free[(index + offset) % len(free)]
+            try:
+                point = self.network.advance(key.road_id, key.lane_id, placed["ego_s"],
+                                             BACKGROUND_AHEAD_M)
+            except LaneEndsError:
+                continue
+            if self.network.drivable_length(point.road_id, point.lane_id, point.s, True,
+                                            needed) >= needed - BACKGROUND_AHEAD_M:
+                pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
+                model = BACKGROUND_MODELS[index % len(BACKGROUND_MODELS)]
+                return {**placed, "background_present": True, "background_speed_ms": speed,
+                        "background_vehicle_type": model,
+                        **_pose_keys("background", pose.x, pose.y, pose.z, pose.h),
+                        **_lane_keys("background", point)}
+        raise NoSpawnFits(f"{needs.scenario_id}: no lane beside road {here.road_id} lane "
+                          f"{here.lane_id} on map {self.map.name} is free of the record for "
+                          f"{needed:.0f} m (lanes the record uses: "
+                          f"{', '.join(str(lane) for _, lane in sorted(used, key=str))})")
+
+    def _ego_key(self, placed: dict[str, Any], needs: Requirements) -> LaneKey:
+        try:
+            return self.network.key_at(str(placed.get("ego_road_id")), placed.get("ego_lane_id"),
+                                       placed.get("ego_s"))
+        except (KeyError, TypeError, ValueError, OpenDriveError) as err:
+            raise ParamsError(f"{needs.scenario_id}: ego_road_id/ego_lane_id/ego_s do not name "
+                              f"a lane of map {self.map.name}: {err}") from err
+
+    def _lanes_beside(self, here: LaneKey) -> list[LaneKey]:
+        """Every same-direction lane beside ``here``, nearest first (left before right)."""
+        found = []
+        for side in ("left", "right"):
+            key, steps = here, 0
+            while (key := self.network.neighbour(key, side)) is not None:
+                steps += 1
+                found.append((steps, side == "right", key))
+        return [key for *_, key in sorted(found, key=lambda item: item[:2])]
 
     def place_at(self, params: dict[str, Any]) -> dict[str, Any]:
         """``params`` placed anew from the spawn point they name (``spawn_id``): for a record

@@ -47,6 +47,7 @@ def asked(brake) -> dict[str, dict]:
     matcher = default_matcher()
     return {"vehicles": asked_params(brake, "vehicles", matcher),
             "vehicles2": asked_params(brake, "vehicles", matcher, 1),
+            "traffic": asked_params(brake, "traffic", matcher),
             "lane": asked_params(brake, "lane", matcher)}
 
 
@@ -58,18 +59,19 @@ def varied(brake, asked, replay, esmini, tmp_path):
     assert '"weather_key": "Day_Clear"' in right and speed in right and model in right
     new_model = f'"npc_vehicle_type": "{asked["vehicles2"]["npc_vehicle_type"]}"'
     assert (brake["ego_lane_id"], asked["lane"]["ego_lane_id"]) == (-2, -1)
+    one_over = right.replace('"ego_lane_id": -2', '"ego_lane_id": -1')
     replies = [fenced(right),  # the faithful scenario, ok on attempt 1
                fenced(right.replace('"Day_Clear"', '"Night_Rain"')),  # v01 weather: kept
                fenced(adapted_source("BRAKE", asked["vehicles"])),  # v02 vehicles: kept
-               fenced(right.replace(speed, '"npc_speed_ms": 33.0')),  # v03: a recorded value
+               fenced(adapted_source("BRAKE", asked["traffic"])),  # v03 traffic: kept
                fenced(adapted_source("BRAKE", asked["lane"])),  # v04 lane: kept
-               fenced(right),  # v05 weather: nothing changed
+               fenced(right.replace(speed, '"npc_speed_ms": 33.0')),  # v05: a recorded value
                fenced(right.replace(model, new_model)),  # v06 vehicles: the model alone
-               fenced(right.replace('"ego_lane_id": -2', '"ego_lane_id": -1')),  # v07 ego alone
-               fenced(right.replace('"ego_lane_id": -2', '"ego_lane_id": -1').replace(
-                   '"npc_lane_id": -2', '"npc_lane_id": -1'))]  # v08: lane ids moved by hand
+               fenced(right),  # v07 traffic: nothing changed
+               fenced(one_over.replace('"npc_lane_id": -2', '"npc_lane_id": -1')),  # v08 by hand
+               fenced(one_over)]  # v09 weather: the ego alone one lane over
     settings = PipelineSettings(no_llm=False, agent=replay(replies), replay=ReplaySettings(),
-                                vary=8)
+                                vary=9)
     outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
     return outcome, tmp_path
 
@@ -90,7 +92,7 @@ def test_a_variant_that_changes_the_weather_is_kept(varied):
 
 def test_a_variant_that_changes_what_the_record_fixes_is_not(varied):
     outcome, _ = varied
-    speed = _variant(outcome, 3)
+    speed = _variant(outcome, 5)
     assert not speed["kept"]
     assert any(e.startswith("VARY_RECORDED: the variant changes npc's start") for e in
                speed["errors"]), speed["errors"]
@@ -98,11 +100,26 @@ def test_a_variant_that_changes_what_the_record_fixes_is_not(varied):
 
 def test_a_copy_of_the_faithful_scenario_is_no_variant(varied):
     outcome, _ = varied
-    same = _variant(outcome, 5)
+    same = _variant(outcome, 7)
     assert not same["kept"] and same["changed"] == []
     assert any(e.startswith("VARY_NOTHING") for e in same["errors"])
-    assert variant_summary([outcome]) == {"asked": 8, "kept": 3, "records_with_a_variant": 1,
-                                          "changed": {"lane": 1, "vehicles": 1, "weather": 1}}
+    assert variant_summary([outcome]) == {
+        "asked": 9, "kept": 4, "records_with_a_variant": 1,
+        "changed": {"lane": 1, "traffic": 1, "vehicles": 1, "weather": 1}}
+
+
+def test_background_traffic_is_added_where_the_spawn_stage_found_a_free_lane(brake, asked,
+                                                                              varied):
+    outcome, folder = varied
+    traffic = _variant(outcome, 3)
+    assert (traffic["changed"], traffic["kept"]) == (["traffic"], True), traffic
+    lane = asked["traffic"]["background_lane_id"]
+    assert lane not in (brake["ego_lane_id"], brake["npc_lane_id"])
+    assert traffic["asked"]["background_present"] == [None, True]
+    scenario = (folder / "variants" / "v03" / "scenario.xosc").read_text()
+    assert 'ScenarioObject name="background"' in scenario and f'laneId="{lane}"' in scenario
+    prompt = _prompts(outcome["scenario_id"], "vary-traffic")[0]
+    assert "- background_present: true" in prompt and f"- background_lane_id: {lane}" in prompt
 
 
 def test_another_vehicle_model_keeps_the_gap_between_bumpers(brake, asked, varied):
@@ -146,13 +163,15 @@ def test_the_record_one_lane_over_where_the_spawn_stage_placed_it_is_kept(varied
 
 def test_one_car_alone_or_lane_ids_moved_by_hand_are_not_lane_variants(varied):
     """The second lane variant is asked for the other side (lane -3); lane ids moved by hand
-    to -1 are neither that nor the record."""
+    to -1 are neither that nor the record, and neither is the ego alone one lane over."""
     outcome, _ = varied
-    alone, by_hand = _variant(outcome, 7), _variant(outcome, 8)
+    by_hand, alone = _variant(outcome, 8), _variant(outcome, 9)
     assert by_hand["aspect"] == "lane" and by_hand["asked"]["ego_lane_id"] == [-2, -3]
-    for variant in (alone, by_hand):
+    for variant in (by_hand, alone):
         assert not variant["kept"]
         assert any(e.startswith("VARY_RECORDED: the variant changes hero's start")
+                   for e in variant["errors"]), variant["errors"]
+        assert any(e.startswith("VARY_UNASKED: the variant changes the lane by itself")
                    for e in variant["errors"]), variant["errors"]
 
 
@@ -176,7 +195,7 @@ def test_the_report_lists_each_records_variants(varied):
     assert outcome["scenario_id"] in html and "v01 weather" in html
     assert f"v02 vehicles (npc {before} → {after})" in html
     assert "v04 lane (road 35 lane -1)" in html
-    assert "v03 (traffic) not kept: VARY_RECORDED" in html
+    assert "v03 traffic" in html and "v05 (weather) not kept: VARY_RECORDED" in html
 
 
 def test_no_room_one_lane_over_asks_no_lane_variant(brake, replay, esmini, tmp_path):

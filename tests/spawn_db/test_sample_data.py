@@ -85,6 +85,31 @@ def test_the_record_one_lane_over_fits_the_neighbouring_lane(assigned, town04):
     assert all("no spawn point beside road" in message for message in no_room)
 
 
+def test_background_traffic_keeps_to_a_lane_the_record_leaves_free(assigned, town04):
+    """``background`` (traffic variants): beside the ego in its direction, in no lane an actor
+    starts in or a manoeuvre needs, with lane for the whole drive."""
+    matcher, placed = SpawnMatcher(), 0
+    for params, result in assigned:
+        if params["domain"] != "highway":
+            continue
+        try:
+            added = matcher.background(result)
+        except NoSpawnFits:
+            continue
+        here = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
+        used = {result[f"{a}_lane_id"] for a in ("ego", "npc", "center", "right", "left")
+                if result.get(f"{a}_lane_id") is not None}
+        used |= {town04.neighbour(here, side).lane_id for side in params["required_lane_sides"]}
+        lane = added["background_lane_id"]
+        assert lane not in used and lane * result["ego_lane_id"] > 0, params["scenario_id"]
+        assert added["background_speed_ms"] == result["ego_speed_ms"]
+        drive = result["ego_speed_ms"] * params["timeout_s"]
+        assert town04.drivable_length(str(added["background_road_id"]), lane,
+                                      added["background_s"], True, drive) >= drive
+        placed += 1
+    assert placed > 100
+
+
 def test_place_at_places_a_changed_record_from_the_same_spawn(assigned):
     matcher = SpawnMatcher()
     params, result = next((p, r) for p, r in assigned if p["maneuver_class"] == "BRAKE")

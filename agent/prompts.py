@@ -11,6 +11,7 @@ import json
 
 from scenweave.agent.edits import edit_grammar, edit_schema
 from scenweave.agent.llm.base import Prompt
+from scenweave.corpus.worked_example import python_literal
 
 #: params keys that describe where a record came from, not the scenario (kept from the LLM)
 METADATA_KEYS = frozenset({"scenario_id", "source_file", "source_row", "record_id",
@@ -37,10 +38,13 @@ ERROR_CONSTRAINTS = ("Reproduce the REFERENCE SCRIPT VERBATIM, replacing ONLY it
                      "with those of the same keys in the JSON. Do not invent functions, "
                      "attributes or modules: use only what the reference script uses.")
 
-PATCH_FORMAT = """JSON, one edit per line to change:
-{"edits": [{"search": "    \"speed\": 1.0,", "replace": "    \"speed\": 2.5,"}]}
+#: the form of a JSON edit reply, shown to the model (valid JSON: ``json.dumps`` writes it)
+EDIT_EXAMPLE = json.dumps({"edits": [{"search": '    "speed": 1.0,',
+                                      "replace": '    "speed": 2.5,'}]})
+PATCH_FORMAT = f"""JSON, one edit per line to change:
+{EDIT_EXAMPLE}
 Change every line of RECORD whose value differs from the JSON, and every value written into
-generate() that differs. If the script already fits the parameters: {"edits": []}"""
+generate() that differs. If the script already fits the parameters: {{"edits": []}}"""
 
 
 def llm_params(params: dict, values: dict | None = None) -> dict:
@@ -126,6 +130,9 @@ VARIANT_CONSTRAINTS = ("Every number of the manoeuvre stays as it is: speeds, di
                        "lanes and positions of the recorded vehicles, the light. Change only "
                        "what is asked below. Keep the function generate(params, out_path) and "
                        "every import.")
+VARIANT_EDIT_FORMAT = f"""JSON, one edit per line to change:
+{EDIT_EXAMPLE}
+A "replace" may hold several lines (joined by \\n) to add lines after the one searched."""
 #: what each aspect of a variant asks for (schemas.variation.ASPECTS)
 VARIANT_CHANGES = {
     "weather": ("Change only the weather and time of day: set the \"weather_key\" value to "
@@ -145,22 +152,31 @@ VARIANT_CHANGES = {
 }
 
 
-def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = None) -> Prompt:
+def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = None,
+                   edits: bool = False) -> Prompt:
     """A variant of the delivered scenario script that changes one ``aspect`` only;
     ``asked``: the record as the variant must play it (``agent.variants.asked_params``), whose
-    changed values the request lists."""
+    changed values the request lists. ``edits``: ask for JSON line edits of the script (the
+    ``patch`` strategy, held to its grammar) instead of the whole script."""
     change = VARIANT_CHANGES[aspect].format(moves=_moves(params, asked or params, code))
-    user = _sections(("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
-                     ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", change),
-                     ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
-    return Prompt(SYSTEM, user, params.get("scenario_id", ""), f"vary-{aspect}")
+    head = [("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
+            ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", change)]
+    purpose = f"vary-{aspect}"
+    if edits:
+        user = _sections(*head, ("FORMAT", VARIANT_EDIT_FORMAT), ("SCRIPT", _fenced(code)),
+                         ("OUTPUT", "Output only the JSON edits."))
+        return Prompt(PATCH_SYSTEM, user, params.get("scenario_id", ""), purpose,
+                      edit_schema(code), edit_grammar(code))
+    user = _sections(*head, ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
+    return Prompt(SYSTEM, user, params.get("scenario_id", ""), purpose)
 
 
 def _moves(params: dict, moved: dict, code: str) -> str:
-    """``- key: old -> new`` for each value ``moved`` changes that ``code`` names."""
+    """``- key: old -> new`` (Python literals, as the script writes them) for each value
+    ``moved`` changes that ``code`` names; ``- key: new`` for a key it adds."""
     changed = [key for key, value in moved.items()
                if params.get(key) != value and key not in METADATA_KEYS]
     named = [key for key in changed if f'"{key}"' in code or f"'{key}'" in code] or changed
-    return "\n".join(f"- {key}: {json.dumps(params[key])} -> {json.dumps(moved[key])}"
-                      if params.get(key) is not None else f"- {key}: {json.dumps(moved[key])}"
+    return "\n".join(f"- {key}: {python_literal(params[key])} -> {python_literal(moved[key])}"
+                      if params.get(key) is not None else f"- {key}: {python_literal(moved[key])}"
                       for key in named)

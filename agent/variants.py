@@ -28,6 +28,9 @@ Where the record has no room one lane over (``VARY_NO_LANE``), no vehicle but th
 (``VARY_NO_VEHICLE``), or no room for the other model or a free lane (``VARY_NO_ROOM``), no
 LLM call is spent.
 
+With the ``patch`` strategy the LLM answers with JSON line edits of the delivered script, held
+to the same grammar as its repairs, instead of the whole script.
+
 Each variant gets ``variants/vNN/`` in the scenario folder: its script, its scenario when it
 ran, and ``variant.json`` (what it changed, what it was asked to change, kept or why not).
 """
@@ -40,7 +43,8 @@ from pathlib import Path
 from typing import Any
 
 from scenweave import corpus
-from scenweave.agent.code import extract_python_code
+from scenweave.agent.code import PatchError, extract_python_code
+from scenweave.agent.edits import apply_edits
 from scenweave.agent.prompts import variant_prompt
 from scenweave.agent.run import shared_llm, shared_sandbox
 from scenweave.agent.settings import AgentSettings
@@ -58,6 +62,8 @@ VARIANT_FILE = "variant.json"
 REFERENCE_NAME = "reference.xosc"
 #: where ``variant.json`` says a lane variant put the record
 PLACEMENT_KEYS = ("spawn_id", "ego_road_id", "ego_lane_id", "ego_s")
+#: the repair strategy whose variants are JSON line edits of the script (held to a grammar)
+EDIT_STRATEGY = "patch"
 #: the vehicle models a vehicles variant gives a recorded actor, in turn
 VEHICLE_TYPES = ("car", "van", "truck")
 
@@ -150,8 +156,13 @@ def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict, fol
         (folder / PARAMS_NAME).write_text(json.dumps(asked, indent=1), encoding="utf-8")
         reference = folder / REFERENCE_NAME
         corpus.generate(asked, reference)
-    prompt = variant_prompt(params, code, aspect, asked)
-    written = extract_python_code(shared_llm(settings).complete(prompt).text).code
+    edits = settings.repair == EDIT_STRATEGY
+    reply = shared_llm(settings).complete(variant_prompt(params, code, aspect, asked, edits))
+    try:
+        written = apply_edits(code, reply.text)[0] if edits else extract_python_code(
+            reply.text).code
+    except PatchError as err:
+        return found | {"errors": [f"VARY_EDIT: {err}"]}
     (folder / CODE_NAME).write_text(written, encoding="utf-8")
     if not written:
         return found | {"errors": ["the reply held no Python code"]}

@@ -64,11 +64,19 @@ def right_replies(raw: Path) -> dict[str, list[str]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--per-class", type=int, default=3)
+    parser.add_argument("--classes", default="", help="e.g. BRAKE,CINF,LCF (default: all)")
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--llm", default="replay", choices=("replay", "embedded"),
+                        help="replay: a perfect model's replies; embedded: SmolLM2 itself")
+    parser.add_argument("--repair", default="error_feedback",
+                        help="the agent's strategy (patch: variants as JSON line edits)")
     parser.add_argument("--sandbox", default="bwrap")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--verbose", action="store_true")
     args = parser.parse_args()
+    if args.llm == "replay" and args.repair == "patch":
+        parser.error("the recorded replies are whole scripts: use --repair patch with "
+                     "--llm embedded")
     os.environ["SCENWEAVE_LLM_LOG"] = "0"
 
     from scenweave.agent import AgentSettings
@@ -79,17 +87,21 @@ def main() -> None:
     from scenweave.player import ReplaySettings
     from scenweave.runner import run_batch
 
+    classes = tuple(c for c in args.classes.split(",") if c)
     with tempfile.TemporaryDirectory(prefix="scenweave-bench-variants-") as tmp:
         raw = Path(tmp) / "raw"
         write_highway_samples(raw / "highway", seed=args.seed, per_class=args.per_class)
         write_urban_samples(raw / "urban", seed=args.seed, per_class=args.per_class)
-        replies = Path(tmp) / "replies.json"
-        replies.write_text(json.dumps(right_replies(raw)), encoding="utf-8")
+        llm: dict = {"llm": args.llm}
+        if args.llm == "replay":
+            replies = Path(tmp) / "replies.json"
+            replies.write_text(json.dumps(right_replies(raw)), encoding="utf-8")
+            llm["replay_file"] = replies
         settings = PipelineSettings(no_llm=False, replay=ReplaySettings(), vary=VARY,
-                                    agent=AgentSettings(llm="replay", replay_file=replies,
+                                    agent=AgentSettings(**llm, repair=args.repair,
                                                         sandbox=batch_sandbox(args.sandbox)))
         started = time.perf_counter()
-        result = run_batch(raw, Path(tmp) / "runs", InputSelection(), settings,
+        result = run_batch(raw, Path(tmp) / "runs", InputSelection(classes=classes), settings,
                            run_id="vary", jobs=args.jobs)
         wall = time.perf_counter() - started
     outcomes = result.summary["scenarios"]
@@ -105,8 +117,9 @@ def main() -> None:
                 if args.verbose:
                     print(o["scenario_id"], v["aspect"], v["errors"][:2])
     aspects = ("weather", "vehicles", "traffic", "lane")
+    model = "recorded right replies" if args.llm == "replay" else "embedded SmolLM2-135M"
     print(f"variants benchmark: sample data seed {args.seed}, {len(outcomes)} records, "
-          f"--vary {VARY}, recorded right replies, replay on, {wall:.0f} s")
+          f"--vary {VARY}, {model}, --repair {args.repair}, replay on, {wall:.0f} s")
     print(f"delivered: {Counter(o['status'] for o in outcomes)}")
     print("class | " + " | ".join(aspects))
     for code in sorted({c for c, _ in kept}):

@@ -134,7 +134,7 @@ def _value_edits(source: str, statement: ast.stmt, values: Mapping[str, Any]) ->
     for node in ast.walk(statement):
         key = _read_key(node)
         if key is not None and key in values:
-            edits.append((*_span(source, node), _literal(values[key])))
+            edits.append((*_span(source, node), python_literal(values[key])))
             claimed.add(id(node.value if isinstance(node, ast.Subscript)
                            else node.func.value))  # type: ignore[attr-defined]
     for node in ast.walk(statement):
@@ -173,7 +173,7 @@ def _merge_line(source: str, function: ast.FunctionDef) -> Edit:
 
 
 def _record_block(source: str, function: ast.FunctionDef, values: Mapping[str, Any]) -> Edit:
-    lines = "".join(f"    {json.dumps(key)}: {_literal(value)},\n"
+    lines = "".join(f"    {json.dumps(key)}: {python_literal(value)},\n"
                     for key, value in values.items())
     block = (f"#: this record's values, written in\n{RECORD_NAME} = {{\n{lines}}}\n\n\n")
     start = function.decorator_list[0].lineno if function.decorator_list else function.lineno
@@ -181,7 +181,7 @@ def _record_block(source: str, function: ast.FunctionDef, values: Mapping[str, A
     return offset, offset, block
 
 
-def _literal(value: Any) -> str:
+def python_literal(value: Any) -> str:
     """A Python literal for a JSON value (strings double-quoted like the scripts')."""
     return json.dumps(value) if isinstance(value, str) else repr(value)
 

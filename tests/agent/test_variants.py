@@ -4,13 +4,16 @@ the real sandbox, validator and esmini replay)."""
 
 from __future__ import annotations
 
+import difflib
 import json
 
 import pytest
 
+from scenweave import corpus
 from scenweave.agent.llm.log import recent_calls
 from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.corpus_utils import bumper_gap_m
+from scenweave.corpus.worked_example import example_params as stored_example
 from scenweave.inputs import InputSelection, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.player import ReplaySettings
@@ -225,3 +228,52 @@ def _prompts(scenario_id: str, purpose: str) -> list[str]:
     """The prompts of one purpose (``vary-lane``) from the local LLM log, oldest first."""
     return [call["prompt"] for call in reversed(recent_calls(50, scenario_id))
             if call["purpose"] == purpose]
+
+
+def json_edits(before: str, after: str) -> str:
+    """The JSON edit reply that turns ``before`` into ``after``, line for line; lines added
+    ride on the replace of the line before them."""
+    old, new = before.splitlines(), after.splitlines()
+    edits = []
+    matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
+    for tag, i1, i2, j1, j2 in matcher.get_opcodes():
+        if tag == "replace" and i2 - i1 == j2 - j1:
+            edits += [{"search": o, "replace": n} for o, n in zip(old[i1:i2], new[j1:j2],
+                                                                  strict=True)]
+        elif tag == "insert":
+            edits.append({"search": old[i1 - 1], "replace": "\n".join(new[j1 - 1:j2])})
+        elif tag != "equal":
+            raise AssertionError(f"no line edit turns {old[i1:i2]} into {new[j1:j2]}")
+    return json.dumps({"edits": edits})
+
+
+def test_with_the_patch_strategy_a_variant_is_json_edits(brake, asked, replay, esmini,
+                                                         tmp_path):
+    """``--repair patch``: the LLM answers each variant with line edits of the delivered
+    script, held to the same grammar as its repairs; the right edits make every aspect."""
+    right = adapted_source("BRAKE", brake)
+    shown = adapted_source("BRAKE", stored_example(corpus.retrieve(brake).script_path))
+    wanted = [right.replace('"Day_Clear"', '"Night_Rain"'),
+              *(adapted_source("BRAKE", asked[a]) for a in ("vehicles", "traffic", "lane"))]
+    replies = [json_edits(shown, right), *(json_edits(right, w) for w in wanted)]
+    settings = PipelineSettings(no_llm=False, agent=replay(replies, repair="patch"),
+                                replay=ReplaySettings(), vary=4)
+    outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
+    assert (outcome["status"], outcome["attempts"]) == ("ok", 1), outcome["error"]
+    assert [(v["changed"], v["kept"]) for v in outcome["variants"]] == [
+        (["weather"], True), (["vehicles"], True), (["traffic"], True), (["lane"], True)]
+    for number, scenario in enumerate(wanted, start=1):
+        assert (tmp_path / "variants" / f"v{number:02d}" / "scenario.py").read_text() == scenario
+    prompt = _prompts(outcome["scenario_id"], "vary-lane")[0]
+    assert "Output only the JSON edits." in prompt
+
+
+def test_an_edit_that_does_not_apply_is_no_variant(brake, replay, esmini, tmp_path):
+    right = adapted_source("BRAKE", brake)
+    shown = adapted_source("BRAKE", stored_example(corpus.retrieve(brake).script_path))
+    wrong = json.dumps({"edits": [{"search": "not a line of it", "replace": "x = 1"}]})
+    settings = PipelineSettings(no_llm=False, replay=ReplaySettings(), vary=1,
+                                agent=replay([json_edits(shown, right), wrong], repair="patch"))
+    outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
+    variant = _variant(outcome, 1)
+    assert not variant["kept"] and variant["errors"][0].startswith("VARY_EDIT: edit 1: "), variant

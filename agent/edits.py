@@ -70,7 +70,12 @@ def apply_edits(reference: str, reply: str) -> tuple[str, int]:
         return apply_edit_blocks(reference, text)
     edits = parse_edits(text)
     lines = reference.splitlines(keepends=True)
+    edited: dict[str, int] = {}
     for number, edit in enumerate(edits, start=1):
+        if edit["search"] in edited:
+            raise PatchError(f"edit {number}: edit {edited[edit['search']]} already changed "
+                             f"that line ({edit['search'][:80]!r}); one edit per line")
+        edited[edit["search"]] = number
         index = _line_index(lines, edit, number)
         lines[index] = _indented(edit["replace"], edit["search"]) + "\n"
     return "".join(lines), len(edits)

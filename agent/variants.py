@@ -3,7 +3,8 @@ script changing one thing the record does not fix (weather and time of day, a ve
 background traffic, the lane; ``schemas.variation.ASPECTS`` in turn), and a variant is kept
 only when
 
-- it runs in the sandbox, given what the delivered script was given;
+- it runs in the sandbox, given only the record's provenance (``scenario_id``): every value
+  is written into the script;
 - it changes what it may and nothing the record fixes (``schemas.variation.compare``);
 - it is valid and still plays the recorded manoeuvre (``validate_xosc`` with the replay,
   against the record's params as the variant was asked to change them, with its own weather);
@@ -50,7 +51,7 @@ from scenweave.agent.run import shared_llm, shared_sandbox
 from scenweave.agent.settings import AgentSettings
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, XOSC_NAME, Trace
 from scenweave.corpus.corpus_utils import known_type
-from scenweave.corpus.worked_example import provenance
+from scenweave.corpus.worked_example import provenance, worked_example
 from scenweave.ingest.extract import with_vehicle_type
 from scenweave.player import REPLAY_NAME
 from scenweave.schemas.variation import ASPECTS, compare
@@ -80,11 +81,14 @@ def make_variants(params: dict, out_dir: Path, settings: AgentSettings, count: i
                   replay: Any, parametric: bool, trace: Trace, matcher: Any) -> list[dict]:
     """``count`` variants of the scenario in ``out_dir``; what each changed, kept or not.
 
-    ``parametric``: the delivered script is the reference (a fallback), which reads params.
+    ``parametric``: the delivered script is the reference (a fallback), which reads params;
+    the variants then start from the record's worked example (its values written in, the
+    same scenario), so that each is a change of values, as when the LLM delivered.
     ``matcher``: the spawn stage that placed ``params`` (``SpawnMatcher``).
     """
-    code = (out_dir / CODE_NAME).read_text(encoding="utf-8")
-    given = params if parametric else provenance(params)
+    code = (worked_example(corpus.retrieve(params).script_path, params) if parametric
+            else (out_dir / CODE_NAME).read_text(encoding="utf-8"))
+    given = provenance(params)
     seen = {_digest(out_dir / XOSC_NAME)}
     found = []
     for number in range(1, count + 1):

@@ -122,7 +122,7 @@ def test_background_traffic_is_added_where_the_spawn_stage_found_a_free_lane(bra
     scenario = (folder / "variants" / "v03" / "scenario.xosc").read_text()
     assert 'ScenarioObject name="background"' in scenario and f'laneId="{lane}"' in scenario
     prompt = _prompts(outcome["scenario_id"], "vary-traffic")[0]
-    assert "- background_present: true" in prompt and f"- background_lane_id: {lane}" in prompt
+    assert "- background_present: True" in prompt and f"- background_lane_id: {lane}" in prompt
 
 
 def test_another_vehicle_model_keeps_the_gap_between_bumpers(brake, asked, varied):

@@ -12,7 +12,11 @@ in the SEARCH/REPLACE block format are still applied (``agent.code.apply_edit_bl
 
 from __future__ import annotations
 
+import io
 import json
+import keyword as keyword_module
+import re
+import tokenize
 from collections import Counter
 
 from scenweave.agent.code import (
@@ -57,6 +61,90 @@ def edit_grammar(reference: str) -> str:
     )) + "\n"
 
 
+def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = ()) -> str:
+    """The GBNF grammar of an edit reply that can change only values: ``search`` one of the
+    lines of ``reference`` holding a literal (each there once), ``replace`` that line with
+    only its literals free (numbers, strings but dict keys, ``True``/``False``/``None``); after
+    a ``"key": value,`` line of a dict, new ``"key": value,`` lines for ``new_keys`` may
+    follow. A reply in it cannot break the script's syntax, rename a key or touch code; a
+    script with no such line gets :func:`edit_grammar`."""
+    slots = _literal_slots(reference)
+    counts = Counter(reference.splitlines())
+    pairs = [_pair_rule(line, slots[number], new_keys)
+             for number, line in enumerate(reference.splitlines(), start=1)
+             if slots.get(number) and counts[line] == 1]
+    if not pairs:
+        return edit_grammar(reference)
+    rules = [
+        'root ::= "{" ws "\\"edits\\":" ws "[" ws (edit ("," ws edit)*)? ws "]" ws "}"',
+        'edit ::= "{" ws "\\"search\\":" ws pair ws "}"',
+        "pair ::= " + " | ".join(pairs),
+        'val ::= num | pystr | "True" | "False" | "None"',
+        'num ::= "-"? [0-9]+ ("." [0-9]+)? ([eE] [-+]? [0-9]+)?',
+        f"pystr ::= {_gbnf_literal(QUOTE)} [a-zA-Z0-9_ ./:-]* {_gbnf_literal(QUOTE)}",
+        'ws ::= [ \\t\\n]{0,4}',
+    ]
+    if new_keys:
+        keys = " | ".join(_gbnf_literal(key) for key in new_keys)
+        rules.append(f"added ::= {_gbnf_literal(_json_inner(chr(10) + '    ' + chr(34)))} "
+                     f"({keys}) {_gbnf_literal(_json_inner(chr(34) + ': '))} val "
+                     f"{_gbnf_literal(',')}")
+    return "\n".join(rules) + "\n"
+
+
+#: a double quote as it stands inside a JSON string
+QUOTE = '\\"'
+#: a ``"key": value,`` entry of a dict literal, alone on its line
+DICT_ENTRY = re.compile(r'^\s+"\w+": .*,$')
+
+
+def _pair_rule(line: str, slots: list[tuple[int, int]], new_keys: tuple[str, ...]) -> str:
+    """``SEARCH "," ws "replace": REPLACE`` for one line: the line, then its template."""
+    pieces, at = [], 0
+    for start, end in slots:
+        pieces.append(_gbnf_literal(_json_inner(line[at:start])) if start > at else "")
+        pieces.append("val")
+        at = end
+    pieces.append(_gbnf_literal(_json_inner(line[at:])) if at < len(line) else "")
+    added = " added*" if new_keys and DICT_ENTRY.match(line) else ""
+    template = " ".join(piece for piece in pieces if piece)
+    return (f'({_gbnf_literal(json.dumps(line))} "," ws "\\"replace\\":" ws '
+            f'"\\"" {template}{added} "\\"")')
+
+
+def _json_inner(text: str) -> str:
+    """``text`` as it stands between the quotes of a JSON string."""
+    return json.dumps(text)[1:-1]
+
+
+def _literal_slots(reference: str) -> dict[int, list[tuple[int, int]]]:
+    """Line number -> the column spans of the literals a value edit may change: numbers
+    (with a unary minus), ``True``/``False``/``None``, and one-line strings in an expression
+    that are no dict key (a docstring or a string statement is not one)."""
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(reference).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return {}
+    slots: dict[int, list[tuple[int, int]]] = {}
+    for index, token in enumerate(tokens):
+        before = tokens[index - 1] if index else None
+        after = tokens[index + 1] if index + 1 < len(tokens) else None
+        keyword = token.type == tokenize.NAME and token.string in ("True", "False", "None")
+        value_string = (token.type == tokenize.STRING and token.start[0] == token.end[0]
+                        and not (after is not None and after.string == ":")
+                        and before is not None and (before.type == tokenize.OP
+                                                    or keyword_module.iskeyword(before.string)))
+        if not (token.type == tokenize.NUMBER or keyword or value_string):
+            continue
+        start = token.start[1]
+        if (token.type == tokenize.NUMBER and before is not None and before.string == "-"
+                and index > 1 and tokens[index - 2].type == tokenize.OP
+                and tokens[index - 2].string in "([{,:=" and before.end == token.start):
+            start = before.start[1]
+        slots.setdefault(token.start[0], []).append((start, token.end[1]))
+    return slots
+
+
 def _gbnf_literal(text: str) -> str:
     """``text`` as a GBNF string literal."""
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
@@ -69,14 +157,10 @@ def apply_edits(reference: str, reply: str) -> tuple[str, int]:
     if not text.startswith("{"):
         return apply_edit_blocks(reference, text)
     edits = parse_edits(text)
-    lines = reference.splitlines(keepends=True)
-    edited: dict[str, int] = {}
+    original = reference.splitlines(keepends=True)
+    lines = list(original)
     for number, edit in enumerate(edits, start=1):
-        if edit["search"] in edited:
-            raise PatchError(f"edit {number}: edit {edited[edit['search']]} already changed "
-                             f"that line ({edit['search'][:80]!r}); one edit per line")
-        edited[edit["search"]] = number
-        index = _line_index(lines, edit, number)
+        index = _line_index(original, edit, number)  # a line edited twice: the last edit wins
         lines[index] = _indented(edit["replace"], edit["search"]) + "\n"
     return "".join(lines), len(edits)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 
-from scenweave.agent.edits import edit_grammar, edit_schema
+from scenweave.agent.edits import edit_schema, value_edit_grammar
 from scenweave.agent.llm.base import Prompt
 from scenweave.corpus.worked_example import python_literal
 
@@ -100,7 +100,7 @@ def patch_prompt(params: dict, reference: str, error: str | None = None,
     sections.append(("OUTPUT", "Output only the JSON edits."))
     return Prompt(PATCH_SYSTEM, _sections(*sections), params.get("scenario_id", ""),
                   "repair" if error else "generate", edit_schema(reference),
-                  edit_grammar(reference))
+                  value_edit_grammar(reference, _new_keys(reference, llm_params(params, values))))
 
 
 def _shared_head(params: dict, reference: str, values: dict | None) -> list[tuple[str, str]]:
@@ -166,7 +166,9 @@ def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = No
         user = _sections(*head, ("FORMAT", VARIANT_EDIT_FORMAT), ("SCRIPT", _fenced(code)),
                          ("OUTPUT", "Output only the JSON edits."))
         return Prompt(PATCH_SYSTEM, user, params.get("scenario_id", ""), purpose,
-                      edit_schema(code), edit_grammar(code))
+                      edit_schema(code), value_edit_grammar(code, _new_keys(code, {
+                          key: value for key, value in (asked or {}).items()
+                          if params.get(key) != value})))
     user = _sections(*head, ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), purpose)
 
@@ -180,3 +182,9 @@ def _moves(params: dict, moved: dict, code: str) -> str:
     return "\n".join(f"- {key}: {python_literal(params[key])} -> {python_literal(moved[key])}"
                       if params.get(key) is not None else f"- {key}: {python_literal(moved[key])}"
                       for key in named)
+
+
+def _new_keys(script: str, values: dict) -> tuple[str, ...]:
+    """The keys of ``values`` the script's dicts do not hold yet (an edit may add them)."""
+    return tuple(key for key in values if f'"{key}":' not in script
+                 and key not in METADATA_KEYS)

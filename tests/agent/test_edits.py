@@ -31,12 +31,16 @@ def test_a_replace_of_several_lines_adds_them():
 @pytest.mark.parametrize(("edits", "message"), [
     ([("x = 1", "x = 2")], "edit 1: the search line is 2 lines of the script"),
     ([("y = 1", "y = 2")], "edit 1: the search line is not a line of the script"),
-    ([('    "lane": -2,', '    "lane": -1,'), ('    "lane": -2,', '    "lane": -3,')],
-     "edit 2: edit 1 already changed that line"),
 ])
 def test_an_edit_that_cannot_apply_says_which_and_why(edits, message):
     with pytest.raises(PatchError, match=message):
         apply_edits(SCRIPT, reply(*edits))
+
+
+def test_a_line_edited_twice_takes_the_last_edit():
+    code, count = apply_edits(SCRIPT, reply(('    "lane": -2,', '    "lane": -1,'),
+                                            ('    "lane": -2,', '    "lane": -3,')))
+    assert count == 2 and '"lane": -3,' in code and '"lane": -1,' not in code
 
 
 def test_a_reply_cut_short_keeps_its_complete_edits():

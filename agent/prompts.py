@@ -11,7 +11,7 @@ import json
 
 from scenweave.agent.edits import edit_schema, value_edit_grammar
 from scenweave.agent.llm.base import Prompt
-from scenweave.corpus.worked_example import python_literal
+from scenweave.corpus.worked_example import python_literal, written_values
 
 #: params keys that describe where a record came from, not the scenario (kept from the LLM)
 METADATA_KEYS = frozenset({"scenario_id", "source_file", "source_row", "record_id",
@@ -43,8 +43,8 @@ EDIT_EXAMPLE = json.dumps({"edits": [{"search": '    "speed": 1.0,',
                                       "replace": '    "speed": 2.5,'}]})
 PATCH_FORMAT = f"""JSON, one edit per line to change:
 {EDIT_EXAMPLE}
-Change every line of RECORD whose value differs from the JSON, and every value written into
-generate() that differs. If the script already fits the parameters: {{"edits": []}}"""
+Change each value listed below, in RECORD and wherever generate() has it written in; add a
+value the script does not have yet to RECORD. If nothing is listed: {{"edits": []}}"""
 
 
 def llm_params(params: dict, values: dict | None = None) -> dict:
@@ -88,12 +88,14 @@ def patch_prompt(params: dict, reference: str, error: str | None = None,
                  values: dict | None = None) -> Prompt:
     """Ask for JSON edits against the worked example (their schema rides along for backends
     that constrain decoding); after a failure, with the error."""
+    shown, wanted = written_values(reference), llm_params(params, values)
     sections = [
         ("TASK", TASK.format(maneuver=maneuver_name(params))
-         + " Adapt it to the parameters with the smallest edit."),
+         + " Adapt it to this record's values with the smallest edit."),
         ("FORMAT", PATCH_FORMAT),
         ("REFERENCE SCRIPT", _fenced(reference)),
-        ("PARAMETERS JSON", _params_json(params, values)),
+        ("VALUES TO CHANGE", value_changes(shown, wanted)) if shown is not None
+        else ("PARAMETERS JSON", _params_json(params, values)),
     ]
     if error:
         sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
@@ -158,7 +160,10 @@ def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = No
     ``asked``: the record as the variant must play it (``agent.variants.asked_params``), whose
     changed values the request lists. ``edits``: ask for JSON line edits of the script (the
     ``patch`` strategy, held to its grammar) instead of the whole script."""
-    change = VARIANT_CHANGES[aspect].format(moves=_moves(params, asked or params, code))
+    asked = asked or params
+    named = {key: value for key, value in asked.items() if _names(code, key)}
+    change = VARIANT_CHANGES[aspect].format(moves=value_changes(
+        params, named if value_changes(params, named) else asked))
     head = [("TASK", VARIANT_TASK.format(maneuver=maneuver_name(params))),
             ("CONSTRAINTS", VARIANT_CONSTRAINTS), ("CHANGE", change)]
     purpose = f"vary-{aspect}"
@@ -173,15 +178,18 @@ def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = No
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), purpose)
 
 
-def _moves(params: dict, moved: dict, code: str) -> str:
-    """``- key: old -> new`` (Python literals, as the script writes them) for each value
-    ``moved`` changes that ``code`` names; ``- key: new`` for a key it adds."""
-    changed = [key for key, value in moved.items()
-               if params.get(key) != value and key not in METADATA_KEYS]
-    named = [key for key in changed if f'"{key}"' in code or f"'{key}'" in code] or changed
-    return "\n".join(f"- {key}: {python_literal(params[key])} -> {python_literal(moved[key])}"
-                      if params.get(key) is not None else f"- {key}: {python_literal(moved[key])}"
-                      for key in named)
+def value_changes(before: dict, after: dict) -> str:
+    """``- key: old -> new`` (Python literals, as a script writes them) for each value of
+    ``after`` that ``before`` holds otherwise; ``- key: new`` for one it does not hold."""
+    return "\n".join(
+        f"- {key}: {python_literal(before[key])} -> {python_literal(value)}"
+        if before.get(key) is not None else f"- {key}: {python_literal(value)}"
+        for key, value in after.items()
+        if key not in METADATA_KEYS and (key not in before or before[key] != value))
+
+
+def _names(code: str, key: str) -> bool:
+    return f'"{key}"' in code or f"'{key}'" in code
 
 
 def _new_keys(script: str, values: dict) -> tuple[str, ...]:

@@ -111,6 +111,23 @@ def adaptation(script: Path, params: Mapping[str, Any]) -> tuple[str, dict]:
     return worked_example(script, params if example is None else example), values
 
 
+def written_values(source: str) -> dict | None:
+    """The values a worked example has written into its ``RECORD`` (None: it has none, or
+    it is not Python)."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return None
+    for node in tree.body:
+        if (isinstance(node, ast.Assign) and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name) and node.targets[0].id == RECORD_NAME):
+            try:
+                return ast.literal_eval(node.value)
+            except ValueError:
+                return None
+    return None
+
+
 def write_values_in(source: str, values: Mapping[str, Any]) -> str:
     """``source`` with ``params[k]``/``params.get(k...)`` inside ``generate`` replaced by
     ``values[k]``'s literal, other uses of ``params`` there by ``record``, the first line of

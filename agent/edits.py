@@ -61,13 +61,16 @@ def edit_grammar(reference: str) -> str:
     )) + "\n"
 
 
-def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = ()) -> str:
+def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
+                       min_edits: int = 0) -> str:
     """The GBNF grammar of an edit reply that can change only values: ``search`` one of the
     lines of ``reference`` holding a literal (each there once), ``replace`` that line with
-    only its literals free (numbers, strings but dict keys, ``True``/``False``/``None``); after
+    only its literals free, each to a value of its type (numbers, strings but dict keys,
+    ``True``/``False``; ``None`` to anything); after
     a ``"key": value,`` line of a dict, new ``"key": value,`` lines for ``new_keys`` may
-    follow. A reply in it cannot break the script's syntax, rename a key or touch code; a
-    script with no such line gets :func:`edit_grammar`."""
+    follow; at least ``min_edits`` edits (one per value to change: a small model otherwise
+    stops after the first). A reply in it cannot break the script's syntax, rename a key or
+    touch code; a script with no such line gets :func:`edit_grammar`."""
     slots = _literal_slots(reference)
     counts = Counter(reference.splitlines())
     pairs = [_pair_rule(line, slots[number], new_keys)
@@ -75,11 +78,14 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = ()) -> str:
              if slots.get(number) and counts[line] == 1]
     if not pairs:
         return edit_grammar(reference)
+    edits = ('(edit ("," ws edit)*)?' if min_edits < 1 else
+             f'edit ("," ws edit){{{min_edits - 1},}}')
     rules = [
-        'root ::= "{" ws "\\"edits\\":" ws "[" ws (edit ("," ws edit)*)? ws "]" ws "}"',
+        f'root ::= "{{" ws "\\"edits\\":" ws "[" ws {edits} ws "]" ws "}}"',
         'edit ::= "{" ws "\\"search\\":" ws pair ws "}"',
         "pair ::= " + " | ".join(pairs),
-        'val ::= num | pystr | "True" | "False" | "None"',
+        'val ::= num | pystr | bool | "None"',
+        'bool ::= "True" | "False"',
         'num ::= "-"? [0-9]+ ("." [0-9]+)? ([eE] [-+]? [0-9]+)?',
         f"pystr ::= {_gbnf_literal(QUOTE)} [a-zA-Z0-9_ ./:-]* {_gbnf_literal(QUOTE)}",
         'ws ::= [ \\t\\n]{0,4}',
@@ -103,13 +109,22 @@ def _pair_rule(line: str, slots: list[tuple[int, int]], new_keys: tuple[str, ...
     pieces, at = [], 0
     for start, end in slots:
         pieces.append(_gbnf_literal(_json_inner(line[at:start])) if start > at else "")
-        pieces.append("val")
+        pieces.append(_slot_rule(line[start:end]))
         at = end
     pieces.append(_gbnf_literal(_json_inner(line[at:])) if at < len(line) else "")
     added = " added*" if new_keys and DICT_ENTRY.match(line) else ""
     template = " ".join(piece for piece in pieces if piece)
     return (f'({_gbnf_literal(json.dumps(line))} "," ws "\\"replace\\":" ws '
             f'"\\"" {template}{added} "\\"")')
+
+
+def _slot_rule(literal: str) -> str:
+    """What may stand where ``literal`` stands: a value of its type (``None``: any)."""
+    if literal.startswith('"'):
+        return "pystr"
+    if literal in ("True", "False"):
+        return "bool"
+    return "val" if literal == "None" else "num"
 
 
 def _json_inner(text: str) -> str:

@@ -100,9 +100,10 @@ def patch_prompt(params: dict, reference: str, error: str | None = None,
     if error:
         sections.append(("ERROR OF YOUR PREVIOUS EDIT", _fenced(error, "text")))
     sections.append(("OUTPUT", "Output only the JSON edits."))
+    grammar = value_edit_grammar(reference, _new_keys(reference, wanted),
+                                 _changed_entries(shown, wanted))
     return Prompt(PATCH_SYSTEM, _sections(*sections), params.get("scenario_id", ""),
-                  "repair" if error else "generate", edit_schema(reference),
-                  value_edit_grammar(reference, _new_keys(reference, llm_params(params, values))))
+                  "repair" if error else "generate", edit_schema(reference), grammar)
 
 
 def _shared_head(params: dict, reference: str, values: dict | None) -> list[tuple[str, str]]:
@@ -170,10 +171,11 @@ def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = No
     if edits:
         user = _sections(*head, ("FORMAT", VARIANT_EDIT_FORMAT), ("SCRIPT", _fenced(code)),
                          ("OUTPUT", "Output only the JSON edits."))
+        changed = {key: value for key, value in asked.items() if params.get(key) != value}
+        grammar = value_edit_grammar(code, _new_keys(code, changed),
+                                     _changed_entries(written_values(code), changed))
         return Prompt(PATCH_SYSTEM, user, params.get("scenario_id", ""), purpose,
-                      edit_schema(code), value_edit_grammar(code, _new_keys(code, {
-                          key: value for key, value in (asked or {}).items()
-                          if params.get(key) != value})))
+                      edit_schema(code), grammar)
     user = _sections(*head, ("SCRIPT", _fenced(code)), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), purpose)
 
@@ -196,3 +198,11 @@ def _new_keys(script: str, values: dict) -> tuple[str, ...]:
     """The keys of ``values`` the script's dicts do not hold yet (an edit may add them)."""
     return tuple(key for key in values if f'"{key}":' not in script
                  and key not in METADATA_KEYS)
+
+
+def _changed_entries(shown: dict | None, wanted: dict) -> int:
+    """How many ``RECORD`` entries must change (each is a line an edit names)."""
+    if shown is None:
+        return 0
+    return sum(1 for key, value in wanted.items() if key in shown and shown[key] != value
+               and key not in METADATA_KEYS)

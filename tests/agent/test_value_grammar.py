@@ -13,6 +13,7 @@ import math
 import pytest
 
 from scenweave import corpus
+from scenweave.agent.edits import value_edit_grammar
 from scenweave.agent.prompts import patch_prompt, variant_prompt
 from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.worked_example import adaptation, worked_example
@@ -101,6 +102,7 @@ def test_the_right_variant_edits_decode_for_every_aspect_asked(sampler, placed):
     ('    "ego_speed_ms": {v},', '    "ego_speed_ms": 30.0'),  # the comma lost
     ('    "ego_speed_ms": {v},', '    "ego_speed_ms": 30.0, x = 1'),  # code smuggled in
     ("    return write_scenario(scenario, out_path)", "    return None"),  # no value there
+    ('    "npc_vehicle_type": "car",', '    "npc_vehicle_type": 35.3,'),  # a value's type
 ])
 def test_an_edit_that_is_not_a_change_of_value_cannot_be_decoded(sampler, placed, search,
                                                                  replace):
@@ -108,9 +110,25 @@ def test_an_edit_that_is_not_a_change_of_value_cannot_be_decoded(sampler, placed
     shown, values = adaptation(corpus.retrieve(brake).script_path, brake)
     speed = next(line for line in shown.splitlines() if '"ego_speed_ms":' in line)
     search = search.format(v=speed.split(": ")[1].rstrip(","))
+    if "npc_vehicle_type" in search:
+        search = next(line for line in shown.splitlines() if '"npc_vehicle_type":' in line)
+        replace = search.replace(search.split(": ")[1], "35.3,")
     assert search in shown.splitlines()
-    grammar = patch_prompt(brake, shown, values=values).reply_grammar
+    grammar = value_edit_grammar(shown)
     good = json.dumps({"edits": [{"search": search, "replace": search}]})
     bad = json.dumps({"edits": [{"search": search, "replace": replace}]})
     assert sampler.accepts(grammar, good) == ("return" not in search)
     assert not sampler.accepts(grammar, bad)
+
+
+def test_a_reply_must_make_at_least_one_edit_per_value_to_change(sampler, placed):
+    """SmolLM2 otherwise stops after its first edit (14 output tokens a call)."""
+    brake = next(p for p in placed if p["maneuver_class"] == "BRAKE")
+    shown, values = adaptation(corpus.retrieve(brake).script_path, brake)
+    right = json.loads(json_edits(shown, worked_example(corpus.retrieve(brake).script_path,
+                                                        brake)))["edits"]
+    grammar = patch_prompt(brake, shown, values=values).reply_grammar
+    assert len(right) > 5
+    assert not sampler.accepts(grammar, json.dumps({"edits": right[:3]}))
+    assert not sampler.accepts(grammar, '{"edits": []}')
+    assert sampler.accepts(value_edit_grammar(shown), '{"edits": []}')

@@ -31,7 +31,7 @@ def fenced(code: str) -> str:
     return f"```python\n{code}```\n"
 
 
-def right_replies(raw: Path) -> dict[str, list[str]]:
+def right_replies(raw: Path, map_name: str | None) -> dict[str, list[str]]:
     """scenario id -> what a perfect model answers: the faithful script, then each aspect
     (vehicles and lane: the values ``asked_params`` hands the LLM, written in)."""
     from scenweave import corpus
@@ -41,7 +41,7 @@ def right_replies(raw: Path) -> dict[str, list[str]]:
     from scenweave.runner import default_matcher, round_robin
     from scenweave.spawn_db import SpawnDbError
 
-    matcher = default_matcher()
+    matcher = default_matcher(map_name)
     replies = {}
     for index, params in round_robin(load_input(raw, InputSelection()).params):
         try:
@@ -70,6 +70,7 @@ def main() -> None:
                         help="replay: a perfect model's replies; embedded: SmolLM2 itself")
     parser.add_argument("--repair", default="error_feedback",
                         help="the agent's strategy (patch: variants as JSON line edits)")
+    parser.add_argument("--map", default=None, help="a bundled town or an .xodr (Town04)")
     parser.add_argument("--sandbox", default="bwrap")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--verbose", action="store_true")
@@ -95,9 +96,9 @@ def main() -> None:
         llm: dict = {"llm": args.llm}
         if args.llm == "replay":
             replies = Path(tmp) / "replies.json"
-            replies.write_text(json.dumps(right_replies(raw)), encoding="utf-8")
+            replies.write_text(json.dumps(right_replies(raw, args.map)), encoding="utf-8")
             llm["replay_file"] = replies
-        settings = PipelineSettings(no_llm=False, replay=ReplaySettings(), vary=VARY,
+        settings = PipelineSettings(no_llm=False, replay=ReplaySettings(), vary=VARY, map=args.map,
                                     agent=AgentSettings(**llm, repair=args.repair,
                                                         sandbox=batch_sandbox(args.sandbox)))
         started = time.perf_counter()
@@ -118,7 +119,8 @@ def main() -> None:
                     print(o["scenario_id"], v["aspect"], v["errors"][:2])
     aspects = ("weather", "vehicles", "traffic", "lane")
     model = "recorded right replies" if args.llm == "replay" else "embedded SmolLM2-135M"
-    print(f"variants benchmark: sample data seed {args.seed}, {len(outcomes)} records, "
+    print(f"variants benchmark: {args.map or 'Town04'}, sample data seed {args.seed}, "
+          f"{len(outcomes)} records, "
           f"--vary {VARY}, {model}, --repair {args.repair}, replay on, {wall:.0f} s")
     print(f"delivered: {Counter(o['status'] for o in outcomes)}")
     print("class | " + " | ".join(aspects))

@@ -112,7 +112,10 @@ def _differs(one: etree._Element, other: etree._Element, path: str) -> bool:
 
 
 def _start_lanes(root: etree._Element, actor: str) -> list[str]:
-    return root.xpath(f"{_start_path(actor)}//LanePosition/@laneId")
+    """The lane ``actor`` starts in: its ``LanePosition``'s lane id, or where the scenario
+    places it by world coordinates (urban), the whole position."""
+    lanes = root.xpath(f"{_start_path(actor)}//LanePosition/@laneId")
+    return lanes or [_canonical(p) for p in root.xpath(f"{_start_path(actor)}//WorldPosition")]
 
 
 def _start_path(actor: str) -> str:

@@ -25,9 +25,9 @@ from scenweave.runner import run_batch
               help="Perturbed copies per record (extract_with_variants).")
 @click.option("--seed", default=0, show_default=True, help="Seed for the variants.")
 @click.option("--vary", default=0, show_default=True, type=click.IntRange(0),
-              help="Variants the LLM writes of each delivered scenario, changing only what the "
-                   "record does not fix (weather, vehicle models, background traffic); each "
-                   "must still replay the record.")
+              help="Variants the LLM writes of each delivered scenario, one aspect in turn: "
+                   "weather, a vehicle model (bumper gaps kept), a background vehicle in a "
+                   "free lane, the record one lane over; each must still replay the record.")
 @click.option("--layout", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Highway column-layout JSON for raw .npy input.")
 @click.option("--top-n", default=5, show_default=True, type=click.IntRange(1),

@@ -61,6 +61,10 @@ class Playback:
     storyboard: list[StoryboardChange] = field(default_factory=list)
     #: light action name -> the colour it sets (from the translation, CARLA's names)
     lights: dict[str, str] = field(default_factory=dict)
+    #: light action name -> where its signal stands (x, y, OpenDRIVE frame), for the viewer
+    light_positions: dict[str, list[float]] = field(default_factory=dict)
+    #: the map file the scenario was played on (its path as given)
+    map: str | None = None
     engine_error: str | None = None
     quit_by_engine: bool = False
     log: list[str] = field(default_factory=list)
@@ -140,7 +144,7 @@ class Playback:
             "boxes": {k: [b.length, b.width, b.center_ahead] for k, b in self.boxes.items()},
             "collisions": [list(c) for c in self.collisions],
             "storyboard": [c.to_list() for c in self.storyboard],
-            "lights": self.lights,
+            "lights": self.lights, "light_positions": self.light_positions, "map": self.map,
             "engine_error": self.engine_error, "quit_by_engine": self.quit_by_engine,
             "log": self.log, "timings_s": self.timings_s,
         }
@@ -153,6 +157,7 @@ class Playback:
             collisions=[tuple(c) for c in data.get("collisions", [])],
             storyboard=[StoryboardChange(*c) for c in data.get("storyboard", [])],
             lights=dict(data.get("lights", {})),
+            light_positions=dict(data.get("light_positions", {})), map=data.get("map"),
             engine_error=data.get("engine_error"), quit_by_engine=data.get("quit_by_engine", False),
             log=list(data.get("log", [])), timings_s=dict(data.get("timings_s", {})),
         )

@@ -73,6 +73,11 @@ def replay_file(xosc_path: Path, map_path: Path,
         replays = 2
         playback.timings_s["first_replay"] = first_s
     playback.lights = translated.light_actions
+    carla_xy = _lights_of(map_path)
+    playback.light_positions = {action: [carla_xy[signal][0], -carla_xy[signal][1]]
+                                for action, signal in translated.light_signals.items()
+                                if signal in carla_xy}
+    playback.map = str(map_path)
     playback.timings_s.update({"translate": round(translated_at - started, 4),
                                "plan": round(planned_at - translated_at, 4),
                                "map": round(map_s, 4), "replays": replays,

@@ -26,11 +26,13 @@ from scenweave.progress import progress
               help="Seconds one replay may take before its player is killed.")
 @click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per scenario.")
+@click.option("--force", is_flag=True, help="Play a file that fails the parameter checks too "
+              "(a hand-edited scenario), and say which checks it fails.")
 @map_option(optional=True, help="Map to play on instead of the one each scenario names (its "
                                "params' map, else its LogicFile): a bundled CARLA town or an "
                                ".xodr path.")
 def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures: bool,
-           as_json: bool, map_ref: Any) -> None:
+           as_json: bool, force: bool, map_ref: Any) -> None:
     """Play each scenario (a run folder's, or .xosc files) and say whether it replays as
     recorded."""
     from scenweave.player import ReplaySettings, find_esmini
@@ -41,9 +43,12 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
     if not files:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
     map_path = None if map_ref is None else map_ref.path
-    results = [replay_one(xosc, settings, figures, map_path)
+    results = [replay_one(xosc, settings, figures, map_path, force)
                for xosc in progress(files, desc="replay")]
     for result in results:
+        if result.get("forced") and not as_json:
+            click.echo(f"FORCED {result['scenario']}: fails the parameter checks ("
+                       + ", ".join(result["forced"]) + "); played anyway")
         if as_json:
             click.echo(json.dumps(result))
         elif not result["passed"]:
@@ -66,9 +71,12 @@ def scenario_files(paths: tuple[Path, ...]) -> list[Path]:
     return files
 
 
-def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None) -> dict:
+def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None,
+               force: bool = False) -> dict:
     """Play ``xosc`` (on ``map_path``, default: the map the scenario names); judge it against
-    its folder's params.json when there is one."""
+    its folder's params.json when there is one. A file that fails the static or parameter
+    checks is not played, unless ``force``: then it is played and judged all the same, and
+    ``forced`` names the checks it fails."""
     from scenweave.player import REPLAY_NAME, replay_file
     from scenweave.schemas import validate_xosc
     from scenweave.schemas.findings import Finding
@@ -80,6 +88,10 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
         result = validate_xosc(xosc, params, fix=False, replay=settings, map_path=map_path)
         playback, findings = result.playback, [f for f in result.errors
                                                if f.severity == "error"]
+        forced = sorted({f.code for f in findings}) if force and playback is None else []
+        if forced:
+            playback, judged = _forced_replay(xosc, params, settings, map_path)
+            findings += judged
     elif (map_path := map_path or _named_map(xosc)) is not None:
         playback = replay_file(xosc, map_path, settings)
         findings = judge_collisions_only(playback)
@@ -95,7 +107,27 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     return {"scenario": xosc.parent.name if xosc.name == "scenario.xosc" else str(xosc),
             "played": playback is not None and not playback.engine_error,
             "passed": not findings, "codes": sorted({f.code for f in findings}),
-            "errors": [f"{f.code}: {f.message}" for f in findings]}
+            "errors": [f"{f.code}: {f.message}" for f in findings],
+            **({"forced": forced} if params_path.is_file() and forced else {})}
+
+
+def _forced_replay(xosc: Path, params: dict, settings, map_path: Path | None) -> tuple:
+    """Play a file that failed the checks before the replay; the playback and the judge's
+    findings (a REPLAY_MAP finding when no map is named)."""
+    from lxml import etree
+
+    from scenweave.player import replay_file
+    from scenweave.schemas.findings import Finding
+    from scenweave.schemas.replay import judge_replay
+    from scenweave.schemas.scenario_doc import ScenarioDoc
+
+    doc = ScenarioDoc(etree.parse(str(xosc)), params.get("map"))
+    map_path = map_path or doc.map_path
+    if map_path is None:
+        return None, [Finding("REPLAY_MAP", "its LogicFile names no known map; give one with "
+                              "--map")]
+    playback = replay_file(xosc, map_path, settings)
+    return playback, judge_replay(playback, params, doc, map_path)
 
 
 def _named_map(xosc: Path) -> Path | None:

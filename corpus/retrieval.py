@@ -14,10 +14,10 @@ import ast
 import hashlib
 import importlib
 import importlib.util
+import io
 import os
 import re
 import sys
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
@@ -29,6 +29,7 @@ import numpy as np
 
 from scenweave import maneuvers
 from scenweave.corpus.errors import CorpusError, ParamsError
+from scenweave.files import write_bytes_atomic
 
 CORPUS_DIR = Path(__file__).resolve().parent
 
@@ -217,14 +218,9 @@ def _digest(texts: list[str]) -> str:
 
 
 def _save_atomically(path: Path, matrix: np.ndarray) -> None:
+    buffer = io.BytesIO()
+    np.save(buffer, matrix)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        write_bytes_atomic(path, buffer.getvalue())
     except OSError:
         return  # a read-only home only costs recomputing the 16 embeddings next time
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            np.save(handle, matrix)
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)

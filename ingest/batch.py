@@ -11,7 +11,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenweave.ingest.atomic import write_json_atomic
+from scenweave.files.atomic import write_json_atomic
+from scenweave.ingest.admission import admit
 from scenweave.ingest.highway import (
     DEFAULT_BINNING,
     HighwayFileResult,
@@ -20,7 +21,6 @@ from scenweave.ingest.highway import (
 )
 from scenweave.ingest.issues import IngestError, IngestReport, Issue, RecordIssue, unexpected_issue
 from scenweave.ingest.layouts import HighwayLayouts, load_layouts
-from scenweave.ingest.records import check_record
 from scenweave.ingest.urban import canonicalize_urban_file, iter_urban_files
 
 REPORT_NAME = "ingest_report.json"
@@ -40,7 +40,7 @@ class RawRecord:
 def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayouts | None = None,
                      binning: str = DEFAULT_BINNING,
                      on_file: Callable[[Path], None] | None = None) -> Iterator[RawRecord]:
-    """Canonical, schema-checked records of every raw file; problems go into ``report``."""
+    """Canonical records of every raw file that ``admit`` takes; problems go into ``report``."""
     raw_dir = Path(raw_dir)
     if not raw_dir.is_dir():
         raise IngestError(f"input folder not found: {raw_dir}")
@@ -71,7 +71,7 @@ def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[R
     for record in records:
         row = record.get("source", {}).get("row_index")
         try:
-            check_record(record)
+            admit(record)
         except RecordIssue as issue:
             report.add([Issue(file=file, row=row, field=issue.field, message=issue.message)])
             continue

@@ -144,7 +144,7 @@ def _extract_urban(record: dict) -> dict:
         "tfl_state": light["light_state"] if light else None,
         "turn": maneuvers.get(record["maneuver_class"]).turn,
         "speed_limit_kmh": env["speed_limit_kmh"],
-        "lane_count": env["lane_count"],
+        "lane_count": _whole(env["lane_count"]),
         "lane_width_m": env["lane_width_m"],
         "has_npc": lead is not None,
         "npc_position": "front" if lead else None,
@@ -162,6 +162,12 @@ def _extract_urban(record: dict) -> dict:
     }
     params.update(dict.fromkeys(SPAWN_KEYS))
     return finish(params)
+
+
+def _whole(count: float | None) -> int | None:
+    """A count the record gave as a number (``2.0``) as an int; None when it gave none or
+    no whole one (no stage needs the lane count: docs/params.md)."""
+    return int(count) if isinstance(count, int | float) and float(count).is_integer() else None
 
 
 def brake_time(t: list[float], v: list[float]) -> float:

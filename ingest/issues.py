@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Literal
@@ -26,6 +28,8 @@ class Issue:
     row: int | None = None
     field: str | None = None
     severity: Severity = "error"
+    #: how many frames or rows of ``file`` the warning stands for (one line for all of them)
+    count: int = 1
 
     def line(self) -> str:
         """One human line: ``file, row 12, field 'x': message``."""
@@ -37,7 +41,10 @@ class Issue:
         return f"{', '.join(where)}: {self.message}"
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        found = asdict(self)
+        if self.count == 1:
+            del found["count"]
+        return found
 
 
 class RecordIssue(Exception):
@@ -68,12 +75,31 @@ class IngestReport:
     records_by_class: dict[str, int] = field(default_factory=dict)
     issues: list[Issue] = field(default_factory=list)
 
+    #: where each warning of ``issues`` stands, to fold repeats into it
+    _warning_at: dict[tuple, int] = field(default_factory=dict, repr=False)
+
     @property
     def errors(self) -> list[Issue]:
         return [i for i in self.issues if i.severity == "error"]
 
+    @property
+    def warnings(self) -> list[Issue]:
+        return [i for i in self.issues if i.severity == "warning"]
+
     def add(self, issues: Iterable[Issue]) -> None:
-        self.issues.extend(issues)
+        """Add issues; a warning repeated for one file and field (a label read in every frame)
+        is kept once, with a count of the frames or rows it stands for."""
+        for issue in issues:
+            if issue.severity != "warning":
+                self.issues.append(issue)
+                continue
+            key = (issue.file, _field_pattern(issue.field), issue.message)
+            at = self._warning_at.get(key)
+            if at is None:
+                self._warning_at[key] = len(self.issues)
+                self.issues.append(issue)
+            else:
+                self.issues[at] = _folded(self.issues[at], issue)
 
     def count(self, maneuver_class: str, n: int = 1) -> None:
         self.records_by_class[maneuver_class] = self.records_by_class.get(maneuver_class, 0) + n
@@ -85,6 +111,21 @@ class IngestReport:
             "records_written": self.records_written,
             "records_by_class": dict(sorted(self.records_by_class.items())),
             "errors": len(self.errors),
-            "warnings": len(self.issues) - len(self.errors),
-            "issues": [i.to_dict() for i in self.issues],
+            "warnings": len(self.warnings),
+            "issues": [i.to_dict() for i in (*self.errors, *self.warnings)],
         }
+
+
+def _field_pattern(field_name: str | None) -> str | None:
+    """``key_times[12].temporal_climatic.day_period`` -> ``key_times[*]...``: the same field
+    of every frame."""
+    return None if field_name is None else re.sub(r"\[\d+\]", "[*]", field_name)
+
+
+def _folded(first: Issue, again: Issue) -> Issue:
+    """One warning standing for both: the field as a pattern, the frames or rows counted."""
+    count = first.count + again.count
+    unit = "frames" if (first.field or "").startswith("key_times[") else "rows"
+    message = re.sub(r" in \d+ (frames|rows)$", "", first.message)
+    return dataclasses.replace(first, field=_field_pattern(first.field), row=None, count=count,
+                               message=f"{message} in {count} {unit}")

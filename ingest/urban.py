@@ -12,6 +12,7 @@ import json
 import re
 import statistics
 from collections.abc import Iterator
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,13 @@ NUMERIC_ELEMENTS: dict[str, float | None] = {
     "RearCurvature": None, "Slope": None, "RoadType": 0, "GuardRail": 0, "Junction": 0,
     "PresenceOfEmergencyLane": 0, "TrafficSignType": 0,
 }
+#: way-point elements whose codes may also be given by their label (``"Urban Road"``)
+ELEMENT_CODE_TABLES = {"RoadType": "RT_RoadType", "GuardRail": "RT_GuardRail",
+                       "Junction": "RT_JunctionBifurcation",
+                       "TrafficSignType": "RT_TrafficSignType",
+                       "PresenceOfEmergencyLane": "RT_PresenceOfEmergencyLane"}
+#: what the file being read holds in a form we did not expect but can read (set per file)
+_NOTES: ContextVar[list[RecordIssue] | None] = ContextVar("urban_notes", default=None)
 
 
 def iter_urban_files(folder: Path) -> Iterator[Path]:
@@ -90,6 +98,16 @@ def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None,
 
     A field in a form we did not expect but can read (a day period written as ``"Night"``
     instead of its code) is read and noted in ``notes``, not rejected."""
+    token = _NOTES.set(notes if notes is not None else [])
+    try:
+        return _canonical(scene, source, folder_code)
+    finally:
+        _NOTES.reset(token)
+
+
+def _canonical(scene: dict, source: str, folder_code: str | None) -> dict:
+    notes = _NOTES.get()
+    assert notes is not None
     code = _get(scene, "scenario_code", str)
     maneuver = maneuvers.find(code)
     if maneuver is None or maneuver.domain != "urban":
@@ -99,10 +117,10 @@ def canonicalize_scene(scene: dict, source: str, folder_code: str | None = None,
         raise RecordIssue(f"file is in folder {folder_code} but says {code}",
                           field="scenario_code")
     segment = _get(scene, "segment", dict)
-    frames = _frames(scene, notes if notes is not None else [])
+    frames = _frames(scene, notes)
     times = [f["time"] for f in frames]
     ego = _ego_trajectory(frames)
-    infra = _infrastructure(scene, notes if notes is not None else [])
+    infra = _infrastructure(scene, notes)
     environment = _environment(frames[0], infra, scene)
     actors_start, actor_tracks = _actors(frames, ego["ds"])
     min_ttc = _min_ttc(frames)
@@ -145,12 +163,28 @@ def _get(obj: dict, key: str, kind: type | tuple[type, ...], where: str = "") ->
     value = obj[key]
     if kind is float:
         kind = (int, float)
+        if isinstance(value, str):
+            value = obj[key] = _number_in_text(value, path)
     if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
         raise RecordIssue(f"expected {_kind_name(kind)}, got {type(value).__name__} {value!r:.40}",
                           field=path)
     if isinstance(value, float) and value != value or value in (float("inf"), float("-inf")):
         raise RecordIssue(f"not a finite number: {value!r}", field=path)
     return value
+
+
+def _number_in_text(text: str, path: str) -> float | str:
+    """A number written as text (``"3.5"``) as the number, with a note; other text as is (the
+    caller's type check then names it)."""
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    notes = _NOTES.get()
+    if notes is not None:
+        notes.append(RecordIssue(f"number given as text {text!r}, read as {number:g}",
+                                 field=path))
+    return number
 
 
 def _optional_number(obj: dict, key: str, where: str, allow_bool: bool = False) -> None:
@@ -287,8 +321,14 @@ def _infrastructure(scene: dict, notes: list[RecordIssue]) -> dict:
             if kind == "TrafficSignType":
                 sign_codes += _sign_codes(element, at_element, notes)
                 continue
-            values[kind] = (_element_value(element, kind, at_element)
-                            if kind in NUMERIC_ELEMENTS else element.get("value"))
+            if kind not in NUMERIC_ELEMENTS:
+                values[kind] = element.get("value")
+                continue
+            try:
+                values[kind] = _element_value(element, kind, at_element)
+            except RecordIssue as issue:  # the road's description only: no scenario needs it
+                notes.append(RecordIssue(f"{issue.message}; ignored (no scenario needs it)",
+                                         field=issue.field))
         if sign_codes:
             signs.append(_sign(at, sign_codes))
         if "LaneWidth" in values:
@@ -327,7 +367,15 @@ def _sign(at: float, codes: list[float]) -> dict:
 
 
 def _element_value(element: dict, kind: str, where: str) -> float:
-    """The numeric value of a known way-point element; RecordIssue names type and path."""
+    """The numeric value of a known way-point element (a coded one may name its label);
+    RecordIssue names type and path."""
+    value = element.get("value")
+    if kind in ELEMENT_CODE_TABLES and isinstance(value, str):
+        code = _code_of(value, ELEMENT_CODE_TABLES[kind])
+        if code is not None and not value.strip().lstrip("-").isdigit():
+            _NOTES.get().append(RecordIssue(f"{value!r} read as code {code}",
+                                            field=f"{where}.value"))
+            element["value"] = code
     try:
         value = _get(element, "value", float, where)
     except RecordIssue as issue:

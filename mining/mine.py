@@ -14,10 +14,9 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from scenweave.ingest import check_playable, extract_params
-from scenweave.ingest.atomic import write_json_atomic
+from scenweave.files.atomic import write_json_atomic
+from scenweave.ingest import admit, extract_params
 from scenweave.ingest.issues import RecordIssue
-from scenweave.ingest.records import check_record
 from scenweave.mining.detect import Event, detect
 from scenweave.mining.records import record_of
 from scenweave.mining.tracks import Recording
@@ -87,8 +86,7 @@ def _checked_record(event: Event, recording: Recording, number: int, report: Min
     try:
         _moving_at_start(event, thresholds["records"]["min_start_speed_ms"])
         record = record_of(event, Path(recording.source), recording.reader, number)
-        check_record(record)
-        check_playable(extract_params(record))
+        admit(record)
     except RecordIssue as issue:
         report.skipped.append({"file": recording.source, "class": event.code,
                                "scenario_id": f"{event.code} event {number}",

@@ -17,11 +17,12 @@ import math
 import os
 import re
 import stat
-import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from itertools import pairwise
 from pathlib import Path
+
+from scenweave.files import write_bytes_atomic
 
 MAX_MESSAGE_CHARS = 4000
 MAX_TRACEBACK_CHARS = 16000
@@ -261,13 +262,6 @@ def write_files(files: dict[str, bytes], out_dir: Path) -> list[Path]:
     written = []
     for name, data in files.items():
         target = out_dir / name
-        fd, tmp = tempfile.mkstemp(dir=out_dir, prefix=".sandbox-")
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
-            os.replace(tmp, target)  # replaces a link of that name, never writes through it
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        write_bytes_atomic(target, data)  # replaces a link of that name, never writes through it
         written.append(target)
     return written

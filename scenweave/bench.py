@@ -20,7 +20,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from scenweave.ingest.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
+from scenweave.files.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.progress import progress

@@ -6,11 +6,12 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from scenweave import maneuvers
 from scenweave.ingest import (
     IngestReport,
     Issue,
+    admit,
     check_playable,
-    extract_params,
     extract_with_variants,
     iter_raw_records,
     load_layouts,
@@ -50,7 +51,8 @@ def is_raw(data: Path) -> bool:
     candidates = [data, data / "highway", data / "urban"]
     if any(any(c.glob("*.npy")) for c in candidates if c.is_dir()):
         return True
-    return any(p.is_dir() and p.name.startswith("U") for c in candidates if c.is_dir()
+    urban = set(maneuvers.codes("urban"))
+    return any(p.is_dir() and p.name in urban for c in candidates if c.is_dir()
                for p in c.iterdir())
 
 
@@ -93,13 +95,12 @@ def _records(data: Path, loaded: LoadedInput,
 
 
 def _with_variants(record: dict, selection: InputSelection) -> list[dict]:
-    """The record's params (and its variants), each one a replay can show
-    (``ingest.check_playable``; else the record is an input issue)."""
-    base = extract_params(record)
-    made = [base]
+    """The record's params (``ingest.admit``: the rule ingest applies too) and its variants,
+    each one a replay can show; else the record is an input issue."""
+    made = [admit(record)]
     if selection.variants:
         made += extract_with_variants(record, selection.variants, selection.seed)
-    for params in made:
+    for params in made[1:]:
         check_playable(params)
     return made
 

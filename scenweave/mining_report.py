@@ -10,7 +10,7 @@ import html
 import json
 from pathlib import Path
 
-from scenweave.ingest.atomic import write_text_atomic
+from scenweave.files.atomic import write_text_atomic
 from scenweave.report import figure, figure_png, page, pyplot, table
 
 HISTOGRAM_BINS = 12

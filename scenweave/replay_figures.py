@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from scenweave.corpus.corpus_utils import reference_gap_m
-from scenweave.ingest.atomic import write_bytes_atomic
+from scenweave.files.atomic import write_bytes_atomic
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.run_folder import RECORDED_NAME
 from scenweave.schemas.params import number as number_of

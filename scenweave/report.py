@@ -21,7 +21,7 @@ from pathlib import Path
 from string import Template
 from typing import Any
 
-from scenweave.ingest.atomic import write_text_atomic
+from scenweave.files.atomic import write_text_atomic
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
 
 REPORT_FILE = "report.html"

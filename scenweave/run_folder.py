@@ -14,7 +14,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from scenweave.ingest.atomic import write_json_atomic
+from scenweave.files.atomic import write_json_atomic
 
 STATUS_FILE = "status.json"
 SUMMARY_FILE = "summary.json"

@@ -84,9 +84,10 @@ class Params(TypedDict, total=False):
     tfl_ds_m: float | None
     tfl_state: Literal["green", "orange", "red"] | None
     turn: Literal["straight", "right"]
-    speed_limit_kmh: float
-    lane_count: int
-    lane_width_m: float
+    #: what the record says of its road, when it says it: no stage needs these
+    speed_limit_kmh: float | None
+    lane_count: int | None
+    lane_width_m: float | None
     lead_present: bool
     lead_distance_m: float
     lead_speed_ms: float

@@ -6,13 +6,12 @@ changed), and every check runs on the one parsed tree, so a validation costs mil
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from pathlib import Path
 
 from lxml import etree
 
+from scenweave.files import write_text_atomic
 from scenweave.schemas.autofix import apply_fixes
 from scenweave.schemas.carla_lint import carla_lint
 from scenweave.schemas.checks import detect_domain, semantics, structural
@@ -47,7 +46,7 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
     if fix:
         text, fixes = apply_fixes(text)
         if fixes:
-            _write_atomic(path, text)
+            write_text_atomic(path, text)
     try:
         tree = etree.ElementTree(etree.fromstring(text.encode("utf-8"),
                                                  etree.XMLParser(remove_blank_text=False)))
@@ -106,14 +105,3 @@ def _class_from_header(doc: ScenarioDoc) -> str | None:
 
 def _invalid(finding: Finding, fixes: list[str] | None = None) -> ValidationResult:
     return ValidationResult(False, list(fixes or []), [finding], None)
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -15,8 +15,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import tempfile
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import cache
@@ -27,6 +25,7 @@ import jsonschema
 import numpy as np
 
 from scenweave import maneuvers
+from scenweave.files import write_text_atomic
 from scenweave.spawn_db.bundled import road_network
 from scenweave.spawn_db.errors import LaneEndsError, SpawnDatabaseError
 from scenweave.spawn_db.lanes import lane_center_offset, lane_width
@@ -344,27 +343,6 @@ def write_database(database: dict[str, Any], path: str | Path) -> None:
     validate_database(database, Path(path))
     text = json.dumps(database, indent=1, ensure_ascii=False) + "\n"
     write_text_atomic(Path(path), text)
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` through a temporary file in the same folder."""
-    write_bytes_atomic(path, text.encode("utf-8"))
-
-
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    mode = path.stat().st_mode & 0o777 if path.exists() else 0o644
-    handle, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            stream.write(data)
-        os.chmod(temp, mode)
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
 
 
 def load_database(path: str | Path) -> dict[str, Any]:

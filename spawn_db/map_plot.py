@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first
 import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
-from scenweave.spawn_db.database import write_bytes_atomic  # noqa: E402
+from scenweave.files import write_bytes_atomic  # noqa: E402
 from scenweave.spawn_db.lanes import lane_center_offset, section_samples  # noqa: E402
 from scenweave.spawn_db.road_network import RoadNetwork  # noqa: E402
 from scenweave.spawn_db.signals import is_traffic_light, signal_position  # noqa: E402

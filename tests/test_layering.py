@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-UPPER = ("scenweave", "ingest", "agent", "mining")
-BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers")
+UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
+BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers", "files")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 
@@ -130,9 +130,15 @@ def test_the_packages_import_each_other_without_a_cycle():
     assert _cycles(packages) == []
 
 
-def test_maneuvers_is_the_bottom_layer():
-    assert {layer(target) for name, targets in GRAPH.items() if layer(name) == "maneuvers"
-            for target in targets} <= {"maneuvers"}
+@pytest.mark.parametrize("package", ["maneuvers", "files"])
+def test_the_bottom_layer_imports_nothing_of_ours(package):
+    assert {layer(target) for name, targets in GRAPH.items() if layer(name) == package
+            for target in targets} <= {package}
+
+
+def test_the_scenario_library_imports_only_what_the_sandbox_mounts():
+    """LLM-written scripts run ``corpus_utils`` in the sandbox, where only ``corpus`` exists."""
+    assert {layer(target) for target in GRAPH["scenweave.corpus.corpus_utils"]} <= {"corpus"}
 
 
 def test_no_package_imports_another_packages_private_names():

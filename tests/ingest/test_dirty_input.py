@@ -183,31 +183,47 @@ def _set_element(data: dict, index: int, value) -> None:
 
 
 @pytest.mark.parametrize("mutate, field, words", [
-    (lambda d: _set_element(d, 3, "3.5"), f"{WAY_POINT}[3].value",
-     "LaneWidth: expected number, got str '3.5'"),
-    (lambda d: _set_element(d, 0, "fifty"), f"{WAY_POINT}[0].value",
-     "SpeedLimit: expected number, got str 'fifty'"),
-    (lambda d: _set_element(d, 0, -30), f"{WAY_POINT}[0].value", "SpeedLimit: -30 is below 0"),
-    (lambda d: _set_element(d, 2, [2]), f"{WAY_POINT}[2].value",
-     "NumberOfLanes: expected number, got list"),
     (lambda d: d["key_times"][3]["temporal_climatic"].update(precipitation="heavy"),
      "key_times[3].temporal_climatic.precipitation", "expected number, got str 'heavy'"),
     (lambda d: d["key_times"][0]["temporal_climatic"].update(day_period={"night": 1}),
      "key_times[0].temporal_climatic.day_period", "expected number, got dict"),
-    (lambda d: d["key_times"][1]["obstacles"][0].update(relative_velocity_y="0.2"),
-     "key_times[1].obstacles[0].relative_velocity_y", "expected number, got str '0.2'"),
     (lambda d: d["key_times"][2]["obstacles"][0].update(time_to_collision=float("nan")),
      "key_times[2].obstacles[0].time_to_collision", "not a finite number"),
+    (lambda d: d["key_times"][1]["ego_vehicle"].update(ego_speed="fast"),
+     "key_times[1].ego_vehicle.ego_speed", "expected number, got str 'fast'"),
     (lambda d: d.update(attributes="250"), "attributes", "expected list, got str '250'"),
 ])
-def test_badly_typed_urban_value_is_one_issue_naming_file_and_field(tmp_path, mutate, field,
-                                                                     words):
+def test_a_value_the_scenario_needs_badly_typed_is_one_error_naming_file_and_field(
+        tmp_path, mutate, field, words):
     raw = tmp_path / "raw"
     write_scene(raw, _bad_urban(lambda d: None), "1.0.json")
     write_scene(raw, _bad_urban(mutate), "2.0.json")
     report, out = _ingest(tmp_path)
     [issue] = report.issues
-    assert (issue.file, issue.field) == ("U4_2/2.0.json", field)
+    assert (issue.file, issue.field, issue.severity) == ("U4_2/2.0.json", field, "error")
+    assert words in issue.message
+    assert len(_records(out, "urban", "U4_2")) == 1
+
+
+@pytest.mark.parametrize("mutate, field, words", [
+    (lambda d: _set_element(d, 3, "3.5"), f"{WAY_POINT}[3].value",
+     "number given as text '3.5', read as 3.5"),
+    (lambda d: _set_element(d, 0, "fifty"), f"{WAY_POINT}[0].value",
+     "SpeedLimit: expected number, got str 'fifty'; ignored (no scenario needs it)"),
+    (lambda d: _set_element(d, 0, -30), f"{WAY_POINT}[0].value",
+     "SpeedLimit: -30 is below 0; ignored"),
+    (lambda d: _set_element(d, 2, [2]), f"{WAY_POINT}[2].value",
+     "NumberOfLanes: expected number, got list"),
+    (lambda d: d["key_times"][1]["obstacles"][0].update(relative_velocity_y="0.2"),
+     "key_times[1].obstacles[0].relative_velocity_y", "number given as text '0.2', read as 0.2"),
+])
+def test_a_value_read_in_another_form_or_not_needed_is_a_warning_and_the_record_stays(
+        tmp_path, mutate, field, words):
+    raw = tmp_path / "raw"
+    write_scene(raw, _bad_urban(mutate), "2.0.json")
+    report, out = _ingest(tmp_path)
+    [issue] = report.issues
+    assert (issue.file, issue.field, issue.severity) == ("U4_2/2.0.json", field, "warning")
     assert words in issue.message
     assert len(_records(out, "urban", "U4_2")) == 1
 

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from scenweave.ingest import IngestReport, check_playable, extract_params, iter_raw_records
-from scenweave.ingest.issues import RecordIssue
+from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from tests.ingest.builders import write_npy
 
 KMH = 3.6
@@ -142,23 +141,22 @@ def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path)
     inconsistent = [["72", "54", "90", "90", "20", "45", "200", "8", "No", "B1", "Car"]]
     write_npy(tmp_path, "FLF", inconsistent)
     report = IngestReport()
-    (item,) = iter_raw_records(tmp_path, report)
-    params = extract_params(item.record)  # extraction reads what the record says
-    with pytest.raises(RecordIssue) as raised:
-        check_playable(params)
-    assert raised.value.field == "npc_distance_end_m"
+    assert list(iter_raw_records(tmp_path, report)) == []  # ingest admits what run takes
+    [issue] = report.issues
+    assert (issue.file, issue.row, issue.field) == ("FLF_BINS_VALUES.npy", 0,
+                                                    "npc_distance_end_m")
     # 20 and 45 m between bumpers are 24.58 and 49.58 m between reference points (a car ahead)
-    assert "24.6 m to 49.6 m" in raised.value.message and "84.6 m" in raised.value.message
+    assert "24.6 m to 49.6 m" in issue.message and "84.6 m" in issue.message
 
 
 def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):
     # 8 m between the bumpers (11.92 m between reference points), 2 m/s faster for 5 s: it
     # would end 1.92 m behind the ego's reference point, inside the ego
     write_npy(tmp_path, "CINB", [["108", "7.2", "0", "5", "-8", "No", "Right", "Car"]])
-    (item,) = iter_raw_records(tmp_path, IngestReport())
-    with pytest.raises(RecordIssue) as raised:
-        check_playable(extract_params(item.record))
-    assert raised.value.field == "npc_distance_m" and "-1.9 m from the ego" in raised.value.message
+    report = IngestReport()
+    assert list(iter_raw_records(tmp_path, report)) == []
+    [issue] = report.issues
+    assert issue.field == "npc_distance_m" and "-1.9 m from the ego" in issue.message
 
 
 @pytest.mark.parametrize("code", sorted(CASES))

@@ -13,8 +13,8 @@ from scenweave.ingest import (
     check_playable,
     check_record,
     extract_params,
-    iter_raw_records,
 )
+from scenweave.ingest.highway import DEFAULT_BINNING, canonicalize_highway_file
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import load_layouts
 from tests.ingest.builders import write_npy
@@ -38,12 +38,14 @@ settings_ = settings(max_examples=60, deadline=None,
 def _params(tmp_path, code, rows):
     for old in tmp_path.glob("*.npy"):
         old.unlink()
-    write_npy(tmp_path, code, [list(r) for r in rows])
+    path = write_npy(tmp_path, code, [list(r) for r in rows])
+    # the file's records before admission, so playability is checked here, case by case
+    result = canonicalize_highway_file(path, LAYOUTS, DEFAULT_BINNING)
     report = IngestReport()
-    items = list(iter_raw_records(tmp_path, report))
-    for item in items:
-        check_record(item.record)
-    return [extract_params(i.record) for i in items], report
+    report.add(result.issues)
+    for record in result.records:
+        check_record(record)
+    return [extract_params(record) for record in result.records], report
 
 
 def _apart_at_the_start(row) -> bool:

@@ -25,6 +25,7 @@ COMMANDS: dict[str, str] = {
     "sandbox": "scenweave.commands.sandbox:sandbox",
     "worker": "scenweave.commands.worker:worker",
     "submit": "scenweave.commands.submit:submit_command",
+    "collect": "scenweave.commands.collect:collect",
     "report": "scenweave.commands.report:report",
     "bench": "scenweave.commands.bench:bench",
     "trace": "scenweave.commands.trace:trace",

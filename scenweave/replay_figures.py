@@ -25,10 +25,14 @@ esmini could not play gets a figure saying why. Every figure has the same size
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import math
+import struct
 import textwrap
+import zlib
+from contextlib import suppress
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -43,6 +47,8 @@ from scenweave.schemas.params import number as number_of
 from scenweave.schemas.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
 FIGURE_NAME = "replay.png"
+#: the PNG text chunk naming what the figure shows (``figure_source``)
+SOURCE_KEY = "scenweave-source"
 #: figure size (inches) and resolution: FIGURE_PX pixels, the same for every replay
 FIGURE_IN = (10.0, 5.6)
 DPI = 90
@@ -64,18 +70,24 @@ FAIL_COLOUR = "#cf222e"
 PASS_COLOUR = "#1a7f37"
 
 
-def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None) -> Path | None:
+def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
+                       status: dict | None = None) -> Path | None:
     """Write ``replay.png`` into ``scenario_dir`` and return its path; None without a replay.
 
     ``map_path`` is the OpenDRIVE map the scenario was played on (default: the one its params
-    or its ``LogicFile`` name, else Town04). Never raises for a problem of the files read: an
-    unreadable ``replay.json`` or a playback with an engine error gets a figure that says so.
+    or its ``LogicFile`` name, else Town04); ``status`` the scenario's outcome when its
+    ``status.json`` is not written yet (a figure drawn in the worker, before the commit). Never
+    raises for a problem of the files read: an unreadable ``replay.json`` or a playback with an
+    engine error gets a figure that says so. The PNG names what it shows (``figure_source``),
+    so a reader can tell a stale figure without trusting file times.
     """
     folder = Path(scenario_dir)
     replay_path = folder / REPLAY_NAME
     if not replay_path.is_file():
         return None
     facts = _Facts.read(folder)
+    if status is not None:
+        facts.status = status
     try:
         playback = Playback.read(replay_path)
     except (OSError, ValueError, TypeError, KeyError, AttributeError) as err:
@@ -93,8 +105,63 @@ def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None) -
                 png = _message_figure(facts, "the replay could not be drawn",
                                       f"{type(err).__name__}: {err}")
     out = folder / FIGURE_NAME
-    write_bytes_atomic(out, png)
+    write_bytes_atomic(out, _with_text(png, SOURCE_KEY, figure_source(folder, facts.status)))
     return out
+
+
+def is_reported(outcome: dict, index: int) -> bool:
+    """Whether a scenario's figure is one a run's report will show, so the worker that made
+    the scenario draws it (in parallel) instead of the report at the end: every failed replay,
+    and the first scenario of each class (``index`` 0), the one shown when it passes."""
+    replay = outcome.get("replay")
+    return bool(replay) and (not replay.get("passed") or index == 0)
+
+
+def figure_source(folder: Path, status: dict) -> str:
+    """What a figure of ``folder`` shows, as a digest: the playback and the verdict on it."""
+    replay = status.get("replay") if isinstance(status.get("replay"), dict) else {}
+    verdict = {"passed": replay.get("passed"), "codes": replay.get("codes"),
+               "errors": (status.get("validation") or {}).get("errors")}
+    digest = hashlib.sha256()
+    with suppress(OSError):
+        digest.update((folder / REPLAY_NAME).read_bytes())
+    digest.update(json.dumps(verdict, sort_keys=True, default=str).encode())
+    return digest.hexdigest()
+
+
+def is_current(folder: Path, status: dict) -> bool:
+    """True when the folder's ``replay.png`` was drawn from its present replay and verdict."""
+    try:
+        drawn = _read_text(folder / FIGURE_NAME, SOURCE_KEY)
+    except OSError:
+        return False
+    return drawn == figure_source(folder, status)
+
+
+def _with_text(png: bytes, key: str, value: str) -> bytes:
+    """``png`` with a ``tEXt`` chunk ``key: value`` right after its header chunk."""
+    data = key.encode("latin-1") + b"\0" + value.encode("latin-1")
+    chunk = (struct.pack(">I", len(data)) + b"tEXt" + data
+             + struct.pack(">I", zlib.crc32(b"tEXt" + data)))
+    header_end = 8 + 8 + 13 + 4  # signature, IHDR's length+type, its 13 bytes, its CRC
+    return png[:header_end] + chunk + png[header_end:]
+
+
+def _read_text(path: Path, key: str) -> str | None:
+    """The value of the ``tEXt`` chunk ``key`` before the image data, or None."""
+    with open(path, "rb") as handle:
+        head = handle.read(4096)
+    at = 8
+    while at + 8 <= len(head):
+        length, kind = struct.unpack(">I4s", head[at:at + 8])
+        if kind == b"IDAT":
+            break
+        if kind == b"tEXt":
+            name, _, value = head[at + 8:at + 8 + length].partition(b"\0")
+            if name == key.encode("latin-1"):
+                return value.decode("latin-1")
+        at += 12 + length
+    return None
 
 
 # --- what the folder says --------------------------------------------------------------------

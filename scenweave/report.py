@@ -16,7 +16,7 @@ import io
 import json
 import math
 from collections import Counter
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from string import Template
 from typing import Any
@@ -427,12 +427,16 @@ def _replay_overview(replayed: list[dict]) -> str:
 
 
 def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PASSING_PER_CLASS,
-                        limit: int = REPLAY_FIGURES_MAX) -> list[dict]:
+                        limit: int = REPLAY_FIGURES_MAX,
+                        drawn: Callable[[dict], bool] | None = None) -> list[dict]:
     """The outcomes whose replay figure the report shows: every failed replay (taken class by
     class in turn when there are more than ``limit``), then up to ``passing_per_class``
-    passing ones per class while there is room."""
+    passing ones per class while there is room, those whose figure is ``drawn`` already (by
+    the worker that made them) first."""
     failed = by_class(o for o in replayed if not o["replay"].get("passed"))
-    passing = by_class(o for o in replayed if o["replay"].get("passed"))
+    passing = {code: sorted(group, key=lambda o: not drawn(o)) if drawn else group
+               for code, group in by_class(o for o in replayed
+                                           if o["replay"].get("passed")).items()}
     picks: list[dict] = []
     queues = [list(group) for group in failed.values()]
     while queues and len(picks) < limit:
@@ -446,7 +450,10 @@ def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PA
 
 def _replay_figures(run_dir: Path, replayed: list[dict]) -> list[str]:
     """The picked replays' figures inline; a missing or stale ``replay.png`` is drawn first."""
-    picks = replay_figure_picks(replayed)
+    from scenweave.replay_figures import is_current
+
+    picks = replay_figure_picks(
+        replayed, drawn=lambda o: is_current(run_dir / safe_name(o["scenario_id"]), o))
     failed = sum(not o["replay"].get("passed") for o in replayed)
     shown_failed = sum(not o["replay"].get("passed") for o in picks)
     parts = [f"<p>Every failed replay ({shown_failed} of {failed} shown) and up to "
@@ -454,7 +461,7 @@ def _replay_figures(run_dir: Path, replayed: list[dict]) -> list[str]:
              "against the record's values (diamonds, with the judge's tolerance), the paths on "
              "the map. The figure of any scenario is its folder's replay.png.</p>"]
     for o in picks:
-        png = _replay_png(run_dir / safe_name(o["scenario_id"]))
+        png = _replay_png(run_dir / safe_name(o["scenario_id"]), o)
         verdict = ("replay passed" if o["replay"].get("passed") else "replay failed: "
                    + (", ".join(o["replay"].get("codes") or []) or "?"))
         caption = f"{o['scenario_id']} ({o.get('maneuver_class', '?')}): {verdict}"
@@ -465,19 +472,18 @@ def _replay_figures(run_dir: Path, replayed: list[dict]) -> list[str]:
     return parts
 
 
-def _replay_png(folder: Path) -> bytes | str | None:
-    """The folder's ``replay.png`` (drawn when missing or older than ``replay.json`` or the
-    verdict in ``status.json``); the reason as text when it cannot be drawn; None without a
+def _replay_png(folder: Path, status: dict) -> bytes | str | None:
+    """The folder's ``replay.png`` (drawn when missing or not drawn from the present
+    ``replay.json`` and verdict); the reason as text when it cannot be drawn; None without a
     replay."""
+    from scenweave.replay_figures import draw_replay_figure, is_current
+
     source, picture = folder / REPLAY_JSON, folder / REPLAY_PNG
     if not source.exists():
         return None
     try:
-        sources = [p.stat().st_mtime_ns for p in (source, folder / STATUS_FILE) if p.exists()]
-        if not picture.exists() or picture.stat().st_mtime_ns < max(sources):
-            from scenweave.replay_figures import draw_replay_figure
-
-            draw_replay_figure(folder)
+        if not is_current(folder, status):
+            draw_replay_figure(folder, status=status)
         return picture.read_bytes()
     except Exception as err:  # noqa: BLE001 - one broken picture must not cost the report
         return f"{type(err).__name__}: {err}"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import time
 from collections import Counter
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -34,12 +35,25 @@ class RunResult:
     skipped: int = 0
     input_issues: list = field(default_factory=list)
 
+    @property
+    def refused(self) -> int:
+        """Records no scenario was made of: input errors (warnings are read records)."""
+        return sum(i.get("severity", "error") == "error" for i in self.input_issues)
+
+    @property
+    def problems(self) -> bool:
+        """Something asked for was not delivered: a refused record, a failed scenario, or
+        nothing at all (exit code 1)."""
+        return (self.refused > 0 or self.summary["counts"].get("failed", 0) > 0
+                or self.summary["total"] == 0)
+
     def line(self) -> str:
         """The one-line summary printed at the end of a run."""
         counts = self.summary["counts"]
         parts = ", ".join(f"{counts[s]} {s}" for s in STATUSES)
         resumed = f" ({self.skipped} already done)" if self.skipped else ""
-        issues = f", {len(self.input_issues)} input issues" if self.input_issues else ""
+        refused = self.refused
+        issues = f", {refused} refused" if refused else ""
         replay = self.summary.get("replay") or {}
         played = (f"; replay: {replay['passed']}/{replay['played']} played as recorded"
                   if replay.get("played") else "")
@@ -79,9 +93,16 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     this process commits each scenario folder.
     """
     loaded = load_input(Path(data), selection)
-    folder = RunFolder.open(out_root, run_id)
-    folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
     matcher = matcher or default_matcher(settings.map)
+    folder = RunFolder.open(out_root, run_id)
+    with folder.started() as started:
+        folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
+        return _run_into(folder, started, loaded, settings, matcher, retry_failed, jobs)
+
+
+def _run_into(folder: RunFolder, started: Any, loaded: LoadedInput,
+              settings: PipelineSettings, matcher: Any, retry_failed: bool,
+              jobs: int) -> RunResult:
     todo = []
     for index, params in round_robin(loaded.params):
         done = folder.outcome(params["scenario_id"])
@@ -93,6 +114,7 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
             _in_this_process(todo, stage, settings, matcher))
     for params, staging, outcome in progress(work, desc="scenarios", total=len(todo)):
         folder.commit(params["scenario_id"], staging, outcome)
+        started.committed += 1
     issues = [i.to_dict() for i in loaded.report.issues]
     summary = summarize(folder, issues)
     folder.write(SUMMARY_FILE, summary)
@@ -109,12 +131,26 @@ def _staging(folder: RunFolder, recorded: dict[str, dict], params: dict) -> Path
     return staging
 
 
+def make_scenario(params: dict, index: int, staging: Path, settings: PipelineSettings,
+                  matcher: Any) -> dict:
+    """``process_scenario``, then the replay figure the report will show (drawn here, in the
+    worker that made the scenario, not serially at the end); its time is ``timings_s.figure``."""
+    from scenweave.replay_figures import draw_replay_figure, is_reported
+
+    outcome = process_scenario(params, index, staging, settings, matcher)
+    if is_reported(outcome, index):
+        started = time.perf_counter()
+        draw_replay_figure(staging, status=outcome)
+        outcome.setdefault("timings_s", {})["figure"] = round(time.perf_counter() - started, 4)
+    return outcome
+
+
 def _in_this_process(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
                      settings: PipelineSettings, matcher: Any
                      ) -> Iterator[tuple[dict, Path, dict]]:
     for index, params in todo:
         staging = stage(params)
-        yield params, staging, process_scenario(params, index, staging, settings, matcher)
+        yield params, staging, make_scenario(params, index, staging, settings, matcher)
 
 
 _worker_matcher: Any = None
@@ -127,7 +163,7 @@ def _remember_matcher(matcher: Any) -> None:
 
 def _process_in_worker(params: dict, index: int, staging: Path,
                        settings: PipelineSettings) -> dict:
-    return process_scenario(params, index, staging, settings, _worker_matcher)
+    return make_scenario(params, index, staging, settings, _worker_matcher)
 
 
 def _in_processes(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],

@@ -1,52 +1,61 @@
-"""The queue on the GPU host: a run's scenarios as RQ jobs on Redis, done by worker processes.
+"""The queue: a run's scenarios as RQ jobs on Redis, done by workers on any machine.
 
-``submit`` loads the input, opens the run folder and enqueues one job per scenario, job id =
-run id + scenario id, so nothing runs twice: a scenario with a ``status.json`` or a job still
-queued/running is not enqueued again (and RQ's ``unique`` enqueue makes two racing submits
-safe). A worker runs ``process_scenario`` in RQ's forked work horse, commits the scenario
-folder atomically and rewrites the run's ``summary.json``; the job that finishes the run also
-writes ``report.html``.
+Workers share nothing with the submitter but the queue. ``submit`` loads the input, opens
+the run folder and enqueues one job per scenario (job id = run id + scenario id) carrying all
+the scenario needs: the record's params (extracted with the run's layout), its spawn index,
+the pipeline settings, the map by name or, for a map file, by content hash (the file itself
+travels once per run through Redis), and a mined record's recorded series. A worker makes
+the scenario in its own scratch folder and hands the finished folder back through Redis as a
+compressed parcel (``handoff``; artefacts over the limits stay behind and the outcome lists
+them); ``collect`` (``submit --wait``, ``scenweave collect RUN_DIR``) commits each parcel into
+the run folder atomically, exactly once, and finishes the run with ``summary.json`` and
+``report.html``. Nothing runs twice: a scenario committed, handed back or still queued/running
+is not enqueued again (and RQ's ``unique`` enqueue makes two racing submits safe).
 
 Retries are for infrastructure only: ``process_scenario`` turns every problem of a scenario
 into a ``failed`` outcome and raises only infrastructure errors (LLM server down, sandbox
 engine gone, disk full), which RQ retries with the delays of ``JobOptions``. A worker that
 dies mid-job (SIGKILL, OOM, host reboot) stops heartbeating; another worker's maintenance
 finds the abandoned job in the StartedJobRegistry and retries it. When the retries run out,
-the scenario is committed as ``failed`` with taxonomy ``infrastructure``, so the run still
+the scenario is handed back as ``failed`` with taxonomy ``infrastructure``, so the run still
 completes and ``submit --retry-failed`` picks it up again.
 """
 
 from __future__ import annotations
 
-import fcntl
+import hashlib
 import importlib
 import json
 import multiprocessing
 import os
+import shutil
 import signal
 import sys
+import tempfile
 import uuid
-from collections.abc import Iterator
-from contextlib import contextmanager, suppress
-from dataclasses import dataclass, field
+import zlib
+from contextlib import suppress
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit, urlunsplit
 
+from scenweave.handoff import Limits, pack
 from scenweave.inputs import InputSelection, load_input
-from scenweave.pipeline import PipelineSettings, base_outcome, process_scenario
+from scenweave.pipeline import PipelineSettings, base_outcome
 from scenweave.progress import progress
-from scenweave.report import write_run_report
-from scenweave.run_folder import RUN_FILE, SUMMARY_FILE, RunFolder, safe_name
-from scenweave.runner import round_robin, run_description, summarize
+from scenweave.run_folder import RECORDED_NAME, RUN_FILE, STATUS_FILE, RunFolder, safe_name
+from scenweave.runner import make_scenario, round_robin, run_description
 
 QUEUE_NAME = "scenweave"
 QUEUE_ENV = "SCENWEAVE_QUEUE"
 DEFAULT_QUEUE_URL = "redis://127.0.0.1:6379/0"
 #: ``module:callable`` making a job's spawn matcher, called with the map's name (None: Town04)
 DEFAULT_MATCHER = "scenweave.runner:default_matcher"
-LOCK_FILE = ".summary.lock"
 #: RQ job states in which a job will still run: such a job is not enqueued a second time
 PENDING_STATES = ("queued", "started", "scheduled", "deferred")
+#: where a worker makes its scenarios unless told (``scenweave worker --scratch``)
+SCRATCH_ENV = "SCENWEAVE_WORKER_SCRATCH"
 
 
 class QueueError(Exception):
@@ -62,6 +71,8 @@ class JobOptions:
     timeout_s: int = 3600
     result_ttl_s: int = 7 * 86400
     matcher: str = DEFAULT_MATCHER
+    #: how large a scenario's artefacts may travel back through Redis
+    limits: Limits = field(default_factory=Limits)
 
 
 @dataclass
@@ -76,7 +87,10 @@ class WorkerOptions:
     preload_map: str | None = None
     #: imported once in the worker so each forked work horse starts warm (~1 s per job saved)
     preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.corpus.corpus_utils",
-                                       "scenweave.schemas", "scenweave.agent")
+                                       "scenweave.schemas", "scenweave.agent",
+                                       "scenweave.replay_figures")
+    #: the worker's own folder for scenarios in the making (None: a temp folder)
+    scratch: Path | None = None
 
 
 @dataclass
@@ -98,13 +112,50 @@ class SubmitResult:
                 f"{issues} -> {self.folder.root}")
 
 
+@dataclass(frozen=True)
+class RunKeys:
+    """The Redis keys of one run's hand-back: parcels not collected yet, what was made (by
+    which submission) and the scenarios the submitter still waits for."""
+
+    run_id: str
+
+    @property
+    def parcels(self) -> str:
+        return f"scenweave:run:{self.run_id}:parcels"
+
+    @property
+    def made(self) -> str:
+        return f"scenweave:run:{self.run_id}:made"
+
+    @property
+    def pending(self) -> str:
+        return f"scenweave:run:{self.run_id}:pending"
+
+
+def map_key(sha256: str) -> str:
+    """The Redis key holding a map file's compressed content."""
+    return f"scenweave:map:{sha256}"
+
+
 def queue_url(url: str | None = None) -> str:
     """The Redis URL to use: ``url``, else ``$SCENWEAVE_QUEUE``, else the local default."""
     return url or os.environ.get(QUEUE_ENV) or DEFAULT_QUEUE_URL
 
 
+def redacted(url: str) -> str:
+    """``url`` with its password replaced by ``***``, for messages and ``run.json``."""
+    parts = urlsplit(url)
+    if not parts.password:
+        return url
+    user = parts.username or ""
+    host = parts.hostname or ""
+    netloc = f"{user}:***@{host}" + (f":{parts.port}" if parts.port else "")
+    return urlunsplit(parts._replace(netloc=netloc))
+
+
 def connect(url: str | None = None) -> Any:
-    """A checked connection to the Redis of ``url``; QueueError names the setting to change."""
+    """A checked connection to the Redis of ``url`` (``redis://`` or TLS ``rediss://``, a
+    password as ``redis://:PASSWORD@host``); QueueError names the setting to change."""
     from redis import Redis
     from redis.exceptions import RedisError
 
@@ -113,8 +164,9 @@ def connect(url: str | None = None) -> Any:
         connection = Redis.from_url(url)
         connection.ping()
     except (RedisError, ValueError) as err:
-        raise QueueError(f"cannot reach the job queue at {url}: {err}; start redis-server there "
-                         f"or pass --queue / set {QUEUE_ENV}") from err
+        raise QueueError(f"cannot reach the job queue at {redacted(url)}: {err}; start "
+                         f"redis-server there or pass --queue / set {QUEUE_ENV} (a password "
+                         "goes in the URL: redis://:PASSWORD@host:6379/0)") from err
     return connection
 
 
@@ -134,43 +186,72 @@ def submit(data: Path, out_root: Path, selection: InputSelection, settings: Pipe
     folder = RunFolder.open(out_root, run_id)
     result = SubmitResult(folder, input_issues=[i.to_dict() for i in loaded.report.issues])
     description = run_description(data, loaded, selection, settings, folder)
-    folder.write(RUN_FILE, {**description, "queue": True, "input_issues": result.input_issues})
+    where = connection.connection_pool.connection_kwargs
+    folder.write(RUN_FILE, {**description, "queue": _described_queue(where),
+                            "input_issues": result.input_issues})
     try:
         queue = _queue(connection)
+        job_map = share_map(connection, settings.map, options.result_ttl_s)
         for index, params in progress(round_robin(loaded.params), desc="enqueue",
                                       total=len(loaded.params)):
-            _submit_one(queue, folder, params, index, settings, retry_failed, options, result)
+            spec = {"run_id": folder.run_id, "params": params, "index": index,
+                    "settings": settings, "matcher": options.matcher, "map": job_map,
+                    "recorded": loaded.recorded.get(params["scenario_id"]),
+                    "limits": options.limits, "submission": result.submission,
+                    "ttl_s": options.result_ttl_s}
+            _submit_one(queue, folder, spec, retry_failed, options, result)
     except RedisError as err:
         raise QueueError(f"the job queue failed while enqueueing run {folder.run_id}: {err}; "
                          "check the Redis server, then submit the same --run-id again") from err
-    if not result.enqueued:
-        refresh_run(folder.root)
     return result
 
 
-def _submit_one(queue: Any, folder: RunFolder, params: dict, index: int,
-                settings: PipelineSettings, retry_failed: bool, options: JobOptions,
-                result: SubmitResult) -> None:
+def _described_queue(kwargs: dict) -> dict:
+    """Where the queue is, for ``run.json``: host, port and database, never the password."""
+    return {"host": kwargs.get("host"), "port": kwargs.get("port"), "db": kwargs.get("db", 0)}
+
+
+def share_map(connection: Any, map_name: str | None, ttl_s: int) -> dict | None:
+    """What a job says about its map: a bundled town by name; a map file by name and content
+    hash, its content stored once in Redis for workers that do not have the file."""
+    from scenweave.spawn_db import resolve_map
+
+    if map_name is None:
+        return None
+    ref = resolve_map(map_name)
+    if ref.bundled:
+        return {"name": ref.name, "bundled": True}
+    content = ref.path.read_bytes()
+    sha256 = hashlib.sha256(content).hexdigest()
+    connection.set(map_key(sha256), zlib.compress(content, 6), ex=ttl_s, nx=True)
+    connection.expire(map_key(sha256), ttl_s)
+    return {"name": ref.path.name, "path": str(ref.path), "sha256": sha256, "bundled": False}
+
+
+def _submit_one(queue: Any, folder: RunFolder, spec: dict, retry_failed: bool,
+                options: JobOptions, result: SubmitResult) -> None:
     from rq import Callback, Retry
     from rq.exceptions import DuplicateJobError, NoSuchJobError
     from rq.job import Job
 
-    scenario_id = params["scenario_id"]
+    scenario_id = spec["params"]["scenario_id"]
+    keys = RunKeys(folder.run_id)
     done = folder.outcome(scenario_id)
-    if done and not (retry_failed and done.get("status") == "failed"):
-        result.already_done += 1
+    redo = retry_failed and done is not None and done.get("status") == "failed"
+    waiting = queue.connection.hexists(keys.parcels, scenario_id)
+    if (done and not redo) or (waiting and done is None):
+        result.already_done += 1  # committed, or handed back and waiting to be collected
         return
     jid = job_id(folder.run_id, scenario_id)
     try:
         old = Job.fetch(jid, connection=queue.connection)
         if old.get_status() in PENDING_STATES:
             result.already_queued += 1
+            queue.connection.sadd(keys.pending, scenario_id)
             return
         old.delete()
     except NoSuchJobError:
         pass
-    spec = {"run_dir": str(folder.root.resolve()), "params": params, "index": index,
-            "settings": settings, "matcher": options.matcher, "submission": result.submission}
     retry = Retry(max=options.retries, interval=list(options.retry_delays_s) or 0) \
         if options.retries else None
     try:
@@ -181,6 +262,8 @@ def _submit_one(queue: Any, folder: RunFolder, params: dict, index: int,
     except DuplicateJobError:
         result.already_queued += 1
         return
+    queue.connection.sadd(keys.pending, scenario_id)
+    queue.connection.expire(keys.pending, options.result_ttl_s)
     result.enqueued.append(jid)
 
 
@@ -190,9 +273,10 @@ def _queue(connection: Any) -> Any:
     return Queue(QUEUE_NAME, connection=connection)
 
 
-# --- the job -------------------------------------------------------------------------------
+# --- the job, in the worker ----------------------------------------------------------------
 
 _matchers: dict[tuple[str, str | None], Any] = {}
+_scratch_root: Path | None = None
 
 
 def matcher_for(factory: str, map_name: str | None = None) -> Any:
@@ -206,30 +290,104 @@ def matcher_for(factory: str, map_name: str | None = None) -> Any:
     return _matchers[key]
 
 
-def run_job(spec: dict) -> str:
-    """RQ job: make one scenario into its run folder and update the run; return its status.
+def scratch_root() -> Path:
+    """This worker's scratch folder: ``--scratch``, ``$SCENWEAVE_WORKER_SCRATCH``, or a
+    folder of its own under the system's temp folder."""
+    global _scratch_root
+    if _scratch_root is None:
+        chosen = os.environ.get(SCRATCH_ENV)
+        _scratch_root = Path(chosen) if chosen else Path(
+            tempfile.mkdtemp(prefix="scenweave-worker-"))
+    _scratch_root.mkdir(parents=True, exist_ok=True)
+    return _scratch_root
 
-    Idempotent: a scenario already committed (e.g. a retry after the worker died between
-    the commit and telling Redis) is not made again.
+
+def run_job(spec: dict) -> str:
+    """RQ job: make one scenario in this worker's scratch folder and hand the folder back
+    through Redis; return its status.
+
+    Idempotent: a scenario this submission already handed back (e.g. a retry after the
+    worker died between the hand-back and telling Redis) is not made again.
     """
-    folder = RunFolder(Path(spec["run_dir"]))
+    from rq import get_current_job
+
+    connection = get_current_job().connection
+    keys = RunKeys(spec["run_id"])
     scenario_id = spec["params"]["scenario_id"]
-    done = folder.outcome(scenario_id)
-    if done is None or _redo(done, spec):
-        # the scenario's staging folder is emptied first: leftovers of a dead attempt go
-        staging = folder.staging(scenario_id)
-        settings = spec["settings"]
-        matcher = matcher_for(spec.get("matcher") or DEFAULT_MATCHER,
-                              getattr(settings, "map", None))
+    made_by = connection.hget(keys.made, scenario_id)
+    if made_by is not None and made_by.decode() == spec.get("submission"):
+        return "handed back already"
+    folder = scratch_root() / job_id(spec["run_id"], scenario_id)
+    _remove(folder)  # leftovers of a dead attempt go
+    folder.mkdir(parents=True)
+    try:
+        settings = _local_settings(spec["settings"], spec.get("map"), connection)
+        if spec.get("recorded"):
+            (folder / RECORDED_NAME).write_text(_json(spec["recorded"]), encoding="utf-8")
+        matcher = matcher_for(spec.get("matcher") or DEFAULT_MATCHER, settings.map)
         try:
-            outcome = process_scenario(spec["params"], spec["index"], staging, settings, matcher)
+            outcome = make_scenario(spec["params"], spec["index"], folder, settings, matcher)
         finally:
             _close_agent()
         outcome.update(worker=os.environ.get("RQ_WORKER_ID"), submission=spec.get("submission"))
-        folder.commit(scenario_id, staging, outcome)
-        done = outcome
-    refresh_run(folder.root)
-    return done["status"]
+        hand_back(connection, spec, folder, outcome)
+    finally:
+        _remove(folder)
+    return outcome["status"]
+
+
+def hand_back(connection: Any, spec: dict, folder: Path, outcome: dict) -> int:
+    """Put the scenario folder (with its outcome as ``status.json``) into Redis for the
+    collector, in one transaction with the note that this submission made it; return the
+    parcel's size in bytes."""
+    limits = spec.get("limits") or Limits()
+
+    def status(dropped: list[dict]) -> dict[str, bytes]:
+        if dropped:
+            outcome["artefacts_left_behind"] = dropped
+        return {STATUS_FILE: _json(outcome).encode("utf-8")}
+
+    parcel = pack(folder, limits, extra=status)
+    keys, scenario_id = RunKeys(spec["run_id"]), spec["params"]["scenario_id"]
+    ttl = int(spec.get("ttl_s") or JobOptions.result_ttl_s)
+    with connection.pipeline(transaction=True) as pipe:
+        pipe.hset(keys.parcels, scenario_id, parcel.data)
+        pipe.hset(keys.made, scenario_id, spec.get("submission") or "")
+        pipe.expire(keys.parcels, ttl)
+        pipe.expire(keys.made, ttl)
+        pipe.execute()
+    return len(parcel.data)
+
+
+def _json(data: Any) -> str:
+    return json.dumps(data, indent=1)
+
+
+def _local_settings(settings: PipelineSettings, job_map: dict | None,
+                    connection: Any) -> PipelineSettings:
+    """The job's settings with its map file where this worker can read it: the same path if
+    it holds the same content, else a copy fetched from Redis into the scratch folder."""
+    if not job_map or job_map.get("bundled"):
+        return settings
+    path = Path(job_map["path"])
+    with suppress(OSError):
+        if hashlib.sha256(path.read_bytes()).hexdigest() == job_map["sha256"]:
+            return settings
+    copy = scratch_root() / "maps" / job_map["sha256"] / job_map["name"]
+    if not copy.is_file():
+        content = connection.get(map_key(job_map["sha256"]))
+        if content is None:
+            raise QueueError(f"map {job_map['name']} ({job_map['sha256'][:12]}) is no longer in "
+                             "the queue; submit the run again")
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        temporary = copy.with_suffix(".part")
+        temporary.write_bytes(zlib.decompress(content))
+        temporary.rename(copy)
+    return replace(settings, map=str(copy))
+
+
+def _remove(path: Path) -> None:
+    shutil.rmtree(path, ignore_errors=True)
 
 
 def _close_agent() -> None:
@@ -240,65 +398,23 @@ def _close_agent() -> None:
         agent_run.close_shared()
 
 
-def _redo(done: dict, spec: dict) -> bool:
-    # submit --retry-failed enqueues a failed scenario again: that submission redoes it,
-    # while a retry of the job that already committed it does not
-    return done.get("status") == "failed" and done.get("submission") != spec.get("submission")
-
-
 def on_job_failure(job: Any, connection: Any, exc_type: type, exc_value: BaseException,
                    traceback: Any) -> None:
-    """RQ failure callback: once a job has no retries left, commit the scenario as failed."""
+    """RQ failure callback: once a job has no retries left, hand the scenario back failed."""
     if job.retries_left:
         return
     spec = job.args[0]
-    folder = RunFolder(Path(spec["run_dir"]))
     scenario_id = spec["params"]["scenario_id"]
-    if folder.outcome(scenario_id):
+    made_by = connection.hget(RunKeys(spec["run_id"]).made, scenario_id)
+    if made_by is not None and made_by.decode() == spec.get("submission"):
         return
     reason = str(exc_value) or "the worker died while running this scenario"
     outcome = {**base_outcome(spec["params"]), "error_taxonomy": ["infrastructure"],
                "error": f"{exc_type.__name__}: {reason} (no retries left; fix the "
                         "infrastructure, then submit again with --retry-failed)",
                "submission": spec.get("submission")}
-    folder.commit(scenario_id, folder.staging(scenario_id), outcome)
-    refresh_run(folder.root)
-
-
-# --- the run's summary and report ----------------------------------------------------------
-
-@contextmanager
-def _run_lock(run_dir: Path) -> Iterator[None]:
-    with open(run_dir / LOCK_FILE, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-def refresh_run(run_dir: Path) -> dict:
-    """Rewrite the run's ``summary.json``; write ``report.html`` once every scenario is done.
-
-    Workers finishing at the same time take turns (a lock file in the run folder), so the
-    last one to write has seen every committed scenario.
-    """
-    folder = RunFolder(Path(run_dir))
-    with _run_lock(folder.root):
-        run = _read_json(folder.root / RUN_FILE)
-        issues = run.get("input_issues", _read_json(folder.root / SUMMARY_FILE).get("input_issues"))
-        summary = summarize(folder, issues or [])
-        folder.write(SUMMARY_FILE, summary)
-        if summary["total"] >= int(run.get("scenarios") or 0):
-            write_run_report(folder.root)
-    return summary
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return {}
+    with tempfile.TemporaryDirectory(prefix="scenweave-failed-") as empty:
+        hand_back(connection, spec, Path(empty), outcome)
 
 
 # --- worker processes ----------------------------------------------------------------------
@@ -343,7 +459,12 @@ def _die_with_parent(parent_pid: int) -> None:
 
 
 def preload(options: WorkerOptions) -> None:
-    """Load the matcher and the pipeline's modules now, so forked work horses inherit them."""
+    """Load the matcher and the pipeline's modules now, so forked work horses inherit them,
+    and settle the scratch folder they make scenarios in."""
+    global _scratch_root
+    if options.scratch is not None:
+        _scratch_root = Path(options.scratch)
+    scratch_root()
     for module in options.preload_modules:
         # an optional part (e.g. the agent) not installed: the jobs needing it will say so
         with suppress(ImportError):

@@ -7,12 +7,15 @@ plus where the queue is and how jobs are retried.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import click
 
 from scenweave.commands.agent_options import AGENT_OPTION_NAMES, pipeline_settings
+from scenweave.commands.collect import QUEUE_HELP, collect_run
 from scenweave.commands.run import run as run_command
+from scenweave.handoff import MIB, Limits
 from scenweave.inputs import InputSelection
 from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, submit
 
@@ -30,8 +33,11 @@ def _delays(text: str) -> tuple[int, ...]:
 
 
 def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, matcher: str,
-            as_json: bool, no_llm: bool, top_n: int, **selection_and_run: object) -> None:
-    """Enqueue one job per scenario of DATA; workers (``scenweave worker``) do them."""
+            max_artefact_mb: float, wait: bool, timeout: float | None, as_json: bool,
+            no_llm: bool, top_n: int, **selection_and_run: object) -> None:
+    """Enqueue one job per scenario of DATA; workers (``scenweave worker``, on any machine
+    that reaches the queue) make them and hand each folder back through the queue; --wait (or
+    ``scenweave collect RUN_DIR`` later) writes them into the run folder."""
     agent = {name: selection_and_run.pop(name) for name in AGENT_OPTION_NAMES}
     settings = pipeline_settings(no_llm, top_n, map_ref=selection_and_run.pop("map_ref"), **agent)
     data, out_root = selection_and_run.pop("data"), selection_and_run.pop("out_root")
@@ -40,8 +46,11 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
     selection = InputSelection(classes=tuple(c.strip() for c in classes.split(",")) if classes
                                else (), **selection_and_run)
     options = JobOptions(retries=retries, retry_delays_s=_delays(retry_delays),
-                         timeout_s=job_timeout, matcher=matcher)
-    result = submit(Path(data), Path(out_root), selection, settings, connect(url), run_id=run_id,
+                         timeout_s=job_timeout, matcher=matcher,
+                         limits=Limits(file_bytes=int(max_artefact_mb * MIB),
+                                       total_bytes=int(4 * max_artefact_mb * MIB)))
+    connection = connect(url)
+    result = submit(Path(data), Path(out_root), selection, settings, connection, run_id=run_id,
                     retry_failed=retry_failed, options=options)
     if as_json:
         click.echo(json.dumps({"run_id": result.folder.run_id, "folder": str(result.folder.root),
@@ -52,13 +61,17 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
         for issue in result.input_issues[:10]:
             click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
         click.echo(result.line())
+    collected = collect_run(result.folder.root, connection, wait, timeout)
+    if wait and not as_json:
+        click.echo(collected.line())
+    if wait and (collected.lost or not collected.complete):
+        sys.exit(1)
 
 
 submit_command = click.Command(
     "submit", callback=_submit, help=_submit.__doc__,
     params=[*(p for p in run_command.params if p.name in SHARED_OPTIONS),
-            click.Option(["--queue", "url"], envvar=QUEUE_ENV, show_envvar=True,
-                         help="Redis URL of the job queue [default: redis://127.0.0.1:6379/0]."),
+            click.Option(["--queue", "url"], envvar=QUEUE_ENV, show_envvar=True, help=QUEUE_HELP),
             click.Option(["--retries"], default=3, show_default=True, type=click.IntRange(0),
                          help="Retries of a scenario after an infrastructure error."),
             click.Option(["--retry-delays"], default="10,60,300", show_default=True,
@@ -67,5 +80,15 @@ submit_command = click.Command(
                          type=click.IntRange(1), help="Seconds one scenario may take."),
             click.Option(["--matcher"], default=DEFAULT_MATCHER, show_default=True,
                          help="Spawn matcher factory (module:callable) the workers use."),
+            click.Option(["--max-artefact-mb"], default=16.0, show_default=True,
+                         type=click.FloatRange(0.001),
+                         help="Largest file a worker hands back (a scenario's folder: 4x); "
+                              "larger ones stay behind and status.json says so."),
+            click.Option(["--wait"], is_flag=True,
+                         help="Wait for the workers and write every scenario folder, "
+                              "summary.json and report.html into the run folder."),
+            click.Option(["--timeout"], type=click.FloatRange(0), default=None,
+                         help="With --wait: stop waiting after this many seconds "
+                              "(scenweave collect RUN_DIR goes on later)."),
             click.Option(["--json", "as_json"], is_flag=True,
                          help="Print what was enqueued as JSON.")])

@@ -13,6 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from scenweave.cli import cli
+from scenweave.collector import collect
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import is_infrastructure_error
 from scenweave.run_folder import safe_name
@@ -49,7 +50,10 @@ def attempts(gates: Path, scenario_id: str) -> list[str]:
     return path.read_text().split() if path.exists() else []
 
 
-def finished(run: Path) -> int:
+def finished(run: Path, url: str) -> int:
+    """How many scenarios are in the run folder after collecting what the workers handed back
+    (the workers never see the run folder)."""
+    collect(run, connect(url))
     return len(list(run.glob("*/status.json")))
 
 
@@ -69,9 +73,9 @@ def test_two_workers_share_a_batch_and_a_poisoned_record_fails_alone(records, tm
     wait_for(lambda: (gates / f"started-{LCF[0]}").exists(), what="worker 1 to block on LCF 0")
     second = workers.start("--burst")
     assert second.wait(timeout=120) == 0, second.stdout.read()
-    assert finished(run) == 7  # everything but the blocked scenario, done by worker 2
+    assert finished(run, redis_url) == 7  # everything but the blocked scenario, done by worker 2
     (gates / "release").touch()
-    wait_for(lambda: finished(run) == 8, what="the blocked scenario")
+    wait_for(lambda: finished(run, redis_url) == 8, what="the blocked scenario")
     wait_for(lambda: (run / "report.html").exists(), what="the report of the finished run")
 
     summary = json.loads((run / "summary.json").read_text())
@@ -103,7 +107,8 @@ def test_a_worker_killed_mid_job_leaves_its_scenario_to_another_exactly_once(
     (gates / "release").touch()
 
     workers.start()
-    wait_for(lambda: finished(run) == 3, timeout_s=120, what="the abandoned job to be redone")
+    wait_for(lambda: finished(run, redis_url) == 3, timeout_s=120,
+             what="the abandoned job to be redone")
     assert len(attempts(gates, BRAKE[0])) == 2  # the killed attempt and the retry
     folders = [p for p in run.iterdir() if p.name.startswith(safe_name(BRAKE[0]))]
     assert len(folders) == 1
@@ -133,7 +138,7 @@ def test_infrastructure_errors_are_retried_and_scenario_errors_are_not(records, 
     submit(records, tmp_path / "runs", redis_url, "--run-id", "retries", "--classes",
            "BRAKE,LCF", "--retries", "2", "--retry-delays", "0")
     assert workers.start("--burst").wait(timeout=120) == 0
-    assert finished(run) == 6
+    assert finished(run, redis_url) == 6
 
     assert len(attempts(gates, BRAKE[0])) == 2
     assert_made_past_spawn(outcome(run, BRAKE[0]))
@@ -163,6 +168,7 @@ def test_resubmitting_never_enqueues_a_scenario_twice(records, tmp_path, gates, 
     (run / safe_name(BRAKE[2])).rmdir()
     assert submit(records, runs, redis_url, *args).startswith("run again: 1 scenarios enqueued")
     assert workers.start("--burst").wait(timeout=120) == 0
+    assert finished(run, redis_url) == 3
     failed = json.loads((run / "summary.json").read_text())["counts"]["failed"]
     assert failed >= 1  # the poisoned record
     assert submit(records, runs, redis_url, *args, "--retry-failed").startswith(
@@ -217,6 +223,7 @@ def test_the_agent_runs_in_the_workers(records, tmp_path, gates, workers, redis_
     assert result.exit_code == 0, result.output
     assert workers.start("--burst").wait(timeout=180) == 0
     run = tmp_path / "runs" / "agent"
+    assert finished(run, redis_url) == 5
     summary = json.loads((run / "summary.json").read_text())
     statuses = {o["scenario_id"]: o["status"] for o in summary["scenarios"]}
     assert statuses.pop(BRAKE[0]) == "repaired"

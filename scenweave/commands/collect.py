@@ -1,0 +1,53 @@
+"""``scenweave collect RUN_DIR``: the scenario folders workers handed back, into the run folder.
+
+Safe to run again at any time (and beside ``submit --wait``): each scenario is written once.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from scenweave.worker import QUEUE_ENV
+
+QUEUE_HELP = ("Redis URL of the job queue (rediss:// for TLS, a password as "
+              "redis://:PASSWORD@host:6379/0) [default: redis://127.0.0.1:6379/0].")
+
+
+def collect_run(run_dir: Path, connection: Any, wait: bool, timeout: float | None) -> Any:
+    """Collect (a bar of committed scenarios on a terminal while waiting), say what happened."""
+    from tqdm import tqdm
+
+    from scenweave.collector import collect
+
+    with tqdm(desc="collected", unit="scenario", leave=False,
+              disable=not (wait and sys.stderr.isatty())) as bar:
+        result = collect(run_dir, connection, wait=wait, timeout_s=timeout,
+                         on_commit=bar.update)
+    for note in result.notes:
+        click.echo(f"collect: {note}", err=True)
+    for scenario_id in result.lost:
+        click.echo(f"collect: {scenario_id}: its job is no longer in the queue and handed "
+                   "nothing back; submit the same --run-id again", err=True)
+    return result
+
+
+@click.command("collect")
+@click.argument("run_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--queue", "url", envvar=QUEUE_ENV, show_envvar=True, help=QUEUE_HELP)
+@click.option("--wait", is_flag=True,
+              help="Keep collecting until no scenario of the run is queued or running.")
+@click.option("--timeout", type=click.FloatRange(0), default=None,
+              help="With --wait: stop waiting after this many seconds.")
+def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None) -> None:
+    """Write the scenario folders the workers handed back into RUN_DIR (atomically, once
+    each), then its summary.json and, when every scenario is in, its report.html."""
+    from scenweave.worker import connect
+
+    result = collect_run(run_dir, connect(url), wait, timeout)
+    click.echo(result.line())
+    if result.lost or (wait and not result.complete):
+        sys.exit(1)

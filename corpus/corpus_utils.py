@@ -17,7 +17,7 @@ import numbers
 import os
 import tempfile
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -37,6 +37,14 @@ from scenweave.corpus.kinematics import (
     red_light_timing,
     start_gap_m,
     stop_at_line,
+)
+from scenweave.corpus.phases import (
+    Phase,
+    PhasedProfile,
+    PhasesInvalid,
+    is_single_ramp,
+    parse_phases,
+    profile_of,
 )
 
 HERO = "hero"
@@ -255,8 +263,7 @@ def free_ride_traffic(params: Mapping[str, Any]) -> tuple[list[Actor], list[Stor
         name = f"npc_{slot}"
         actors.append(npc(name, lane_position(params, slot), number(params, f"{slot}_speed_ms"),
                           params.get(f"{slot}_vehicle_type")))
-        events.append(speed_change(name, number(params, f"{slot}_end_speed_ms"),
-                                   *manoeuvre_timing(params)))
+        events += speed_profile(params, name, slot)
         if slot == "center":  # the ego's own lane
             events += keep_distance_after_record(params, name, slot)
     return actors, events
@@ -282,10 +289,7 @@ def keep_distance_after_record(params: Mapping[str, Any], entity: str = "npc",
     """
     duration, start = manoeuvre_timing(params)
     end = start + duration
-    ego = SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
-                       start, duration)
-    other = SpeedProfile(number(params, f"{prefix}_speed_ms"),
-                         number(params, f"{prefix}_end_speed_ms"), start, duration)
+    ego, other = motion(params, "ego"), motion(params, prefix)
     gap = (number(params, f"{prefix}_distance_m") + other.distance(end) - other.distance(start)
            - ego.distance(end) + ego.distance(start))
     clearance = clearance_m(params.get(f"{prefix}_vehicle_type"))
@@ -376,13 +380,13 @@ def story_event(group: str, key: str, action: Any, start_s: float) -> StoryEvent
 
 
 def speed_change(entity: str, target_ms: float, duration_s: float, start_s: float,
-                 key: str = "speed_change") -> StoryEvent:
-    """``entity`` goes linearly to ``target_ms`` within ``duration_s`` from ``start_s``
-    (action ``<entity>_<key>``)."""
+                 key: str = "speed_change", shape: str = "linear") -> StoryEvent:
+    """``entity`` goes to ``target_ms`` within ``duration_s`` from ``start_s``, linearly or
+    along another of OpenSCENARIO's ``shape``s (action ``<entity>_<key>``)."""
     finite(f"the target speed of {entity}", target_ms)
     finite(f"the speed change duration of {entity}", duration_s)
-    dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear, xosc.DynamicsDimension.time,
-                                       duration_s)
+    dynamics = xosc.TransitionDynamics(getattr(xosc.DynamicsShapes, shape),
+                                       xosc.DynamicsDimension.time, duration_s)
     return story_event(entity, f"{entity}_{key}",
                        xosc.AbsoluteSpeedAction(target_ms, dynamics), start_s)
 
@@ -403,14 +407,52 @@ def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
     return story_event(entity, f"{entity}_lane_change", action, start_s)
 
 
-def hero_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
-    """The recorded ego speed change: ``ego_end_speed_ms`` over ``duration_s``."""
-    return speed_change(HERO, number(params, "ego_end_speed_ms"), *manoeuvre_timing(params))
+def hero_speed_profile(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """The recorded ego speed profile: its phases (``ego_phases``), or ``ego_end_speed_ms``
+    over ``duration_s``."""
+    return speed_profile(params, HERO, "ego")
 
 
-def npc_speed_profile(params: Mapping[str, Any]) -> StoryEvent:
-    """The recorded NPC speed change: ``npc_end_speed_ms`` over ``duration_s``."""
-    return speed_change("npc", number(params, "npc_end_speed_ms"), *manoeuvre_timing(params))
+def npc_speed_profile(params: Mapping[str, Any]) -> list[StoryEvent]:
+    """The recorded NPC speed profile: its phases (``npc_phases``), or ``npc_end_speed_ms``
+    over ``duration_s``."""
+    return speed_profile(params, "npc", "npc")
+
+
+def speed_profile(params: Mapping[str, Any], entity: str, prefix: str) -> list[StoryEvent]:
+    """``entity``'s recorded speed profile, one speed action per phase: ``<prefix>_phases``
+    when params give them, else the single ramp to ``<prefix>_end_speed_ms`` over
+    ``duration_s`` from ``maneuver_start_s`` (the same event as a one-phase list gives)."""
+    if params.get(f"{prefix}_phases") is None:
+        return [speed_change(entity, number(params, f"{prefix}_end_speed_ms"),
+                             *manoeuvre_timing(params))]
+    return speed_phases(entity, phases(params, prefix))
+
+
+def phases(params: Mapping[str, Any], prefix: str) -> tuple[Phase, ...]:
+    """``<prefix>_phases`` checked; an error naming the key when it is no playable list."""
+    try:
+        return parse_phases(params[f"{prefix}_phases"], f"params key {prefix + '_phases'!r}")
+    except PhasesInvalid as err:
+        raise ValueError(str(err)) from err
+
+
+def speed_phases(entity: str, profile: Iterable[Phase]) -> list[StoryEvent]:
+    """One speed action per phase, chained by time: ``<entity>_speed_change`` for the first,
+    ``<entity>_speed_change_2``, ``_3``... for the next ones (docs/scenario-conventions.md)."""
+    return [speed_change(entity, phase.target_ms, phase.duration_s, phase.start_s,
+                         "speed_change" if i == 0 else f"speed_change_{i + 1}", phase.shape)
+            for i, phase in enumerate(profile)]
+
+
+def motion(params: Mapping[str, Any], prefix: str) -> SpeedProfile | PhasedProfile:
+    """``prefix``'s motion from t = 0 (``corpus.phases.profile_of``), its numbers checked."""
+    for key in (f"{prefix}_speed_ms", f"{prefix}_end_speed_ms", "duration_s",
+                "maneuver_start_s"):
+        number(params, key)
+    if params.get(f"{prefix}_phases") is not None:
+        phases(params, prefix)
+    return profile_of(params, prefix)
 
 
 def npc_lane_change(params: Mapping[str, Any]) -> StoryEvent:
@@ -428,27 +470,27 @@ def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
 # --- storyboards shared by several classes ---------------------------------------------------
 
 def npc_lane_change_story(params: Mapping[str, Any],
-                          hero_event: StoryEvent | None = None) -> list[StoryEvent]:
+                          hero_event: list[StoryEvent] | None = None) -> list[StoryEvent]:
     """Cut-in and cut-out: at the recorded gap the NPC changes one lane toward
     ``lane_change_direction`` and changes its speed; the ego drives its recorded speed profile
     (or ``hero_event``, e.g. its reaction to a slower cutter)."""
-    return [hero_event or hero_speed_profile(params), npc_lane_change(params),
-            npc_speed_profile(params)]
+    return [*(hero_event or hero_speed_profile(params)), npc_lane_change(params),
+            *npc_speed_profile(params)]
 
 
 def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
     """Car following (ahead or behind, one lane): both cars drive their recorded speed profiles,
     and the one behind keeps its distance once the record ends."""
-    return [hero_speed_profile(params), npc_speed_profile(params),
+    return [*hero_speed_profile(params), *npc_speed_profile(params),
             *keep_distance_after_record(params)]
 
 
 def ego_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The ego changes one lane toward ``lane_change_direction`` and drives its speed profile."""
-    return [hero_lane_change(params), hero_speed_profile(params)]
+    return [hero_lane_change(params), *hero_speed_profile(params)]
 
 
-def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> StoryEvent:
+def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The ego's speed change when the lead brakes: as recorded, unless the lead ends slower.
 
     Then the ego slows to the lead's end speed, ``REACTION_TIME_S`` after the lead starts
@@ -458,22 +500,25 @@ def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> StoryEvent:
     return _hero_reacts_to_npc(params, cut_in=False)
 
 
-def hero_reacts_to_cut_in(params: Mapping[str, Any]) -> StoryEvent:
+def hero_reacts_to_cut_in(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The ego's speed change when a car cuts in ahead: as recorded, unless the cutter ends
     slower; then the same reaction as behind a braking lead, keeping its distance from the
     moment the cutter starts to change into the ego's lane."""
     return _hero_reacts_to_npc(params, cut_in=True)
 
 
-def _hero_reacts_to_npc(params: Mapping[str, Any], cut_in: bool) -> StoryEvent:
-    duration, start = manoeuvre_timing(params)
+def _hero_reacts_to_npc(params: Mapping[str, Any], cut_in: bool) -> list[StoryEvent]:
+    if params.get("ego_phases") is not None and not is_single_ramp(params, "ego"):
+        return hero_speed_profile(params)  # a recorded speed curve: what the ego did
+    start = number(params, "maneuver_start_s")
     ego_speed, lead_speed = number(params, "ego_speed_ms"), number(params, "npc_speed_ms")
-    lead = SpeedProfile(lead_speed, number(params, "npc_end_speed_ms"), start, duration)
+    lead = motion(params, "npc")
     gap = start_gap_m(number(params, "npc_distance_m"), lead_speed, ego_speed, start)
     clearance = clearance_m(params.get("npc_vehicle_type"))
     reaction = lead_reaction(ego_speed, number(params, "ego_end_speed_ms"), lead, gap,
                              number(params, "timeout_s"), clearance, cut_in)
-    return hero_speed_profile(params) if reaction is None else _profile_change(HERO, reaction)
+    return hero_speed_profile(params) if reaction is None else \
+        [_profile_change(HERO, reaction)]
 
 
 def stop_line_m(params: Mapping[str, Any]) -> float:
@@ -559,12 +604,23 @@ def _init(actors: list[Actor], weather_key: str) -> xosc.Init:
     return init
 
 
-def _act(tag: str, events: Iterable[StoryEvent], timeout_s: float) -> xosc.Act:
+def _flat(events: Iterable[StoryEvent | Iterable[StoryEvent]]) -> Iterator[StoryEvent]:
+    """The events in order, a speed profile's list of phases (``hero_speed_profile``...)
+    standing for its events."""
+    for item in events:
+        if isinstance(item, StoryEvent):
+            yield item
+        else:
+            yield from item
+
+
+def _act(tag: str, events: Iterable[StoryEvent | Iterable[StoryEvent]],
+         timeout_s: float) -> xosc.Act:
     # scenario_runner reads only criteria_* conditions from the Storyboard StopTrigger and ends
     # a scenario through its Acts, so the timeout is stated on the Act as well
     act = xosc.Act(f"{tag}_act", at_time("act_start", 0), at_time("act_stop", timeout_s, "stop"))
     maneuvers: dict[str, xosc.Maneuver] = {}
-    for item in events:
+    for item in _flat(events):
         if item.group not in maneuvers:
             maneuvers[item.group] = xosc.Maneuver(f"{item.group}_maneuver")
             group = xosc.ManeuverGroup(f"{item.group}_group")
@@ -576,12 +632,13 @@ def _act(tag: str, events: Iterable[StoryEvent], timeout_s: float) -> xosc.Act:
 
 
 def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
-                  events: list[StoryEvent]) -> xosc.Scenario:
+                  events: list[StoryEvent | list[StoryEvent]]) -> xosc.Scenario:
     """The OpenSCENARIO 1.0 scenario for the CARLA map ``params["map"]`` (default Town04):
     entities, Init, one Story, stop trigger.
 
     ``tag`` is the script's corpus tag (names the Story and Act); ``actors`` start where and
-    as fast as given, ``events`` run in the order given within their entity's ManeuverGroup,
+    as fast as given, ``events`` (each a StoryEvent or a list of them, as a speed profile's
+    phases come) run in the order given within their entity's ManeuverGroup,
     and the scenario stops at ``timeout_s``. Background traffic the params name
     (``background_traffic``) joins the actors.
     """
@@ -615,8 +672,16 @@ def write_scenario(scenario: xosc.Scenario, out_path: str | os.PathLike[str]) ->
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
+        os.chmod(tmp, _readable_mode())  # as scenweave.files does: mkstemp's 0600 hides it
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def _readable_mode() -> int:
+    """0o666 less the umask: the mode a plain ``open(path, "w")`` gives a new file."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return 0o666 & ~umask

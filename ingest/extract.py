@@ -6,10 +6,14 @@ from them (end speeds, timeout, the spawn footprint), so perturbed variants stay
 
 from __future__ import annotations
 
+import contextlib
+
 from scenweave import maneuvers
 from scenweave.corpus.corpus_utils import bumper_gap_m, reference_gap_m
+from scenweave.corpus.phases import PHASED_ACTORS, is_single_ramp
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
+from scenweave.ingest.phases import NoProfile, fit_end_values, fit_series
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.maneuver import RecordFieldError
 from scenweave.schemas.params import ParamsInvalid, check_params
@@ -20,6 +24,9 @@ YELLOW_DELAY_BOUNDS_S = (1.0, 8.0)
 YELLOW_POINT_BEFORE_LIGHT_M = 5.0
 STOPPED_BELOW_MS = 0.1
 HIGHWAY_WEATHER = "Day_Clear"
+#: a recorded series whose first speed differs more from the params' start speed is not the
+#: record's (a perturbed variant) (m/s)
+SERIES_START_TOL_MS = 1.0
 SPAWN_KEYS = ("spawn_id", "ego_x", "ego_y", "ego_z", "ego_h", "ego_road_id", "ego_lane_id",
               "ego_s")
 
@@ -64,6 +71,9 @@ def _extract_highway(record: dict) -> dict:
         raise RecordIssue(str(err), field=err.field) from err
     if conventions.get("gaps_between", "reference_points") == "bumpers":
         _gaps_to_reference_points(base)
+    series = record.get("series")
+    if isinstance(series, dict) and isinstance(series.get("t"), list):
+        base["recorded_series"] = {k: list(v) for k, v in series.items() if isinstance(v, list)}
     base.update(dict.fromkeys(SPAWN_KEYS))
     return finish(base)
 
@@ -215,7 +225,10 @@ def finish(params: dict) -> dict:
         params["final_speed_ms"] = params["ego_end_speed_ms"]
     params["timeout_s"] = TIMEOUT_FACTOR * (params["maneuver_start_s"] + params["duration_s"])
     params["required_lane_sides"] = maneuver.lane_sides(params)
+    if params["domain"] == "highway":
+        fit_phases(params)
     speeds = [v for k, v in params.items() if k.endswith("speed_ms") and isinstance(v, float)]
+    speeds += [p["target_ms"] for k in PHASED_ACTORS for p in params.get(f"{k}_phases") or ()]
     params["max_speed_ms"] = max(speeds, default=0.0)
     gaps = _start_gaps(params)
     params["gap_ahead_m"] = max([g for g in gaps if g > 0], default=0.0)
@@ -225,6 +238,57 @@ def finish(params: dict) -> dict:
     except ParamsInvalid as err:
         raise RecordIssue(str(err), field=err.key and f"params.{err.key}") from err
     return params
+
+
+def fit_phases(params: dict) -> None:
+    """``<actor>_phases`` where one ramp does not show the record (docs/params.md): fitted to
+    the recorded series when the record has one that starts at the params' speeds, else, for
+    a class whose end gap is recorded, the smallest profile that meets it (none when no
+    profile can: ``check_playable`` says why)."""
+    for prefix in PHASED_ACTORS:
+        params.pop(f"{prefix}_phases", None)
+    series = params.get("recorded_series")
+    if series is not None and not _series_starts_at_params(params, series):
+        del params["recorded_series"]  # a perturbed variant: no longer what was recorded
+        series = None
+    if series is not None:
+        for prefix in PHASED_ACTORS:
+            speeds = series.get(f"{prefix}_speed_ms")
+            if speeds and isinstance(params.get(f"{prefix}_speed_ms"), int | float):
+                _keep(params, prefix, fit_series(series["t"], speeds, params["maneuver_start_s"],
+                                                 params[f"{prefix}_speed_ms"]))
+        return
+    if maneuvers.get(params["maneuver_class"]).gap_at_end:
+        with contextlib.suppress(NoProfile):
+            _keep(params, "npc", npc_end_gap_phases(params))
+
+
+def npc_end_gap_phases(params: dict) -> tuple:
+    """The NPC's profile that meets its recorded end gap while the ego drives its ramp
+    (``ingest.phases.fit_end_values``; raises ``NoProfile``)."""
+    duration = params["duration_s"]
+    ego_m = (params["ego_speed_ms"] + params["ego_end_speed_ms"]) / 2 * duration
+    needed = ego_m + params["npc_distance_end_m"] - params["npc_distance_m"]
+    return fit_end_values(params["npc_speed_ms"], params["npc_end_speed_ms"],
+                          params["maneuver_start_s"], duration, needed)
+
+
+def _keep(params: dict, prefix: str, phases: tuple) -> None:
+    """``<prefix>_phases`` unless they are the single ramp params describe anyway."""
+    records = [p.record() for p in phases]
+    params[f"{prefix}_phases"] = records
+    if is_single_ramp(params, prefix):
+        del params[f"{prefix}_phases"]
+
+
+def _series_starts_at_params(params: dict, series: dict) -> bool:
+    for prefix in PHASED_ACTORS:
+        speeds = [v for v in series.get(f"{prefix}_speed_ms") or () if v is not None]
+        start = params.get(f"{prefix}_speed_ms")
+        if speeds and isinstance(start, int | float) \
+                and abs(speeds[0] - start) > SERIES_START_TOL_MS:
+            return False
+    return True
 
 
 def _start_gaps(params: dict) -> list[float]:

@@ -1,21 +1,30 @@
-"""Can a scenario play this record back? Params a replay cannot reproduce become input issues.
+"""Can a scenario play this record back? Only records no scenario can show become input issues.
 
-Extraction reads what a record says; this asks whether the scenario ScenWeave would make of it
-can show it when played: both cars change speed linearly over the record, no vehicle brakes
-harder than ``MAX_PLAYABLE_DECELERATION_MS2``, and two cars of one lane stay their safety
-distance apart (``corpus_utils.clearance_m``, reference point to reference point). A record
-that fails gets one issue naming its file, row and the field at fault, instead of a scenario
-whose replay shows a collision or a gap the record never had.
+Extraction reads what a record says and fits each actor's speed phases (``ingest.phases``);
+this asks whether **any** profile the phase model allows can show the record, not whether one
+ramp can: no vehicle changes speed harder than ``MAX_PLAYABLE_DECELERATION_MS2``, a recorded
+end gap is reachable by some profile, a car merging behind ends behind, and two cars of one
+lane never overlap. Clearance is one rule ahead and behind, in bumper terms: the facing
+bumpers stay ``MIN_BUMPER_GAP_M`` apart (docs/scenario-conventions.md, "Replay"). A record
+that fails gets one issue naming its file, row, the field at fault and why no profile fits.
 """
 
 from __future__ import annotations
 
 from scenweave import maneuvers
-from scenweave.corpus.corpus_utils import clearance_m
-from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2, SpeedProfile, min_gap_m
+from scenweave.corpus.corpus_utils import reference_gap_m
+from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2, min_gap_m
+from scenweave.corpus.phases import PhasedProfile, phases_of, profile_of
+from scenweave.ingest.extract import npc_end_gap_phases
 from scenweave.ingest.issues import RecordIssue
+from scenweave.ingest.phases import NoProfile
 from scenweave.maneuvers import SameLane
-from scenweave.schemas.replay import GAP_TOL_M
+
+#: the least free space between two cars' facing bumpers in one lane, ahead or behind (m):
+#: less and a played scenario's bounding boxes touch within the replay's tolerances
+MIN_BUMPER_GAP_M = 0.5
+#: arithmetic noise below what any field records (m)
+ROUNDING_M = 1e-6
 
 
 def check_playable(params: dict) -> None:
@@ -23,78 +32,106 @@ def check_playable(params: dict) -> None:
     if params.get("domain") != "highway":
         return
     maneuver = maneuvers.get(params["maneuver_class"])
+    recorded = params.get("recorded_series") is not None
     if maneuver.lead_brakes:
         _brakes_as_a_car_can(params)
-    if maneuver.gap_at_end:
-        _end_gap_follows_from_speeds(params)
+    if maneuver.gap_at_end and not recorded:
+        _end_gap_reachable(params)
     if maneuver.npc_ends_in_ego_lane and maneuver.npc_position == "behind":
         _merges_behind(params)
     if maneuver.same_lane is not None:
-        _cars_in_one_lane_stay_apart(params, maneuver.same_lane)
-
-
-def _profile(params: dict, prefix: str) -> SpeedProfile:
-    return SpeedProfile(params[f"{prefix}_speed_ms"], params[f"{prefix}_end_speed_ms"], 0.0,
-                        params["duration_s"])
+        if recorded:
+            _recorded_gaps_never_overlap(params, maneuver.same_lane)
+        else:
+            _cars_in_one_lane_stay_apart(params, maneuver.same_lane)
 
 
 def _brakes_as_a_car_can(params: dict) -> None:
-    slowed, duration = params["npc_speed_ms"] - params["npc_end_speed_ms"], params["duration_s"]
-    if duration > 0 and slowed / duration > MAX_PLAYABLE_DECELERATION_MS2:
+    profile = PhasedProfile(params["npc_speed_ms"], phases_of(params, "npc"))
+    hardest = profile.max_acceleration_ms2(braking_only=True)
+    if hardest > MAX_PLAYABLE_DECELERATION_MS2:
+        slowed = params["npc_speed_ms"] - profile.end_speed
         raise RecordIssue(
-            f"the lead slows by {slowed:.1f} m/s within {duration:g} s "
-            f"({slowed / duration:.1f} m/s^2): harder than any car brakes "
-            f"(scenarios allow {MAX_PLAYABLE_DECELERATION_MS2:g} m/s^2), no replay can show it",
-            field="delta_vel_kmh")
+            f"the lead slows by {slowed:.1f} m/s at up to {hardest:.1f} m/s^2: harder than any "
+            f"car brakes (scenarios allow {MAX_PLAYABLE_DECELERATION_MS2:g} m/s^2), no speed "
+            "profile can show it", field="delta_vel_kmh")
+
+
+def _end_gap_reachable(params: dict) -> None:
+    """A following record's end gap needs a profile of the NPC that covers the distance."""
+    try:
+        npc_end_gap_phases(params)
+    except NoProfile as err:
+        raise RecordIssue(
+            f"the gap (reference points) goes from {params['npc_distance_m']:.1f} m to "
+            f"{params['npc_distance_end_m']:.1f} m in {params['duration_s']:g} s while the "
+            f"speeds go {params['npc_speed_ms']:.1f} -> {params['npc_end_speed_ms']:.1f} m/s "
+            f"(NPC) and {params['ego_speed_ms']:.1f} -> {params['ego_end_speed_ms']:.1f} m/s "
+            f"(ego): no speed profile fits, {err}", field="npc_distance_end_m") from err
 
 
 def _gained_m(params: dict) -> float:
     """How much the NPC gains on the ego over the record (m; negative: it drops back)."""
-    duration = params["duration_s"]
-    return _profile(params, "npc").distance(duration) - _profile(params, "ego").distance(duration)
-
-
-def _end_gap_follows_from_speeds(params: dict) -> None:
-    """A following record's end gap is what its speeds make of its start gap."""
-    begin, end = params["npc_distance_m"], params["npc_distance_end_m"]
-    made = begin + _gained_m(params)
-    if abs(made - end) > GAP_TOL_M:
-        raise RecordIssue(
-            f"the gap (reference points) goes from {begin:.1f} m to {end:.1f} m, but the speeds "
-            f"make it {made:.1f} m after {params['duration_s']:g} s (they differ by more than "
-            f"{GAP_TOL_M:g} m): no replay can show both", field="npc_distance_end_m")
+    start, end = params["maneuver_start_s"], params["maneuver_start_s"] + params["duration_s"]
+    npc, ego = profile_of(params, "npc"), profile_of(params, "ego")
+    return npc.distance(end) - npc.distance(start) - ego.distance(end) + ego.distance(start)
 
 
 def _merges_behind(params: dict) -> None:
-    """A cut-in behind ends with the car behind the ego (the ego keeps its speed)."""
+    """A cut-in behind ends with the car behind the ego, bumpers apart."""
     duration, gained = params["duration_s"], _gained_m(params)
     end_gap = params["npc_distance_m"] + gained
-    room = clearance_m(params.get("npc_vehicle_type"))
-    if end_gap > -room:
+    room = _clearance(params.get("npc_vehicle_type"), ahead=False)
+    if end_gap > -room + ROUNDING_M:
         raise RecordIssue(
             f"the car merging behind starts {params['npc_distance_m']:.1f} m behind the ego and "
             f"gains {gained:.1f} m in {duration:g} s: it would end {end_gap:.1f} m from the "
-            f"ego's reference point, not behind it (at least {room:.1f} m)",
-            field="npc_distance_m")
+            f"ego's reference point, not behind it (its bumper {MIN_BUMPER_GAP_M:g} m behind "
+            f"the ego's is {room:.1f} m)", field="npc_distance_m")
+
+
+def _clearance(kind: str | None, ahead: bool) -> float:
+    """The reference-point distance at which the facing bumpers are ``MIN_BUMPER_GAP_M``
+    apart (the reference point is the rear axle, so it differs ahead and behind)."""
+    return abs(reference_gap_m(MIN_BUMPER_GAP_M if ahead else -MIN_BUMPER_GAP_M, kind))
+
+
+def _present(params: dict, same_lane: SameLane) -> bool:
+    return same_lane.prefix == "npc" or bool(params.get(f"{same_lane.prefix}_present"))
 
 
 def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
-    """Two cars of one lane never come closer than their safety distance: at t = 0, and for a
-    car that stays in the lane, while both change speed over the record (a slower car ahead
-    that speeds up only later is run into half way, whatever the end gap says)."""
+    """Two cars of one lane keep their bumpers apart: at t = 0, and for a car that stays in
+    the lane, while both drive their profiles over the record."""
     prefix, column = same_lane.prefix, same_lane.gap_column
-    if prefix != "npc" and not params.get(f"{prefix}_present"):
+    if not _present(params, same_lane):
         return
     gap, kind = params[f"{prefix}_distance_m"], params.get(f"{prefix}_vehicle_type")
-    until = params["duration_s"] if same_lane.span == "all_along" else 0.0
-    ego, other = _profile(params, "ego"), _profile(params, prefix)
-    lead, follower = (other, ego) if gap >= 0 else (ego, other)
-    closest = min_gap_m(lead, follower, abs(gap), until)
-    room = clearance_m(kind)
-    if closest < room:
-        when = "at the start" if until == 0 or closest >= abs(gap) - 1e-9 else \
-            "as both change speed over the record"
+    start = params["maneuver_start_s"]
+    until = start + params["duration_s"] if same_lane.span == "all_along" else start
+    ego, other = profile_of(params, "ego"), profile_of(params, prefix)
+    ahead = gap >= 0
+    lead, follower = (other, ego) if ahead else (ego, other)
+    at_zero = abs(gap) - (lead.distance(start) - follower.distance(start))
+    closest = min_gap_m(lead, follower, at_zero, until, from_s=start)
+    room = _clearance(kind, ahead)
+    if closest < room - ROUNDING_M:
+        when = "at the start" if until == start or closest >= abs(gap) - 1e-9 else \
+            "as both drive their recorded speeds"
         raise RecordIssue(
-            f"the {kind or 'car'} in the ego's lane comes {closest:.1f} m from the ego "
-            f"(reference points; {room:.1f} m keeps them apart) {when}: no replay can show "
-            "the record without a collision", field=column)
+            f"the {kind or 'car'} {'ahead of' if ahead else 'behind'} the ego comes "
+            f"{closest:.1f} m from it (reference points; its bumper {MIN_BUMPER_GAP_M:g} m from "
+            f"the ego's is {room:.1f} m) {when}: the two would overlap, no replay can show it",
+            field=column)
+
+
+def _recorded_gaps_never_overlap(params: dict, same_lane: SameLane) -> None:
+    """A mined record's own bumper gaps: a sample where the two overlap is no real motion."""
+    if not _present(params, same_lane):
+        return
+    series = params["recorded_series"]
+    gaps = series.get(f"{same_lane.prefix}_gap_m") or []
+    for t, gap in zip(series["t"], gaps, strict=False):
+        if gap is not None and t is not None and gap == 0.0:
+            raise RecordIssue(f"the recorded gap is {gap:.2f} m at {t:.2f} s: the cars overlap",
+                              field=f"series.{same_lane.prefix}_gap_m")

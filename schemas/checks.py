@@ -95,11 +95,22 @@ def _speeds(doc: ScenarioDoc, domain: str) -> list[Finding]:
                              "error"))
     for entity in doc.entities:
         speed = doc.init_speed(entity)
-        if speed is not None and speed <= 0:
+        # a start from standstill is a valid record (issue 22); a car that never moves is not
+        if speed is not None and (speed < 0 or (speed <= 0 and not _moves_later(doc, entity))):
             private = doc.init_private(entity)
-            found.append(Finding("ZERO_SPEED", f"initial speed of {entity} is {speed} m/s",
+            found.append(Finding("ZERO_SPEED", f"initial speed of {entity} is {speed} m/s"
+                                 + ("" if speed < 0 else " and no speed action moves it"),
                                  "error", line(private)))
     return found
+
+
+def _moves_later(doc: ScenarioDoc, entity: str) -> bool:
+    """Whether a story speed action gives ``entity`` a target speed above 0."""
+    for event in doc.events.values():
+        target = event.action.find(".//AbsoluteTargetSpeed")
+        if entity in event.actors and (number(target, "value") or 0.0) > 0:
+            return True
+    return False
 
 
 def _delays(doc: ScenarioDoc) -> list[Finding]:

@@ -24,6 +24,7 @@ from scenweave.corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
+from scenweave.corpus.phases import PhasesInvalid, is_single_ramp, phases_of, profile_of
 from scenweave.maneuvers import Maneuver
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.params import number as number_of
@@ -258,21 +259,42 @@ SpeedChange = tuple[str, float | None, float | None, float | None]
 def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
     """(action name, end speed, duration, start) of every speed change the class must contain."""
     maneuver = class_of(params)
-    duration, start = params.get("duration_s"), params.get("maneuver_start_s")
+    recorded_ego = params.get("ego_phases") is not None and not _single_ramp(params, "ego")
     hero = _stop_at_line(params) if maneuver.stops_at_line else _npc_reaction(doc, params) \
-        if maneuver.ego_reacts else None
+        if maneuver.ego_reacts and not recorded_ego else None
     if hero is not None:
         changes = [("hero_speed_change", hero.end_speed, hero.duration_s, hero.start_s)]
     elif maneuver.stops_at_line:  # without the spawn's stop line only the target is known
         changes = [("hero_speed_change", 0.0, None, None)]
     else:
-        changes = [("hero_speed_change", params.get("ego_end_speed_ms"), duration, start)]
+        changes = _phase_changes(params, "hero", "ego")
     if maneuver.npc_speed_change:
-        changes.append(("npc_speed_change", params.get("npc_end_speed_ms"), duration, start))
+        changes += _phase_changes(params, "npc", "npc")
     if maneuver.surrounding_slots:
-        changes += [(f"npc_{slot}_speed_change", params.get(f"{slot}_end_speed_ms"), duration,
-                     start) for slot in SLOTS if params.get(f"{slot}_present")]
+        changes += [change for slot in SLOTS if params.get(f"{slot}_present")
+                    for change in _phase_changes(params, f"npc_{slot}", slot)]
     return changes
+
+
+def _phase_changes(params: dict, entity: str, prefix: str) -> list[SpeedChange]:
+    """One speed change per phase of ``prefix`` (``corpus.phases``): ``<entity>_speed_change``,
+    then ``_2``, ``_3``...; the single ramp when params give no phases."""
+    duration, start = params.get("duration_s"), params.get("maneuver_start_s")
+    if params.get(f"{prefix}_phases") is None or None in (duration, start):
+        return [(f"{entity}_speed_change", params.get(f"{prefix}_end_speed_ms"), duration, start)]
+    try:
+        phases = phases_of(params, prefix)
+    except PhasesInvalid:
+        return [(f"{entity}_speed_change", None, None, None)]
+    return [(f"{entity}_speed_change" + ("" if i == 0 else f"_{i + 1}"), p.target_ms,
+             p.duration_s, p.start_s) for i, p in enumerate(phases)]
+
+
+def _single_ramp(params: dict, prefix: str) -> bool:
+    try:
+        return is_single_ramp(params, prefix)
+    except (PhasesInvalid, KeyError):
+        return True
 
 
 def _stop_at_line(params: dict) -> SpeedProfile | None:
@@ -294,7 +316,8 @@ def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
     if None in keys or None in lengths:
         return None
     ego, ego_end, lead, lead_end, duration, start, distance, timeout = keys
-    profile = SpeedProfile(lead, lead_end, start, duration)
+    profile = SpeedProfile(lead, lead_end, start, duration) if _single_ramp(params, "npc") \
+        else profile_of(params, "npc")
     clearance = sum(lengths) / 2 + SAFETY_GAP_M
     return lead_reaction(ego, ego_end, profile, start_gap_m(distance, lead, ego, start), timeout,
                          clearance, cut_in=class_of(params).ego_reacts == "from_cut_in")

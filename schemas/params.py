@@ -21,6 +21,8 @@ from typing import Any, Literal, TypedDict
 
 import fastjsonschema
 
+from scenweave.corpus.phases import PhaseRecord
+
 SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
 
 VehicleType = Literal["car", "truck", "van", "motorcycle"]
@@ -73,6 +75,12 @@ class Params(TypedDict, total=False):
     behavior_type: Literal["B1", "B2", "B3", "B4"]
     ego_dist_traveled_m: float
     driving_side: Side
+    #: an actor's speed as phases where one ramp does not show the record (corpus.phases)
+    ego_phases: list[PhaseRecord]
+    npc_phases: list[PhaseRecord]
+    #: what a mined record recorded at every sample (t from the manoeuvre start; speeds,
+    #: gaps...): the replay is compared with it (schemas.replay)
+    recorded_series: dict[str, list[float | None]]
 
     # -- urban -----------------------------------------------------------------------------
     road_type: str
@@ -119,7 +127,8 @@ REQUIRED = ("scenario_id", "maneuver_class", "maneuver_tag", "domain", "weather_
 #: ``<slot>_<key>`` of each free-ride slot
 SLOT_KEYS: dict[str, Any] = {
     "present": bool, "speed_ms": float, "end_speed_ms": float, "distance_m": float,
-    "end_distance_m": float, "vehicle_type": VehicleType | None}
+    "end_distance_m": float, "vehicle_type": VehicleType | None,
+    "phases": list[PhaseRecord]}
 #: ``<actor>_<key>`` of each placed actor: world pose (OpenSCENARIO frame) and lane position
 POSE_KEYS: dict[str, Any] = {
     "x": float | None, "y": float | None, "z": float | None, "h": float | None,
@@ -165,7 +174,14 @@ def _json_type(kind: Any) -> dict:
         return {"type": "number"}
     if kind is str:
         return {"type": "string"}
+    if typing.is_typeddict(kind):
+        hints = typing.get_type_hints(kind)
+        return {"type": "object", "required": sorted(kind.__required_keys__),
+                "properties": {key: _json_type(hint) for key, hint in hints.items()},
+                "additionalProperties": False}
     origin, args = typing.get_origin(kind), typing.get_args(kind)
+    if origin is dict:
+        return {"type": "object", "additionalProperties": _json_type(args[1])}
     if origin is Literal:
         return {"enum": list(args)}
     if origin is list:

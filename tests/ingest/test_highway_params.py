@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import pytest
 
+from scenweave.corpus.phases import PhasedProfile, parse_phases
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from tests.ingest.builders import write_npy
 
@@ -137,16 +138,34 @@ def _params_of(tmp_path, code: str, rows: list[list[str]]) -> list[dict]:
     return params
 
 
-def test_a_following_record_whose_gaps_and_speeds_disagree_is_an_issue(tmp_path):
-    inconsistent = [["72", "54", "90", "90", "20", "45", "200", "8", "No", "B1", "Car"]]
-    write_npy(tmp_path, "FLF", inconsistent)
+def test_a_following_record_one_ramp_cannot_show_gets_two_phases(tmp_path):
+    # the gap grows by 25 m in 8 s while the lead holds 25 m/s and the ego slows 20 -> 15:
+    # one ramp makes it 84.6 m; the lead must dip in between (issue 22: it used to be refused)
+    [params] = _params_of(tmp_path, "FLF", [["72", "54", "90", "90", "20", "45", "200", "8",
+                                             "No", "B1", "Car"]])
+    phases = params["npc_phases"]
+    assert len(phases) == 2 and phases[0]["start_s"] == 2.0
+    assert phases[-1]["start_s"] + phases[-1]["duration_s"] == pytest.approx(10.0)
+    assert phases[-1]["target_ms"] == pytest.approx(25.0)
+    npc = PhasedProfile(25.0, parse_phases(phases))
+    ego_m = (20.0 + 15.0) / 2 * 8
+    gained = npc.distance(10.0) - npc.distance(2.0) - ego_m
+    assert params["npc_distance_m"] + gained == pytest.approx(params["npc_distance_end_m"],
+                                                              abs=0.01)
+
+
+def test_a_following_record_no_profile_can_show_is_an_issue(tmp_path):
+    # the gap grows by 150 m in 2 s at 90 km/h: 12.5 m/s^2 more than the ego, no car does that
+    write_npy(tmp_path, "FLF", [["90", "90", "90", "90", "20", "170", "200", "2", "No", "B1",
+                                 "Car"]])
     report = IngestReport()
     assert list(iter_raw_records(tmp_path, report)) == []  # ingest admits what run takes
     [issue] = report.issues
     assert (issue.file, issue.row, issue.field) == ("FLF_BINS_VALUES.npy", 0,
                                                     "npc_distance_end_m")
-    # 20 and 45 m between bumpers are 24.58 and 49.58 m between reference points (a car ahead)
-    assert "24.6 m to 49.6 m" in issue.message and "84.6 m" in issue.message
+    # 20 and 170 m between bumpers are 24.58 and 174.58 m between reference points
+    assert "24.6 m to 174.6 m" in issue.message and "no speed profile fits" in issue.message
+    assert "m/s^2" in issue.message
 
 
 def test_a_cut_in_behind_that_would_end_beside_the_ego_is_an_issue(tmp_path):

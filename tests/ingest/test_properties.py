@@ -6,7 +6,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from scenweave.corpus.corpus_utils import clearance_m, reference_gap_m
+from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.ingest import (
     IngestReport,
@@ -17,6 +17,7 @@ from scenweave.ingest import (
 from scenweave.ingest.highway import DEFAULT_BINNING, canonicalize_highway_file
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import load_layouts
+from scenweave.ingest.playable import MIN_BUMPER_GAP_M
 from tests.ingest.builders import write_npy
 
 LAYOUTS = load_layouts()
@@ -49,9 +50,8 @@ def _params(tmp_path, code, rows):
 
 
 def _apart_at_the_start(row) -> bool:
-    """The lead stands further than the two cars' safety distance (reference points)."""
-    kind = str(row[7]).lower()
-    return reference_gap_m(float(row[4]), kind) >= clearance_m(kind)
+    """The lead's rear bumper stands at least MIN_BUMPER_GAP_M ahead of the ego's front."""
+    return float(row[4]) >= MIN_BUMPER_GAP_M - 1e-9  # one rule ahead and behind, bumpers
 
 
 def _lead_deceleration(row) -> float:
@@ -88,7 +88,8 @@ def _merges_level_with_the_ego(row) -> bool:
     distance = reference_gap_m(distance, str(row[7]).lower())  # the layout's gaps: bumpers
     npc = max(ego + rel, 0.0)
     gained = ((npc + max(npc + delta, 0.0)) / 2 - ego) / 3.6 * duration
-    return distance + gained > -clearance_m(str(row[7]).lower())
+    room = abs(reference_gap_m(-MIN_BUMPER_GAP_M, str(row[7]).lower()))
+    return distance + gained > -room
 
 
 @settings_

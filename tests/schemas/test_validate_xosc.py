@@ -135,8 +135,10 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
     "NO_SPEED_ACTION": ("BRAKE", _remove("//AbsoluteTargetSpeed/ancestor::PrivateAction[1]"),
                         True),
     "NPC_MISSING": ("BRAKE", _remove("//ScenarioObject[@name='npc']"), False),
-    "ZERO_SPEED": ("BRAKE", _set("//Private[@entityRef='hero']//AbsoluteTargetSpeed", "value",
-                                 "0"), False),
+    # a start from standstill is valid; a hero that never moves is not
+    "ZERO_SPEED": ("BRAKE", _set("//Private[@entityRef='hero']//AbsoluteTargetSpeed | "
+                                 "//Action[starts-with(@name, 'hero_')]//AbsoluteTargetSpeed",
+                                 "value", "0"), False),
     "SEM_NO_NPC": ("CINF", _remove("//ScenarioObject[@name='npc']"), False),
     "SEM_NO_LANE_CHANGE": ("LCF", _remove("//Event[Action[@name='hero_lane_change']]"), False),
     "SEM_UNEXPECTED_LANE_CHANGE": ("BRAKE", lambda r: r.xpath(
@@ -381,3 +383,12 @@ def test_cli_reports_each_file_and_exits_1_when_one_is_invalid(tmp_path):
     results = {Path(r["file"]).name: r for r in json.loads(both.output)}
     assert results["LCB.xosc"]["valid"] is True
     assert "NO_STORY" in {e["code"] for e in results["FLF.xosc"]["errors"]}
+
+
+def test_a_start_from_standstill_is_valid(tmp_path):
+    """Issue 22: a recorded start from standstill is a valid record; the hero starts at 0
+    m/s and its speed action moves it."""
+    path, _ = _scenario(tmp_path, "FLF")
+    _mutate(path, _set("//Private[@entityRef='hero']//AbsoluteTargetSpeed", "value", "0"))
+    result = validate_xosc(path, None, fix=False)
+    assert "ZERO_SPEED" not in _codes(result), [f.to_dict() for f in result.errors]

@@ -32,6 +32,8 @@ COMMANDS: dict[str, str] = {
     "logs": "scenweave.commands.logs:logs",
     "doctor": "scenweave.commands.doctor:doctor",
     "replay": "scenweave.commands.replay:replay",
+    "view": "scenweave.commands.view:view",
+    "export": "scenweave.commands.export:export",
 }
 
 

@@ -1,0 +1,227 @@
+"""``scenweave export RUN_DIR|FILE.xosc --for esmini|carla --out DIR``: scenarios that plain
+esmini and CARLA users open with their own tools.
+
+``--for esmini`` writes the copy the replay itself plays (``player.translate``: the map named
+by file, each ``pos=x,y`` light by its OpenDRIVE signal id, lamp modes for its colours) with
+the map prepared for esmini (``player.maps.esmini_map``) beside it, so
+``esmini --headless --osc DIR/<scenario>/scenario.xosc`` plays it as is; each is played once
+with esmini's command-line player recording ``replay.dat`` for esmini's own replayer, and a
+scenario esmini refuses is named. ``--for carla`` copies the delivered files (CARLA's dialect)
+with a README saying how scenario_runner plays them on their town.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import click
+
+from scenweave.commands.replay import scenario_files
+
+MAPS_DIR = "maps"
+RECORDING_NAME = "replay.dat"
+README_NAME = "README.md"
+#: the step esmini plays the exported copy with (the replay's own)
+TIME_STEP_S = 0.05
+#: seconds one esmini run may take before it is stopped
+WALL_TIME_S = 120
+#: esmini's log line when the storyboard has run to its stop trigger
+STORY_COMPLETE = "storyBoard runningState -> stopTransition -> completeState"
+#: what esmini 3.6 logs as [error] while reading CARLA's OpenDRIVE maps, harmless for playing
+#: (the geo reference's proj string, CARLA's object types, signal references)
+MAP_LOAD_NOTES = ("Unsupported geo reference attr", "Unsupported object type",
+                  'signal element "signalReference" not supported')
+
+
+@click.command("export")
+@click.argument("paths", nargs=-1, required=True, type=click.Path(exists=True, path_type=Path))
+@click.option("--for", "target", required=True, type=click.Choice(["esmini", "carla"]),
+              help="esmini: the copy plain esmini plays, its map and a .dat recording; "
+                   "carla: the delivered files and how to run them with scenario_runner.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Folder to write into (one folder per scenario).")
+def export(paths: tuple[Path, ...], target: str, out_dir: Path) -> None:
+    """Export scenarios (a run folder's, or .xosc files) for esmini or CARLA."""
+    files = scenario_files(paths)
+    if not files:
+        raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    names = _folder_names(files)
+    if target == "carla":
+        for xosc in files:
+            _export_carla(xosc, out_dir / names[xosc])
+        _write(out_dir / README_NAME, carla_readme(files, names))
+        click.echo(f"export: {len(files)} scenarios for CARLA -> {out_dir} ({README_NAME})")
+        return
+    from scenweave.player import find_esmini
+
+    esmini = find_esmini().home / "bin" / "esmini"
+    problems = [p for xosc in files
+                if (p := _export_esmini(xosc, out_dir, names[xosc], esmini)) is not None]
+    for problem in problems:
+        click.echo(f"FAIL {problem}")
+    _write(out_dir / README_NAME, esmini_readme())
+    click.echo(f"export: {len(files) - len(problems)}/{len(files)} scenarios play in plain "
+               f"esmini -> {out_dir}")
+    if problems:
+        raise SystemExit(1)
+
+
+def _folder_names(files: list[Path]) -> dict[Path, str]:
+    """One folder name per scenario: its folder's name (a lone file: its stem), unique."""
+    names: dict[Path, str] = {}
+    for xosc in files:
+        name = xosc.parent.name if xosc.name == "scenario.xosc" else xosc.stem
+        while name in names.values() or name == MAPS_DIR:
+            name += "_"
+        names[xosc] = name
+    return names
+
+
+# --- esmini ------------------------------------------------------------------------------------
+
+def _export_esmini(xosc: Path, out_dir: Path, name: str, esmini: Path) -> str | None:
+    """Write the esmini copy of ``xosc`` and its recording; a line naming the problem, if any."""
+    from scenweave import spawn_db
+    from scenweave.player import TranslationError
+    from scenweave.player.maps import esmini_map
+    from scenweave.player.translate import translate
+
+    map_path = _map_of(xosc)
+    if map_path is None:
+        return f"{xosc}: its LogicFile names no known map"
+    map_copy = out_dir / MAPS_DIR / f"{map_path.stem}.xodr"
+    if not map_copy.is_file():
+        map_copy.parent.mkdir(exist_ok=True)
+        shutil.copyfile(esmini_map(map_path), map_copy)
+        map_copy.chmod(0o644)
+    folder = out_dir / name
+    folder.mkdir(exist_ok=True)
+    try:
+        # the map by a path relative to the scenario: the exported folder can be moved whole
+        translated = translate(xosc.read_bytes(), Path("..") / MAPS_DIR / map_copy.name,
+                               spawn_db.traffic_lights_carla(map_path))
+    except TranslationError as err:
+        return f"{xosc}: {err}"
+    scenario = folder / "scenario.xosc"
+    scenario.write_bytes(translated.xml)
+    scenario.chmod(0o644)
+    return _record(esmini, scenario)
+
+
+def _record(esmini: Path, scenario: Path) -> str | None:
+    """Play ``scenario`` once with esmini's command-line player, recording ``replay.dat``."""
+    log = scenario.with_name("esmini.log")
+    command = [str(esmini), "--headless", "--osc", scenario.name, "--fixed_timestep",
+               str(TIME_STEP_S), "--record", RECORDING_NAME, "--logfile_path", log.name]
+    try:
+        done = subprocess.run(command, cwd=scenario.parent, capture_output=True, text=True,
+                              timeout=WALL_TIME_S, check=False)
+    except subprocess.TimeoutExpired:
+        return f"{scenario}: esmini did not finish within {WALL_TIME_S} s"
+    lines = _read_lines(log)
+    errors = [line for line in lines if "[error]" in line
+              and not any(note in line for note in MAP_LOAD_NOTES)]
+    recording = scenario.with_name(RECORDING_NAME)
+    if recording.is_file():
+        recording.chmod(0o644)
+    if done.returncode != 0 or errors or not recording.is_file() \
+            or not any(STORY_COMPLETE in line for line in lines):
+        detail = "; ".join(errors[:3]) or done.stderr.strip()[-300:] or \
+            f"exit {done.returncode}, the storyboard did not complete"
+        return f"{scenario}: esmini failed: {detail}"
+    return None
+
+
+def _read_lines(path: Path) -> list[str]:
+    try:
+        return path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError:
+        return []
+
+
+def _map_of(xosc: Path) -> Path | None:
+    """The map the scenario is made for: its params' ``map``, else its ``LogicFile``."""
+    import json
+
+    from lxml import etree
+
+    from scenweave.schemas.scenario_doc import ScenarioDoc
+
+    params_path = xosc.parent / "params.json"
+    named = json.loads(params_path.read_text(encoding="utf-8")).get("map") \
+        if params_path.is_file() else None
+    try:
+        return ScenarioDoc(etree.parse(str(xosc)), named).map_path
+    except (OSError, etree.XMLSyntaxError):
+        return None
+
+
+def esmini_readme() -> str:
+    return f"""# Scenarios for esmini
+
+Each folder holds `scenario.xosc`, the copy ScenWeave's replay plays: the map is named by a
+path relative to the scenario (`../{MAPS_DIR}/`, the map prepared for esmini: CARLA's
+`value="-1"` dropped from its lights), each traffic light by its OpenDRIVE signal id, with lamp
+modes for its colours. `{RECORDING_NAME}` is esmini's recording of one play, `esmini.log` its log.
+
+```bash
+esmini --window 60 60 800 400 --osc <scenario>/scenario.xosc   # watch it (a build with a viewer)
+esmini --headless --osc <scenario>/scenario.xosc               # play it headless
+replayer --file <scenario>/{RECORDING_NAME}                    # esmini's replayer (needs OSG)
+dat2csv <scenario>/{RECORDING_NAME}                            # the recording as CSV
+```
+The delivered scenarios (CARLA's dialect) are unchanged; export them with `--for carla`.
+"""
+
+
+# --- CARLA -------------------------------------------------------------------------------------
+
+DELIVERED = ("scenario.xosc", "scenario.py", "params.json")
+
+
+def _export_carla(xosc: Path, folder: Path) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    sources = [xosc.parent / n for n in DELIVERED] if xosc.name == "scenario.xosc" else [xosc]
+    for source in sources:
+        if source.is_file():
+            target = folder / ("scenario.xosc" if source == xosc else source.name)
+            shutil.copyfile(source, target)
+            target.chmod(0o644)
+
+
+def carla_readme(files: list[Path], names: dict[Path, str]) -> str:
+    from lxml import etree
+
+    rows = []
+    for xosc in files:
+        logic = etree.parse(str(xosc)).find("RoadNetwork/LogicFile")
+        town = logic.get("filepath") if logic is not None else "?"
+        rows.append(f"| `{names[xosc]}/scenario.xosc` | {town} |")
+    table = "\n".join(rows)
+    return f"""# Scenarios for CARLA
+
+Each folder holds the delivered `scenario.xosc` (OpenSCENARIO 1.0 in CARLA's dialect: the town
+named in `RoadNetwork/LogicFile`, traffic lights as `pos=x,y` in CARLA's frame), the script
+that made it (`scenario.py`) and the record's values (`params.json`).
+
+| scenario | town |
+|---|---|
+{table}
+
+Run one with CARLA's scenario_runner (a CARLA server running; scenario_runner loads the town
+the file names):
+```bash
+./CarlaUE4.sh &                                     # the CARLA server
+python scenario_runner.py --openscenario <scenario>/scenario.xosc --reloadWorld
+```
+A map given by file (not a CARLA town) is loaded as a standalone OpenDRIVE world by
+scenario_runner when `LogicFile` holds the path to the `.xodr`; copy the map next to it.
+"""
+
+
+def _write(path: Path, text: str) -> None:
+    path.write_text(text, encoding="utf-8")
+    path.chmod(0o644)

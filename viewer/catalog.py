@@ -1,0 +1,258 @@
+"""Which runs and scenarios the viewer shows, and what it says about each, read from the
+folders ``scenweave run`` writes (``run.json``, ``summary.json``, one folder per scenario with
+``status.json``, ``trace.jsonl``, ``replay.json``, ...).
+
+A path given to ``scenweave view`` is a run folder, a folder of run folders (``runs/``), or
+one scenario folder (a hand-edited copy played with ``scenweave replay --force``); each
+scenario is named by ``<run>/<scenario folder>`` in the page's addresses.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from scenweave.viewer.run_files import (
+    MINING_REPORT_NAME,
+    PARAMS_NAME,
+    REPLAY_NAME,
+    REPORT_NAME,
+    RUN_NAME,
+    SCENARIO_FILES,
+    STATUS_NAME,
+    SUMMARY_NAME,
+    TRACE_NAME,
+    VARIANT_NAME,
+    VARIANTS_DIR,
+    XOSC_NAME,
+)
+from scenweave.viewer.scene import read_json, scene
+
+#: trace events that make or judge an attempt, in the order they run
+ATTEMPT_NODES = ("generate", "repair", "fallback", "execute", "validate")
+#: a file the page shows inline is cut after this many characters
+FILE_PREVIEW_CHARS = 200_000
+
+
+class NotFound(LookupError):
+    """No run or scenario of that name among the folders the viewer was given."""
+
+
+@dataclass
+class Run:
+    """One run folder (or one loose scenario folder, as a run of one)."""
+
+    run_id: str
+    root: Path
+    scenario_dirs: dict[str, Path] = field(default_factory=dict)
+
+
+def find_runs(paths: Iterable[Path]) -> dict[str, Run]:
+    """Every run under ``paths``, by a unique name (the folder's, numbered when repeated)."""
+    runs: dict[str, Run] = {}
+    for path in paths:
+        for root in _run_roots(Path(path)):
+            name = root.name
+            while name in runs:
+                name += "+"
+            runs[name] = Run(name, root, _scenario_dirs(root))
+    return runs
+
+
+def _run_roots(path: Path) -> list[Path]:
+    if _is_run(path) or _is_scenario(path):
+        return [path]
+    if not path.is_dir():
+        return []
+    return sorted((p for p in path.iterdir() if p.is_dir() and (_is_run(p) or _is_scenario(p))),
+                  key=lambda p: p.name)
+
+
+def _is_run(path: Path) -> bool:
+    return (path / RUN_NAME).is_file() or (path / SUMMARY_NAME).is_file()
+
+
+def _is_scenario(path: Path) -> bool:
+    return (path / XOSC_NAME).is_file() or (path / REPLAY_NAME).is_file()
+
+
+def _scenario_dirs(root: Path) -> dict[str, Path]:
+    if _is_scenario(root) and not _is_run(root):
+        return {root.name: root}
+    return {p.name: p for p in sorted(root.iterdir())
+            if p.is_dir() and not p.name.startswith(".") and _is_scenario(p)}
+
+
+# --- what the run list shows -----------------------------------------------------------------
+
+def run_list(runs: dict[str, Run]) -> list[dict]:
+    """Each run with its scenarios' rows (class, status, replay verdict, worst errors)."""
+    return [run_row(run) for run in runs.values()]
+
+
+def run_row(run: Run) -> dict:
+    info, summary = read_json(run.root / RUN_NAME), read_json(run.root / SUMMARY_NAME)
+    row = {"run": run.run_id, "path": str(run.root), "mode": info.get("mode"),
+           "map": info.get("map"), "started_at": info.get("started_at"),
+           "counts": summary.get("counts"), "replay": _replay_counts(summary),
+           "report": (run.root / REPORT_NAME).is_file(),
+           "mining_report": _mining_report(info, run.root),
+           "scenarios": [scenario_row(run, name) for name in run.scenario_dirs]}
+    return row
+
+
+def _replay_counts(summary: dict) -> dict | None:
+    replay = summary.get("replay")
+    return {"played": replay.get("played"), "passed": replay.get("passed")} \
+        if isinstance(replay, dict) else None
+
+
+def _mining_report(info: dict, root: Path) -> str | None:
+    """The mining report of the records the run was made from, when ``scenweave mine`` made
+    them (it lies beside the records)."""
+    source = info.get("input")
+    for folder in ([Path(source), root / source] if source else []):
+        report = folder / MINING_REPORT_NAME
+        if report.is_file():
+            return str(report.resolve())
+    return None
+
+
+def scenario_row(run: Run, name: str) -> dict:
+    folder = run.scenario_dirs[name]
+    status, params = read_json(folder / STATUS_NAME), read_json(folder / PARAMS_NAME)
+    replay = status.get("replay") if isinstance(status.get("replay"), dict) else None
+    if replay is None and (folder / REPLAY_NAME).is_file():
+        verdict = "played"
+    elif replay is None:
+        verdict = "not played"
+    else:
+        verdict = "passed" if replay.get("passed") else "failed"
+    return {"id": name, "key": f"{run.run_id}/{name}",
+            "maneuver_class": params.get("maneuver_class") or status.get("maneuver_class"),
+            "domain": params.get("domain") or status.get("domain"),
+            "status": status.get("status") or "unjudged",
+            "attempts": status.get("attempts"), "verdict": verdict,
+            "codes": (replay or {}).get("codes") or [],
+            "worst": _worst_errors(folder, replay),
+            "variants": len(_variant_dirs(folder)),
+            "watchable": (folder / REPLAY_NAME).is_file()}
+
+
+def _worst_errors(folder: Path, replay: dict | None) -> list[dict]:
+    """The largest series errors the judge measured (max error per quantity), largest first;
+    empty where the judge kept none."""
+    errors = (replay or {}).get("series_errors") or (replay or {}).get("series")
+    if not isinstance(errors, dict):
+        return []
+    rows = []
+    for quantity, value in errors.items():
+        if isinstance(value, dict) and isinstance(value.get("max"), int | float):
+            rows.append({"quantity": quantity, "max": value["max"], "rms": value.get("rms")})
+    return sorted(rows, key=lambda r: -abs(r["max"]))[:3]
+
+
+# --- one scenario ----------------------------------------------------------------------------
+
+def scenario_folder(runs: dict[str, Run], key: str) -> Path:
+    """The folder of ``<run>/<scenario>``, or of ``<run>/<scenario>/variants/vNN``."""
+    run_id, _, rest = key.partition("/")
+    name, _, variant = rest.partition("/variants/")
+    run = runs.get(run_id)
+    if run is None or name not in run.scenario_dirs:
+        raise NotFound(f"no scenario {key!r} in the runs shown")
+    folder = run.scenario_dirs[name]
+    if variant:
+        folder = folder / VARIANTS_DIR / variant
+        if not folder.is_dir() or "/" in variant or variant.startswith("."):
+            raise NotFound(f"no variant {variant!r} of {name}")
+    return folder
+
+
+def scenario_detail(runs: dict[str, Run], key: str) -> dict:
+    """Everything the scenario's page shows: the scene to animate and chart, the status, the
+    agent's attempts, the variants and the files."""
+    folder = scenario_folder(runs, key)
+    return {"key": key, "scene": scene(folder), "status": read_json(folder / STATUS_NAME),
+            "params": read_json(folder / PARAMS_NAME), "attempts": attempts(folder),
+            "variants": variants(folder, key), "files": files(folder),
+            "variant": read_json(folder / VARIANT_NAME) or None}
+
+
+def attempts(folder: Path) -> list[dict]:
+    """The agent's attempts from ``trace.jsonl``: each made (generate, repair or fallback)
+    with what it was given and answered, then run in the sandbox and validated."""
+    found: list[dict] = []
+    for event in _events(folder / TRACE_NAME):
+        node = event.get("node")
+        if node in ("generate", "repair", "fallback") or (node == "validate" and not found):
+            found.append({"number": event.get("number") or len(found) + 1,
+                          "made_by": node if node != "validate" else "reference script",
+                          "make": event if node != "validate" else {}, "execute": None,
+                          "validate": None})
+        if node in ("execute", "validate") and found:
+            found[-1][node] = event
+    return found
+
+
+def _events(path: Path) -> list[dict]:
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return []
+    events = []
+    for line in lines:
+        try:
+            event = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(event, dict):
+            events.append(event)
+    return events
+
+
+def _variant_dirs(folder: Path) -> list[Path]:
+    root = folder / VARIANTS_DIR
+    return sorted(p for p in root.iterdir() if p.is_dir()) if root.is_dir() else []
+
+
+def variants(folder: Path, key: str) -> list[dict]:
+    """The record's variants: what each changed, whether it was kept, and its key."""
+    return [{"name": path.name, "key": f"{key}/variants/{path.name}",
+             "variant": read_json(path / VARIANT_NAME), "watchable": (path / REPLAY_NAME).is_file()}
+            for path in _variant_dirs(folder)]
+
+
+def files(folder: Path) -> list[dict]:
+    return [{"name": name, "bytes": (folder / name).stat().st_size}
+            for name in SCENARIO_FILES if (folder / name).is_file()]
+
+
+def file_text(runs: dict[str, Run], key: str, name: str) -> str:
+    """A listed file of the scenario, as text (cut after ``FILE_PREVIEW_CHARS``)."""
+    if name not in SCENARIO_FILES:
+        raise NotFound(f"{name!r} is not a file the viewer shows")
+    path = scenario_folder(runs, key) / name
+    if not path.is_file():
+        raise NotFound(f"{key} has no {name}")
+    text = path.read_text(encoding="utf-8", errors="replace")
+    return text[:FILE_PREVIEW_CHARS]
+
+
+def as_json(data: Any) -> str:
+    """Compact JSON a browser parses: a non-finite number (NaN, inf) becomes null."""
+    return json.dumps(_finite(data), separators=(",", ":"), default=str, allow_nan=False)
+
+
+def _finite(data: Any) -> Any:
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {k: _finite(v) for k, v in data.items()}
+    if isinstance(data, list | tuple):
+        return [_finite(v) for v in data]
+    return data

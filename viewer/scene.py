@@ -1,0 +1,291 @@
+"""What the page needs to show one played scenario, computed on the server from its folder.
+
+``scene(folder)`` reads ``replay.json`` (``player.Playback``: every actor's pose and speed per
+step, its box, the lights' actions and where they stand, the map played on) and, where they
+are there, ``params.json`` (the record's values), ``scenario.xosc`` (the scripted speed
+changes) and the mined record's ``recorded.json``. The animation needs only ``replay.json``;
+the rest adds the record's values, the judge's tolerance bands and its findings.
+
+Everything is plain JSON: lanes are polylines sampled from the OpenDRIVE map by ``spawn_db``
+(the one reader of the map), gaps are the judge's own measurement (``gap_along_lane``) and
+the findings are the judge's, run again on the playback (``schemas.replay.judge_replay``), so
+a file played with ``scenweave replay --force`` shows them too.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenweave.player import REPLAY_NAME, Playback
+from scenweave.schemas.params import number
+from scenweave.schemas.replay import (
+    GAP_TOL_M,
+    LANE_CHANGE_TOL_S,
+    SPEED_TOL_MS,
+    gap_along_lane,
+    judge_replay,
+    light_state,
+)
+from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
+
+EGO = "hero"
+#: the gap chart is sampled this often (s); each sample follows the lanes (~1 ms)
+GAP_STEP_S = 0.2
+#: metres of map drawn around the paths
+MAP_MARGIN_M = 40.0
+#: lane borders are sampled about this far apart (m)
+LANE_STEP_M = 2.0
+#: a finding's message starts with its time, as the judge writes it
+FINDING_TIME = re.compile(r"^at (?P<t>-?\d+(?:\.\d+)?) s: ")
+
+
+def scene(folder: Path) -> dict[str, Any]:
+    """The scenario in ``folder`` as the page animates and charts it (``KeyError``-free: a
+    missing file leaves its part out; no ``replay.json`` gives ``played: False``)."""
+    params, status = read_json(folder / PARAMS_NAME), read_json(folder / STATUS_NAME)
+    replay_path = folder / REPLAY_NAME
+    out: dict[str, Any] = {"scenario_id": params.get("scenario_id") or status.get("scenario_id")
+                           or folder.name,
+                           "maneuver_class": params.get("maneuver_class")
+                           or status.get("maneuver_class"),
+                           "domain": params.get("domain") or status.get("domain"),
+                           "played": False}
+    if not replay_path.is_file():
+        out["problem"] = "not played: no replay.json in the folder"
+        return out
+    raw = read_json(replay_path)
+    playback = Playback.from_dict(raw)
+    if playback.engine_error or not playback.times:
+        out["problem"] = playback.engine_error or "esmini recorded no step"
+        out["log"] = playback.log[-10:]
+        return out
+    map_path = _map_path(playback.map or params.get("map"))
+    out.update(played=True, duration_s=playback.duration_s, times=playback.times,
+               actors=_actors(playback), lights=_lights(playback),
+               collisions=[list(c) for c in playback.collisions],
+               lanes=_lanes_near(map_path, playback),
+               map=Path(map_path).stem if map_path else None,
+               charts=_charts(playback, params, folder, map_path),
+               findings=_findings(playback, params, folder, map_path, status),
+               series_errors=_series_errors(raw, status))
+    return out
+
+
+def read_json(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _map_path(name: str | None) -> Path | None:
+    from scenweave import spawn_db
+
+    if name and Path(name).is_file():
+        return Path(name)
+    try:
+        return spawn_db.resolve_map(Path(name).stem if name else None).path
+    except spawn_db.UnknownMapError:
+        return None
+
+
+# --- the animation ---------------------------------------------------------------------------
+
+def _actors(playback: Playback) -> dict[str, dict]:
+    actors = {}
+    for name, track in playback.tracks.items():
+        box = playback.boxes.get(name)
+        actors[name] = {key: track[key] for key in ("x", "y", "h", "speed", "lane",
+                                                    "lane_offset", "road")}
+        actors[name]["box"] = ([box.length, box.width, box.center_ahead] if box
+                               else [4.5, 1.9, 1.4])
+    return actors
+
+
+def _lights(playback: Playback) -> list[dict]:
+    """Each light of the scenario: where it stands and its colour from when to when."""
+    started = playback.fired("action")
+    changes = sorted((t, name) for name, t in started.items() if name in playback.lights)
+    spans = [[t, changes[i + 1][0] if i + 1 < len(changes) else playback.duration_s,
+              playback.lights[name]] for i, (t, name) in enumerate(changes)]
+    positions = {tuple(xy) for xy in playback.light_positions.values()}
+    return [{"x": x, "y": y, "spans": spans} for x, y in sorted(positions)]
+
+
+def _lanes_near(map_path: Path | None, playback: Playback) -> list[dict]:
+    """The map's drivable lane borders within ``MAP_MARGIN_M`` of the paths."""
+    if map_path is None:
+        return []
+    xs = [x for track in playback.tracks.values() for x in track["x"]]
+    ys = [y for track in playback.tracks.values() for y in track["y"]]
+    box = (min(xs) - MAP_MARGIN_M, max(xs) + MAP_MARGIN_M,
+           min(ys) - MAP_MARGIN_M, max(ys) + MAP_MARGIN_M)
+    near = []
+    for bounds, junction, points in _lane_polylines(str(map_path)):
+        if bounds[0] <= box[1] and bounds[1] >= box[0] and bounds[2] <= box[3] \
+                and bounds[3] >= box[2]:
+            near.append({"junction": junction, "points": points})
+    return near
+
+
+@lru_cache(maxsize=4)
+def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[list[float]]]]:
+    """(x0, x1, y0, y1), in a junction, [[x, y], ...] of both borders of every drivable lane
+    section of the map (once per map and process)."""
+    from scenweave import spawn_db
+    from scenweave.spawn_db.lanes import lane_border_offsets, section_samples
+
+    network = spawn_db.road_network(map_path)
+    found = []
+    for key in network.drivable_lanes():
+        road = network.road(key.road_id)
+        section = road.sections[key.section]
+        s = section_samples(section, LANE_STEP_M)
+        pose = road.plan_view.pose(s)
+        for offsets in lane_border_offsets(road, section, key.lane_id, s):
+            t = offsets[0]
+            xs, ys = pose.x - t * np.sin(pose.hdg), pose.y + t * np.cos(pose.hdg)
+            points = np.round(np.column_stack([xs, ys]), 2).tolist()
+            found.append(((float(xs.min()), float(xs.max()), float(ys.min()), float(ys.max())),
+                          bool(road.in_junction), points))
+    return found
+
+
+# --- the charts ------------------------------------------------------------------------------
+
+def _charts(playback: Playback, params: dict, folder: Path, map_path: Path | None) -> dict:
+    """Speed, gap, lateral offset and lane, light state: the replay's series, the record's
+    values with the judge's tolerance, and the mined record's own series where there is one."""
+    from scenweave.schemas.fidelity import placed_actors
+
+    recorded = _recorded(folder, params)
+    speed_marks = [{"entity": entity, "t": 0.0, "value": value, "tol": SPEED_TOL_MS,
+                    "what": "start speed"}
+                   for entity, prefix in placed_actors(params)
+                   if (value := number(params, f"{prefix}_speed_ms")) is not None]
+    speed_marks += [{"entity": entity, "t": at_s, "value": target, "tol": SPEED_TOL_MS,
+                     "what": "target speed"}
+                    for entity, target, at_s in _speed_targets(folder, params)]
+    return {
+        "speed": {"series": {n: t["speed"] for n, t in playback.tracks.items()},
+                  "marks": speed_marks, "tol": SPEED_TOL_MS,
+                  "recorded": {f"{e}": recorded[f"{r}_speed_ms"] for r, e in
+                               (("ego", EGO), ("npc", "npc")) if f"{r}_speed_ms" in recorded},
+                  "recorded_t": recorded.get("t")},
+        "gap": _gap_chart(playback, params, recorded, map_path),
+        "lateral": {"offset": {n: t["lane_offset"] for n, t in playback.tracks.items()},
+                    "lane": {n: t["lane"] for n, t in playback.tracks.items()},
+                    "tol_s": LANE_CHANGE_TOL_S},
+        "light": [light_state(playback, t) for t in playback.times] if playback.lights else [],
+        "maneuver": [number(params, "maneuver_start_s"), number(params, "duration_s")],
+    }
+
+
+def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]:
+    """(entity, target speed, when it should be reached) of each scripted speed change."""
+    from lxml import etree
+
+    from scenweave.schemas.fidelity import expected_speed_changes
+    from scenweave.schemas.scenario_doc import ScenarioDoc
+
+    if not params:
+        return []
+    try:
+        doc = ScenarioDoc(etree.parse(str(folder / XOSC_NAME)), params.get("map"))
+        changes = expected_speed_changes(doc, params)
+    except (OSError, etree.XMLSyntaxError, KeyError, TypeError, ValueError, AttributeError):
+        return []
+    return [(name.removesuffix("_speed_change"), float(target), float(start) + float(duration))
+            for name, target, duration, start in changes
+            if all(isinstance(v, int | float) and math.isfinite(v)
+                   for v in (target, duration, start))]
+
+
+def _recorded(folder: Path, params: dict) -> dict:
+    """A mined record's series on the scenario's clock (its event starts with the manoeuvre)."""
+    recorded = read_json(folder / RECORDED_NAME)
+    if not isinstance(recorded.get("t"), list):
+        return {}
+    shift = number(params, "maneuver_start_s") or 0.0
+    return {**recorded, "t": [t + shift for t in recorded["t"]]}
+
+
+def _gap_chart(playback: Playback, params: dict, recorded: dict,
+               map_path: Path | None) -> dict:
+    """Every other vehicle's gap to the ego along its lane (highway; the judge's measure)."""
+    from scenweave.schemas.fidelity import class_of, placed_actors
+
+    others = [e for e in playback.entities if e != EGO]
+    if not others or EGO not in playback.tracks:
+        return {}
+    times = np.round(np.arange(0.0, playback.duration_s + 1e-9, GAP_STEP_S), 3).tolist()
+    series = {}
+    for name in others:
+        gaps = []
+        for t in times:
+            try:
+                gap = gap_along_lane(playback, name, t, map_path)
+            except Exception:  # noqa: BLE001 - a chart shows what it can measure
+                gap = None
+            gaps.append(None if gap is None else round(gap, 3))
+        series[name] = gaps
+    start = number(params, "maneuver_start_s")
+    marks = [{"entity": e, "t": start, "value": gap, "tol": GAP_TOL_M, "what": "gap"}
+             for e, prefix in placed_actors(params) if e != EGO and start is not None
+             and (gap := number(params, f"{prefix}_distance_m")) is not None]
+    end_gap = number(params, "npc_distance_end_m")
+    if params and class_of(params).gap_at_end and start is not None and end_gap is not None:
+        marks.append({"entity": "npc", "t": start + (number(params, "duration_s") or 0.0),
+                      "value": end_gap, "tol": GAP_TOL_M, "what": "gap at end"})
+    return {"times": times, "series": series, "marks": marks, "tol": GAP_TOL_M,
+            "recorded": recorded.get("npc_gap_m"), "recorded_t": recorded.get("t")}
+
+
+# --- the verdict -----------------------------------------------------------------------------
+
+def _findings(playback: Playback, params: dict, folder: Path, map_path: Path | None,
+              status: dict) -> list[dict]:
+    """The judge's REPLAY_* findings on this playback, each with its time where it has one."""
+    from lxml import etree
+
+    from scenweave.schemas.scenario_doc import ScenarioDoc
+
+    if params and (folder / XOSC_NAME).is_file():
+        try:
+            doc = ScenarioDoc(etree.parse(str(folder / XOSC_NAME)), params.get("map"))
+            found = [(f.code, f.message) for f in judge_replay(playback, params, doc, map_path)]
+        except (OSError, etree.XMLSyntaxError):
+            found = _status_findings(status)
+    else:
+        found = _status_findings(status)
+    findings = []
+    for code, message in found:
+        when = FINDING_TIME.match(message)
+        findings.append({"code": code, "message": message,
+                         "t": float(when.group("t")) if when else None})
+    return findings
+
+
+def _status_findings(status: dict) -> list[tuple[str, str]]:
+    errors = (status.get("validation") or {}).get("errors") or []
+    return [(e.get("code", ""), e.get("message", "")) for e in errors
+            if isinstance(e, dict) and str(e.get("code", "")).startswith("REPLAY")]
+
+
+def _series_errors(raw: dict, status: dict) -> dict:
+    """The judge's per-quantity errors against the record's series (max, RMS), where the
+    replay or the status has them (an additive key of the replay judge)."""
+    for source in (raw, status.get("replay") or {}):
+        for key in ("series_errors", "series"):
+            value = source.get(key)
+            if isinstance(value, dict) and value:
+                return value
+    return {}

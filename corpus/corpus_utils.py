@@ -43,6 +43,7 @@ from scenweave.corpus.phases import (
     PhasedProfile,
     PhasesInvalid,
     is_single_ramp,
+    lane_change_length,
     parse_phases,
     profile_of,
 )
@@ -396,13 +397,16 @@ def _profile_change(entity: str, profile: SpeedProfile) -> StoryEvent:
 
 
 def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
-                duration_s: float, start_s: float) -> StoryEvent:
-    """``entity`` moves one lane to ``direction`` (left/right) over ``duration_s``."""
+                duration_s: float, start_s: float, length_m: float | None = None) -> StoryEvent:
+    """``entity`` moves one lane to ``direction`` (left/right) over ``duration_s`` (driving
+    ``length_m`` meanwhile; by default as a linear speed change from ``v_start_ms`` to
+    ``v_end_ms`` does)."""
     if direction not in LANE_CHANGE_SIGN:
         raise ValueError(f"lane_change_direction must be 'left' or 'right', not {direction!r}")
+    length = lane_change_length_m(v_start_ms, v_end_ms, duration_s) if length_m is None \
+        else finite(f"the lane change length of {entity}", length_m)
     dynamics = xosc.TransitionDynamics(xosc.DynamicsShapes.linear,
-                                       xosc.DynamicsDimension.distance,
-                                       lane_change_length_m(v_start_ms, v_end_ms, duration_s))
+                                       xosc.DynamicsDimension.distance, length)
     action = xosc.RelativeLaneChangeAction(LANE_CHANGE_SIGN[direction], entity, dynamics)
     return story_event(entity, f"{entity}_lane_change", action, start_s)
 
@@ -458,13 +462,23 @@ def motion(params: Mapping[str, Any], prefix: str) -> SpeedProfile | PhasedProfi
 def npc_lane_change(params: Mapping[str, Any]) -> StoryEvent:
     """The NPC changes one lane toward ``lane_change_direction`` (cut-in or cut-out)."""
     return lane_change("npc", params["lane_change_direction"], number(params, "npc_speed_ms"),
-                       number(params, "npc_end_speed_ms"), *manoeuvre_timing(params))
+                       number(params, "npc_end_speed_ms"), *manoeuvre_timing(params),
+                       _phased_length(params, "npc"))
 
 
 def hero_lane_change(params: Mapping[str, Any]) -> StoryEvent:
     """The ego changes one lane toward ``lane_change_direction``."""
     return lane_change(HERO, params["lane_change_direction"], number(params, "ego_speed_ms"),
-                       number(params, "ego_end_speed_ms"), *manoeuvre_timing(params))
+                       number(params, "ego_end_speed_ms"), *manoeuvre_timing(params),
+                       _phased_length(params, "ego"))
+
+
+def _phased_length(params: Mapping[str, Any], prefix: str) -> float | None:
+    """The lane change's length when ``prefix`` drives phases (None: the single ramp's)."""
+    if params.get(f"{prefix}_phases") is None:
+        return None
+    motion(params, prefix)
+    return lane_change_length(params, prefix)
 
 
 # --- storyboards shared by several classes ---------------------------------------------------
@@ -509,7 +523,8 @@ def hero_reacts_to_cut_in(params: Mapping[str, Any]) -> list[StoryEvent]:
 
 def _hero_reacts_to_npc(params: Mapping[str, Any], cut_in: bool) -> list[StoryEvent]:
     if params.get("ego_phases") is not None and not is_single_ramp(params, "ego"):
-        return hero_speed_profile(params)  # a recorded speed curve: what the ego did
+        # a recorded speed curve: what the ego did, then it keeps its distance
+        return [*hero_speed_profile(params), *keep_distance_after_record(params)]
     start = number(params, "maneuver_start_s")
     ego_speed, lead_speed = number(params, "ego_speed_ms"), number(params, "npc_speed_ms")
     lead = motion(params, "npc")

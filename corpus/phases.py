@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, TypedDict
 
-from scenweave.corpus.kinematics import SpeedProfile
+from scenweave.corpus.kinematics import LANE_CHANGE_MIN_LENGTH_M, SpeedProfile, lane_change_length_m
 
 Shape = Literal["linear", "cubic", "sinusoidal", "step"]
 SHAPES: tuple[str, ...] = ("linear", "cubic", "sinusoidal", "step")
@@ -231,3 +231,16 @@ def profile_of(params: Mapping[str, Any], actor: str) -> SpeedProfile | PhasedPr
         return SpeedProfile(v0, params[f"{actor}_end_speed_ms"], params["maneuver_start_s"],
                             params["duration_s"])
     return PhasedProfile(v0, phases_of(params, actor))
+
+
+def lane_change_length(params: Mapping[str, Any], actor: str) -> float:
+    """The length (m) ``actor``'s lane change is given so it takes ``duration_s`` from
+    ``maneuver_start_s``: the distance its profile drives meanwhile (for the single ramp,
+    ``kinematics.lane_change_length_m`` of its start and end speeds)."""
+    start, duration = params["maneuver_start_s"], params["duration_s"]
+    if is_single_ramp(params, actor):
+        return lane_change_length_m(params[f"{actor}_speed_ms"], params[f"{actor}_end_speed_ms"],
+                                    duration)
+    profile = profile_of(params, actor)
+    return max(LANE_CHANGE_MIN_LENGTH_M,
+               round(profile.distance(start + duration) - profile.distance(start), 3))

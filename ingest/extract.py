@@ -10,7 +10,7 @@ import contextlib
 
 from scenweave import maneuvers
 from scenweave.corpus.corpus_utils import bumper_gap_m, reference_gap_m
-from scenweave.corpus.phases import PHASED_ACTORS, is_single_ramp
+from scenweave.corpus.phases import PHASED_ACTORS, is_single_ramp, profile_of
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
 from scenweave.ingest.phases import NoProfile, fit_end_values, fit_series
@@ -252,15 +252,33 @@ def fit_phases(params: dict) -> None:
         del params["recorded_series"]  # a perturbed variant: no longer what was recorded
         series = None
     if series is not None:
-        for prefix in PHASED_ACTORS:
+        for prefix in PHASED_ACTORS:  # the ego first: the others keep their gap to it
             speeds = series.get(f"{prefix}_speed_ms")
             if speeds and isinstance(params.get(f"{prefix}_speed_ms"), int | float):
                 _keep(params, prefix, fit_series(series["t"], speeds, params["maneuver_start_s"],
-                                                 params[f"{prefix}_speed_ms"]))
+                                                 params[f"{prefix}_speed_ms"],
+                                                 series.get(f"{prefix}_s_m"),
+                                                 _gap_targets(params, series, prefix)))
         return
     if maneuvers.get(params["maneuver_class"]).gap_at_end:
         with contextlib.suppress(NoProfile):
             _keep(params, "npc", npc_end_gap_phases(params))
+
+
+def _gap_targets(params: dict, series: dict, prefix: str) -> list[float | None] | None:
+    """The distance ``prefix`` must have driven at each sample for its recorded gap to the ego
+    to hold: the ego's fitted distance plus the gap's change (None: no gap recorded)."""
+    gaps = series.get(f"{prefix}_gap_m")
+    first = next((g for g in gaps or () if g is not None), None)
+    if prefix == "ego" or first is None:
+        return None
+    ego, start = profile_of(params, "ego"), params["maneuver_start_s"]
+    times = series["t"]
+    t0 = next(t for t, v in zip(times, series.get(f"{prefix}_speed_ms"), strict=False)
+              if t is not None and v is not None)
+    base = ego.distance(start + t0)
+    return [None if g is None or t is None else ego.distance(start + t) - base + g - first
+            for t, g in zip(times, gaps, strict=False)]
 
 
 def npc_end_gap_phases(params: dict) -> tuple:

@@ -31,6 +31,11 @@ DISTANCE_TOL_M = 0.5
 END_GAP_TOL_M = 1.0
 #: a phase changing the speed less than this is no phase (m/s)
 NO_CHANGE_MS = 1e-3
+#: a phase's corner speed may lie this far from the recorded sample it ends at (m/s): room to
+#: keep the distance where speeds and positions of a record disagree a little
+CORNER_SHIFTS_MS = (0.0, -0.1, 0.1, -0.2, 0.2)
+#: a segment that left a tolerance is tried this many samples further before giving up
+LOOK_AHEAD = 3
 #: where a two-phase profile may put its corner, as shares of the duration
 CORNERS = tuple(k / 100 for k in range(5, 96))
 
@@ -40,49 +45,89 @@ class NoProfile(ValueError):
 
 
 def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], start_s: float,
-               v_start: float) -> tuple[Phase, ...]:
+               v_start: float, positions: Sequence[float | None] | None = None,
+               relative: Sequence[float | None] | None = None) -> tuple[Phase, ...]:
     """The fewest linear phases, from ``v_start`` at ``start_s``, that follow the recorded
-    ``speeds`` at ``times`` (record time; None values are gaps in the record)."""
-    samples = [(float(t), float(v)) for t, v in zip(times, speeds, strict=False)
-               if t is not None and v is not None]
-    if len(samples) < 2:
+    ``speeds`` at ``times`` (record time; None values are gaps in the record), and the
+    distance driven since the first sample: the recorded ``positions`` along the road where
+    every sample has one (what the record's gaps are measured from), else the speeds'
+    trapezoid. ``relative``: distances the fit must also keep within ``DISTANCE_TOL_M``
+    where given (an NPC's: the ego's fitted distance plus the recorded gap's change, so the
+    gap holds as well as each car's own motion)."""
+    n = len(times)
+    rows = [(t, v, x, r) for t, v, x, r in zip(times, speeds, positions or [0.0] * n,
+                                               relative or [None] * n, strict=False)
+            if t is not None and v is not None]
+    if len(rows) < 2:
         return ()
-    t, v = [s[0] for s in samples], [s[1] for s in samples]
+    t, v = [float(r[0]) for r in rows], [float(r[1]) for r in rows]
+    if positions is not None and all(r[2] is not None for r in rows):
+        driven = [float(r[2]) - float(rows[0][2]) for r in rows]
+    else:
+        driven = [0.0]
+        for k in range(1, len(t)):
+            driven.append(driven[-1] + (v[k] + v[k - 1]) / 2 * (t[k] - t[k - 1]))
+    targets = [(driven, DISTANCE_TOL_M)]
+    if relative is not None:
+        targets.append(([r[3] for r in rows], DISTANCE_TOL_M))
     phases: list[Phase] = []
     knot = v_start
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field
         phases.append(Phase(_ms(start_s + t[0]), 0.0, _ms(v[0]), "step"))
         knot = v[0]
-    i, drift = 0, 0.0
+    i, fitted = 0, 0.0
     while i < len(t) - 1:
-        j, drift = _longest_segment(t, v, i, knot, drift)
-        if abs(v[j] - knot) > NO_CHANGE_MS:
-            phases.append(Phase(_ms(start_s + t[i]), _ms(t[j] - t[i]), _ms(v[j])))
-        i, knot = j, v[j]
+        j, corner, fitted = _longest_segment(t, v, targets, i, knot, fitted)
+        if abs(corner - knot) > NO_CHANGE_MS:
+            phases.append(Phase(_ms(start_s + t[i]), _ms(t[j] - t[i]), _ms(corner)))
+        i, knot = j, _ms(corner)
     return tuple(phases)
 
 
-def _longest_segment(t: list[float], v: list[float], i: int, knot: float,
-                     drift: float) -> tuple[int, float]:
-    """The furthest sample ``j`` a straight line from ``(t[i], knot)`` to ``(t[j], v[j])``
-    reaches within both tolerances at every sample between, and the distance drift there.
-    ``drift`` is the fitted minus the recorded distance at ``t[i]``."""
-    best = (i + 1, drift + (knot - v[i]) / 2 * (t[i + 1] - t[i]))
+Targets = list[tuple[list[float | None], float]]
+
+
+def _longest_segment(t: list[float], v: list[float], targets: Targets, i: int, knot: float,
+                     fitted: float) -> tuple[int, float, float]:
+    """The furthest sample ``j`` a straight line from ``(t[i], knot)`` to ``(t[j], corner)``
+    reaches within both tolerances at every sample between, ``corner`` one of the speeds near
+    ``v[j]`` that keeps the distance closest; and the fitted distance at ``t[j]``
+    (``fitted``: at ``t[i]``). Without any, the next sample, as close as it gets."""
+    best: tuple[int, float, float] | None = None
     for j in range(i + 1, len(t)):
-        slope = (v[j] - knot) / (t[j] - t[i]) if t[j] > t[i] else 0.0
-        moved, ok = drift, True
-        previous_error = knot - v[i]
-        for k in range(i + 1, j + 1):
-            error = knot + slope * (t[k] - t[i]) - v[k]
-            moved += (previous_error + error) / 2 * (t[k] - t[k - 1])
-            previous_error = error
-            if abs(error) > SPEED_TOL_MS + 1e-9:
-                return best
-            if abs(moved) > DISTANCE_TOL_M:
-                ok = False
-        if ok:
-            best = (j, moved)
+        options = [o for o in (_segment(t, v, targets, i, j, knot, fitted, v[j] + shift)
+                               for shift in CORNER_SHIFTS_MS) if o is not None]
+        if options:
+            corner, reached, _ = min(options, key=lambda o: o[2])
+            best = (j, corner, reached)
+        elif best is not None and j - best[0] > LOOK_AHEAD:
+            break
+    if best is None:
+        corner = v[i + 1]
+        reached = fitted + (knot + corner) / 2 * (t[i + 1] - t[i])
+        return i + 1, corner, reached
     return best
+
+
+def _segment(t: list[float], v: list[float], targets: Targets, i: int, j: int, knot: float,
+             fitted: float, corner: float) -> tuple[float, float, float] | None:
+    """``(corner, fitted distance at t[j], worst distance error)`` of the line from
+    ``(t[i], knot)`` to ``(t[j], corner)``, or None when it leaves a tolerance."""
+    if corner < 0:
+        return None
+    slope = (corner - knot) / (t[j] - t[i]) if t[j] > t[i] else 0.0
+    reached, worst, previous = fitted, 0.0, knot
+    for k in range(i + 1, j + 1):
+        speed = knot + slope * (t[k] - t[i])
+        if abs(speed - v[k]) > SPEED_TOL_MS + 1e-9:
+            return None
+        reached += (previous + speed) / 2 * (t[k] - t[k - 1])
+        previous = speed
+        for wanted, tolerance in targets:
+            if wanted[k] is not None and abs(reached - wanted[k]) > tolerance:
+                return None
+        worst = max(worst, abs(reached - targets[0][0][k]))
+    return corner, reached, sum(abs(reached - w[j]) for w, _ in targets if w[j] is not None)
 
 
 def fit_end_values(v0: float, v1: float, start_s: float, duration_s: float,

@@ -69,6 +69,9 @@ class Playback:
     quit_by_engine: bool = False
     log: list[str] = field(default_factory=list)
     timings_s: dict[str, float] = field(default_factory=dict)
+    #: the judge's comparison with a record's series (``schemas.replay``): per "<entity>
+    #: <quantity>", the max and RMS error over the recorded samples; empty without series
+    series_errors: dict[str, dict] = field(default_factory=dict)
 
     @classmethod
     def empty(cls, names: Iterable[str]) -> Playback:
@@ -146,7 +149,7 @@ class Playback:
             "storyboard": [c.to_list() for c in self.storyboard],
             "lights": self.lights, "light_positions": self.light_positions, "map": self.map,
             "engine_error": self.engine_error, "quit_by_engine": self.quit_by_engine,
-            "log": self.log, "timings_s": self.timings_s,
+            "log": self.log, "timings_s": self.timings_s, "series_errors": self.series_errors,
         }
 
     @classmethod
@@ -160,6 +163,7 @@ class Playback:
             light_positions=dict(data.get("light_positions", {})), map=data.get("map"),
             engine_error=data.get("engine_error"), quit_by_engine=data.get("quit_by_engine", False),
             log=list(data.get("log", [])), timings_s=dict(data.get("timings_s", {})),
+            series_errors=dict(data.get("series_errors", {})),
         )
 
     def write(self, path: Path) -> None:

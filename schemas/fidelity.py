@@ -24,7 +24,13 @@ from scenweave.corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
-from scenweave.corpus.phases import PhasesInvalid, is_single_ramp, phases_of, profile_of
+from scenweave.corpus.phases import (
+    PhasesInvalid,
+    is_single_ramp,
+    lane_change_length,
+    phases_of,
+    profile_of,
+)
 from scenweave.maneuvers import Maneuver
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.params import number as number_of
@@ -361,7 +367,8 @@ def _lane_change(check: _Check, actor: str) -> None:
     v0, v1 = params.get(f"{prefix}_speed_ms"), params.get(f"{prefix}_end_speed_ms")
     duration = params.get("duration_s")
     if None not in (v0, v1, duration):
-        length = lane_change_length_m(v0, v1, duration)
+        length = lane_change_length_m(v0, v1, duration) if _single_ramp(params, prefix) \
+            else lane_change_length(params, prefix)
         dynamics = event.action.find(".//LaneChangeActionDynamics")
         check.close("FIDELITY_DURATION", f"{name} length (duration x speed)",
                     number(dynamics, "value"), length, POSITION_TOL_M + length * 1e-3, dynamics)

@@ -44,6 +44,15 @@ RIGHT_TURN_MIN_RAD = math.radians(45)
 TURN_HEADING_TOL_RAD = math.radians(20)
 #: the turning ego passes this close to the spawn stage's exit point (m)
 TURN_EXIT_REACH_M = 3.0
+#: a record with series (mined) is compared at every recorded sample: each actor's speed may
+#: differ this much (m/s; osc-validation's limit for esmini replays), each gap's change since
+#: the first sample this much (m), a lane change's start and end this much (s)
+SERIES_SPEED_TOL_MS = 0.75
+SERIES_GAP_TOL_M = 1.0
+SERIES_LANE_CHANGE_TOL_S = 0.3
+#: the record's roles (series keys ``<role>_speed_ms``, ``<role>_gap_m``) as scenario entities
+ROLE_ENTITIES = {"ego": "hero", "npc": "npc", "center": "npc_center", "right": "npc_right",
+                 "left": "npc_left"}
 
 
 @dataclass
@@ -80,7 +89,8 @@ def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> lis
         judge.fail("REPLAY_ENGINE", "esmini ended the scenario before its stop time",
                    playback.duration_s)
     for check in (_actors_present, _start_poses, _start_speeds, _speed_changes, _gaps,
-                  _lane_changes, _events_fired, _lights, _stop_or_pass, _right_turn, _collisions):
+                  _lane_changes, _events_fired, _lights, _stop_or_pass, _right_turn, _collisions,
+                  _series):
         check(judge)
     return judge.found
 
@@ -162,8 +172,9 @@ def _speed_changes(judge: _Judge) -> None:
     """Each scripted speed change starts on time and reaches its target in its duration."""
     for name, target, duration, start in expected_speed_changes(judge.doc, judge.params):
         entity = name.removesuffix("_speed_change")
-        if None in (target, duration, start) or entity not in judge.playback.tracks:
-            continue
+        if None in (target, duration, start) or entity not in judge.playback.tracks \
+                or _has_speed_series(judge.params, entity):
+            continue  # a recorded speed curve is compared sample by sample (_series)
         # events fire on the first step past their time: the change ends one step late, and
         # the next one (keeping the distance after the record) may start right then
         ends = start + duration + judge.time_step_s
@@ -174,8 +185,8 @@ def _speed_changes(judge: _Judge) -> None:
         if abs(got - target) > SPEED_TOL_MS:
             judge.fail("REPLAY_SPEED", f"{entity} drives {got:.2f} m/s at the end of its speed "
                        f"change ({name}), the record says {target:.2f} m/s", ends)
-        if abs(target - v0) <= 2 * ONSET_MS:
-            continue
+        if abs(target - v0) <= 2 * ONSET_MS or not name.endswith("_speed_change"):
+            continue  # a later phase starts from a change still under way: no onset to see
         # a linear change moves the speed by ONSET_MS this long after it starts
         seen_after = duration * ONSET_MS / abs(target - v0) if duration > 0 else 0.0
         onset = _first_time(judge.playback, entity, start - 0.5,
@@ -344,6 +355,109 @@ def _collisions(judge: _Judge) -> None:
                        time_s)
 
 
+def _has_speed_series(params: dict, entity: str) -> bool:
+    series = params.get("recorded_series")
+    role = {e: r for r, e in ROLE_ENTITIES.items()}.get(entity)
+    return isinstance(series, dict) and role is not None and bool(series.get(f"{role}_speed_ms"))
+
+
+@dataclass
+class SeriesError:
+    """How far one played quantity is from the record over its samples."""
+
+    entity: str
+    quantity: str
+    unit: str
+    #: (scenario time, recorded, played) per compared sample
+    samples: list[tuple[float, float, float]]
+
+    @property
+    def worst(self) -> tuple[float, float, float]:
+        return max(self.samples, key=lambda s: abs(s[2] - s[1]))
+
+    def summary(self) -> dict:
+        errors = [abs(got - want) for _, want, got in self.samples]
+        return {"max": round(max(errors), 4),
+                "rms": round(math.sqrt(sum(e * e for e in errors) / len(errors)), 4),
+                "samples": len(errors), "worst_at_s": round(self.worst[0], 3)}
+
+
+def series_errors(playback, params: dict) -> list[SeriesError]:
+    """Each actor's played speed and gap change against the record's series at every recorded
+    sample (scenario time = ``maneuver_start_s`` + the series' ``t``), and a lane change's
+    played start and end against the record's; empty without series."""
+    series, start = params.get("recorded_series"), number_of(params, "maneuver_start_s")
+    if not isinstance(series, dict) or start is None or not playback.times:
+        return []
+    times = series.get("t") or []
+    found = []
+    for role, entity in ROLE_ENTITIES.items():
+        if entity not in playback.tracks:
+            continue
+        speeds = [(start + t, v) for t, v in zip(times, series.get(f"{role}_speed_ms") or (),
+                                                  strict=False)
+                  if t is not None and v is not None and start + t <= playback.duration_s]
+        if speeds:
+            found.append(SeriesError(entity, "speed", "m/s", [
+                (at, want, playback.value(entity, "speed", at)) for at, want in speeds]))
+        gaps = [(start + t, g) for t, g in zip(times, series.get(f"{role}_gap_m") or (),
+                                               strict=False)
+                if role != "ego" and t is not None and g is not None
+                and start + t <= playback.duration_s]
+        if gaps and "hero" in playback.tracks:
+            found.append(SeriesError(entity, "gap change", "m", _gap_changes(playback, entity,
+                                                                             gaps)))
+    found += _lane_change_timing(playback, params)
+    return found
+
+
+def _gap_changes(playback, entity: str,
+                 gaps: list[tuple[float, float]]) -> list[tuple[float, float, float]]:
+    """The recorded gap's change since its first sample against the played one: what
+    ``entity`` drove minus what the ego drove meanwhile (both along their lanes)."""
+    first_at, first_gap = gaps[0]
+    base = travelled(playback, entity, first_at) - travelled(playback, "hero", first_at)
+    return [(at, gap - first_gap, travelled(playback, entity, at)
+             - travelled(playback, "hero", at) - base) for at, gap in gaps]
+
+
+def _lane_change_timing(playback, params: dict) -> list[SeriesError]:
+    """The recorded lane change runs from ``maneuver_start_s`` for ``duration_s`` (mined:
+    measured from the lateral motion); the played one from leaving the old lane's centre to
+    settling in the new one's."""
+    actor = class_of(params).lane_change
+    start, duration = number_of(params, "maneuver_start_s"), number_of(params, "duration_s")
+    if actor is None or actor not in playback.tracks or None in (start, duration):
+        return []
+    changes = lane_changes(playback, actor)
+    if len(changes) != 1:
+        return []  # _lane_changes names it
+    began, ended = lane_change_span(playback, actor, changes[0][0])
+    return [SeriesError(actor, "lane change start", "s", [(start, start, began)]),
+            SeriesError(actor, "lane change end", "s", [(start + duration, start + duration,
+                                                         ended or playback.duration_s)])]
+
+
+def _series(judge: _Judge) -> None:
+    """REPLAY_SERIES: the whole recorded motion, sample by sample (records with series)."""
+    tolerance = {"speed": SERIES_SPEED_TOL_MS, "gap change": SERIES_GAP_TOL_M,
+                 "lane change start": SERIES_LANE_CHANGE_TOL_S,
+                 "lane change end": SERIES_LANE_CHANGE_TOL_S}
+    errors = series_errors(judge.playback, judge.params)
+    summary: dict[str, dict] = {}
+    for error in errors:
+        summary[f"{error.entity} {error.quantity}"] = error.summary()
+        at, want, got = error.worst
+        if abs(got - want) > tolerance[error.quantity]:
+            judge.fail("REPLAY_SERIES", f"{error.entity}'s {error.quantity} is {got:.2f} "
+                       f"{error.unit}, the record says {want:.2f} {error.unit} (tolerance "
+                       f"{tolerance[error.quantity]:g} {error.unit}; "
+                       f"{error.summary()['samples']} samples compared)", at)
+    if errors:
+        # additive keys of replay.json (player.Playback.series_errors)
+        judge.playback.series_errors = summary
+
+
 # --- measurements on a playback (shared with the pictures) -----------------------------------
 
 def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
@@ -412,6 +526,13 @@ def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
 def lane_change_duration(playback, entity: str, crossed_s: float) -> float | None:
     """How long the change around ``crossed_s`` took: from leaving the old lane's centre
     (lateral offset above 0.1 m) to settling in the new one's."""
+    began, ended = lane_change_span(playback, entity, crossed_s)
+    return None if ended is None else ended - began
+
+
+def lane_change_span(playback, entity: str, crossed_s: float) -> tuple[float, float | None]:
+    """When the change around ``crossed_s`` left the old lane's centre (lateral offset above
+    0.1 m) and settled in the new one's (None: not before the replay ends)."""
     track, i = playback.tracks[entity], playback.index_at(crossed_s)
     begin = i - 1
     while begin > 0 and abs(track["lane_offset"][begin]) > 0.1:
@@ -420,8 +541,8 @@ def lane_change_duration(playback, entity: str, crossed_s: float) -> float | Non
     while end < len(playback.times) - 1 and abs(track["lane_offset"][end]) > 0.1:
         end += 1
     if end == len(playback.times) - 1:
-        return None
-    return playback.times[end] - playback.times[begin]
+        return playback.times[begin], None
+    return playback.times[begin], playback.times[end]
 
 
 def travelled(playback, entity: str, time_s: float) -> float:

@@ -34,6 +34,8 @@ from scenweave.viewer.scene import read_json, scene
 
 #: trace events that make or judge an attempt, in the order they run
 ATTEMPT_NODES = ("generate", "repair", "fallback", "execute", "validate")
+#: how many folder levels below a path given the runs are looked for
+SEARCH_DEPTH = 3
 #: a file the page shows inline is cut after this many characters
 FILE_PREVIEW_CHARS = 200_000
 
@@ -63,13 +65,16 @@ def find_runs(paths: Iterable[Path]) -> dict[str, Run]:
     return runs
 
 
-def _run_roots(path: Path) -> list[Path]:
+def _run_roots(path: Path, depth: int = SEARCH_DEPTH) -> list[Path]:
+    """``path`` if it is a run or a scenario folder, else the runs in its subfolders, looked
+    for ``depth`` levels down (``runs/demo/runs/<run>`` as ``scenweave demo`` writes them)."""
     if _is_run(path) or _is_scenario(path):
         return [path]
-    if not path.is_dir():
+    if depth == 0 or not path.is_dir():
         return []
-    return sorted((p for p in path.iterdir() if p.is_dir() and (_is_run(p) or _is_scenario(p))),
-                  key=lambda p: p.name)
+    return [root for sub in sorted(p for p in path.iterdir()
+                                   if p.is_dir() and not p.name.startswith("."))
+            for root in _run_roots(sub, depth - 1)]
 
 
 def _is_run(path: Path) -> bool:

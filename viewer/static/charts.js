@@ -129,7 +129,8 @@ function lateralChart(holder, scene, clock, colours, findings) {
     ...names.map((n) => ({ label: `${n} lane`, stroke: colours[n], width: 1, dash: [2, 3], scale: "lane", paths: uPlot.paths.stepped({ align: 1 }) })),
   ];
   return makeChart(holder, "offset from the lane centre (m, solid) and lane id (dotted)",
-    { name: "lateral", unit: "m", data, series, findings, scales: { lane: {} }, axes: [{ scale: "lane", side: 1, label: "lane", size: 40, grid: { show: false } }] }, clock);
+    { name: "lateral", unit: "m", data, series, findings,
+      scales: { y: { range: (u, min, max) => [Math.min(min, -2), Math.max(max, 2)] }, lane: {} }, axes: [{ scale: "lane", side: 1, label: "lane", size: 40, grid: { show: false } }] }, clock);
 }
 
 function lightStrip(holder, scene, clock) {

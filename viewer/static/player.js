@@ -5,6 +5,9 @@
 const EGO = "hero";
 const EGO_COLOUR = "#1f4e9c";
 const OTHER_COLOURS = ["#e07b00", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+// the following camera frames the actors this close to the ego, at least FOLLOW_MIN_M across
+const FOLLOW_NEAR_M = 80;
+const FOLLOW_MIN_M = 60;
 const LIGHT_COLOURS = { green: "#2ca02c", yellow: "#f2c200", red: "#d62728", off: "#555" };
 
 function actorColours(names) {
@@ -80,8 +83,14 @@ class Player {
     const width = this.canvas.clientWidth, height = this.canvas.clientHeight;
     let cx, cy, scale;
     if (this.camera === "follow" && this.scene.actors[EGO]) {
+      // the ego and every actor within FOLLOW_NEAR_M of it, framed with room around them
       const ego = this.pose(EGO, this.t);
-      cx = ego.x; cy = ego.y; scale = Math.min(width, height) / 130;  // about 130 m across
+      const near = Object.keys(this.scene.actors).map((n) => this.pose(n, this.t))
+        .filter((p) => Math.hypot(p.x - ego.x, p.y - ego.y) < FOLLOW_NEAR_M);
+      cx = near.reduce((sum, p) => sum + p.x, 0) / near.length;
+      cy = near.reduce((sum, p) => sum + p.y, 0) / near.length;
+      const reach = Math.max(...near.map((p) => Math.hypot(p.x - cx, p.y - cy)));
+      scale = Math.min(width, height) / Math.max(FOLLOW_MIN_M, 2 * reach + 30);
     } else {
       const [x0, x1, y0, y1] = this.bounds;
       cx = (x0 + x1) / 2; cy = (y0 + y1) / 2;

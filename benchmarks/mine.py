@@ -1,7 +1,8 @@
 """How fast ``scenweave mine`` turns driving into records, on one core.
 
 Target (issue 14, item 6): mining is never the slow stage, at least 100x faster than real
-time. Default data: the four NGSIM US-101 snippets of ``../shared/data/ngsim/us101``. Prints
+time; the HTML report renders in under a tenth of the mining time (issue 23, item 4).
+Default data: the four NGSIM US-101 snippets of ``../shared/data/ngsim/us101``. Prints
 vehicle-hours of driving, the wall time of reading, of detection, of the whole mine (read,
 detect, check, write; median of ``--repeat`` runs) and the factor over real time (vehicle-time
 mined per second of wall time).
@@ -27,6 +28,7 @@ from scenweave.mining.detect import detect  # noqa: E402
 from scenweave.mining.mine import mine_recordings  # noqa: E402
 from scenweave.mining.readers import read_recordings  # noqa: E402
 from scenweave.mining.thresholds import load_thresholds  # noqa: E402
+from scenweave.mining_report import write_mining_report  # noqa: E402
 
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "ngsim" / "us101"
 
@@ -52,13 +54,18 @@ def measure(data: Path, repeat: int) -> dict:
     with tempfile.TemporaryDirectory() as out:
         whole_s = _median(lambda: mine_recordings(read_recordings(data), Path(out), limits),
                           repeat)
-        written = json.loads((Path(out) / "mining_report.json").read_text())["records_written"]
+        report = json.loads((Path(out) / "mining_report.json").read_text())
+        written = report["records_written"]
+        report_s = _median(lambda: write_mining_report(Path(out) / "mining_report.json"),
+                           repeat)
     return {
         "data": str(data), "files": len(recordings),
         "tracks": sum(len(r.tracks) for r in recordings),
         "vehicle_hours": round(vehicle_s / 3600, 4), "records_written": written,
         "read_s": round(read_s, 3), "detect_s": round(detect_s, 3),
         "mine_s (read+detect+check+write)": round(whole_s, 3),
+        "report_s (mining_report.html)": round(report_s, 4),
+        "report_share_of_mine": round(report_s / whole_s, 4),
         "vehicle_hours_per_s": round(vehicle_s / 3600 / whole_s, 3),
         "times_real_time": round(vehicle_s / whole_s, 1),
     }

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenweave.mining.motion import runs
+from scenweave.mining.motion import best_second_deceleration, runs, trusted_steps
 from scenweave.mining.scene import KMH, Event, Scene, make_event, vehicle
 from scenweave.mining.tracks import Track
 from scenweave.mining.traffic import Neighbour
@@ -21,56 +21,70 @@ from scenweave.mining.traffic import Neighbour
 # -- braking leads (BRAKE, BR_BK) ----------------------------------------------------------
 
 def braking_leads(scene: Scene) -> Iterator[Event]:
+    """One event per braking phase of a car with a follower close behind it."""
     limits = scene.thresholds["brake"]
+    window = scene.thresholds["smoothing"]["window_s"]
     for i, track in enumerate(scene.tracks):
         motion = scene.motion[i]
-        for hard_first, hard_last in runs(motion.acceleration < -limits["deceleration_ms2"]):
-            first, last = _widened(motion.acceleration > -limits["onset_ms2"], hard_first,
-                                   hard_last)
-            took = float(track.t[last] - track.t[first])
+        trusted = trusted_steps(track.t, window)
+        for first, last in braking_phases(track.t, motion.speed, limits["onset_ms2"],
+                                          limits["merge_within_s"]):
             drop = float(motion.speed[first] - motion.speed[last])
-            if took < limits["min_duration_s"] or drop < limits["min_speed_drop_ms"] \
+            best = best_second_deceleration(track.t, motion.speed, first, last, trusted)
+            if best < limits["deceleration_ms2"] or drop < limits["min_speed_drop_ms"] \
                     or motion.speed[first] < limits["min_start_speed_ms"]:
                 continue
+            first, last = _core(track.t, motion.speed, first, last, limits["edge_share"])
             follower = scene.traffic.follower(i, first)
             if follower is None or follower.gap_m > limits["follower_within_m"]:
                 continue
-            yield _brake_event(scene, i, follower, first, last, limits)
+            yield _brake_event(scene, i, follower, first, last, best, limits)
 
 
-def _widened(calm: np.ndarray, first: int, last: int) -> tuple[int, int]:
-    """The run ``first..last`` grown to the neighbouring calm steps (exclusive)."""
-    while first > 0 and not calm[first - 1]:
-        first -= 1
-    while last + 1 < len(calm) and not calm[last + 1]:
-        last += 1
-    return first, last
+def _core(t: np.ndarray, speed: np.ndarray, first: int, last: int,
+          share: float) -> tuple[int, int]:
+    """The phase without the smoothing's blur at its edges: from the first to the last step
+    decelerating at least ``share`` of the phase's peak (at a half, a linear speed change
+    measures as long as it lasts, so a played brake mines back to the same record)."""
+    deceleration = -np.gradient(speed, t)[first:last + 1]
+    strong = np.flatnonzero(deceleration >= share * deceleration.max())
+    return first + int(strong[0]), first + int(strong[-1])
+
+
+def braking_phases(t: np.ndarray, speed: np.ndarray, onset_ms2: float,
+                   merge_within_s: float) -> list[tuple[int, int]]:
+    """``(first, last)`` of each stretch in which the speed keeps falling (faster than
+    ``onset_ms2``); stretches apart by at most ``merge_within_s`` are one braking phase."""
+    if len(t) < 2:
+        return []
+    falling = np.gradient(speed, t) < -onset_ms2
+    phases: list[tuple[int, int]] = []
+    for first, last in runs(falling):
+        if phases and t[first] - t[phases[-1][1]] <= merge_within_s + 1e-6:
+            phases[-1] = (phases[-1][0], last)
+        else:
+            phases.append((first, last))
+    return phases
 
 
 def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last: int,
-                 limits: dict[str, float]) -> Event | None:
-    """The braking as the linear speed change a scenario plays: from the speed before it to
-    the speed after it at the peak deceleration, centred where the speed is half way down
-    (smoothing blurs the episode's edges, not its middle)."""
+                 best_ms2: float, limits: dict[str, float]) -> Event | None:
+    """The braking phase as recorded: from the speed where it starts falling to where it
+    stops; its intensity from the most speed lost within one second."""
     track, motion = scene.tracks[lead], scene.motion[lead]
     v0, v1 = float(motion.speed[first]), float(motion.speed[last])
-    peak = float(-motion.acceleration[first:last + 1].min())
-    duration = (v0 - v1) / peak
-    if duration < max(limits["min_duration_s"], scene.thresholds["smoothing"]["window_s"]):
-        return None  # shorter than the smoothing window: its peak is not measured, only blurred
-    middle = first + int(np.argmax(motion.speed[first:last + 1] <= (v0 + v1) / 2))
-    start = max(float(track.t[middle]) - duration / 2, float(track.t[0]))
+    start, end = float(track.t[first]), float(track.t[last])
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
     if ego_speed is None or gap is None:
         return None
     fields = {
-        "ego_vel_kmh": ego_speed * KMH, "lead_vel_kmh": v0 * KMH, "duration_s": duration,
+        "ego_vel_kmh": ego_speed * KMH, "lead_vel_kmh": v0 * KMH, "duration_s": end - start,
         "delta_vel_kmh": (v1 - v0) * KMH, "npc_distance_m": gap,
-        "brake_intensity": min(peak / limits["max_intensity_deceleration_ms2"], 1.0),
+        "brake_intensity": min(best_ms2 / limits["max_intensity_deceleration_ms2"], 1.0),
         "other_dir_traffic": "No", "lead_vehicle_type": vehicle(track),
     }
     code = "BR_BK" if ego_speed < limits["busy_below_ms"] else "BRAKE"
-    return make_event(scene, code, follower.track, lead, start, start + duration, fields)
+    return make_event(scene, code, follower.track, lead, start, end, fields)
 
 
 # -- lane changes: cut-ins, cut-outs, the ego's own (CIN*, COUT*, LC*) ---------------------
@@ -83,38 +97,93 @@ class LaneChange:
     after: int
     old_lane: float
     new_lane: float
+    #: when the lateral motion starts and ends
     start_s: float
     end_s: float
+    #: how far the car moved across the road (m)
+    lateral_m: float
 
     @property
     def direction(self) -> str:
-        """Lane indexes grow to the right, in the direction of travel."""
+        """The way the changer moves; lane indexes grow to the right."""
         return "Left" if self.new_lane < self.old_lane else "Right"
 
 
 def lane_changes(scene: Scene) -> Iterator[LaneChange]:
+    """Changes of lane held for ``min_steady_s`` on both sides (a label flickering between
+    two lanes while the car crosses their boundary is one change) that move the car at least
+    ``min_lateral_m`` across the road; timed by that lateral motion."""
     limits = scene.thresholds["lane_change"]
     for i, track in enumerate(scene.tracks):
         lanes = np.array([scene.traffic.lane_of(track, k) for k in range(len(track.t))])
-        for before in np.flatnonzero(lanes[1:] != lanes[:-1]).tolist():
-            after = before + 1
-            crossing = float(track.t[after])
-            if not (_steady(track.t, lanes, before, -1, limits["min_steady_s"])
-                    and _steady(track.t, lanes, after, +1, limits["min_steady_s"])):
-                continue
-            half = limits["duration_s"] / 2
-            start = max(float(track.t[0]), crossing - half)
-            end = min(float(track.t[-1]), crossing + half)
-            yield LaneChange(i, before, after, float(lanes[before]), float(lanes[after]),
-                             start, end)
+        for before, after in _held_changes(track.t, lanes, limits["min_steady_s"]):
+            change = _timed(scene, i, before, after, float(lanes[before]), float(lanes[after]),
+                            limits)
+            if change is not None:
+                yield change
 
 
-def _steady(t: np.ndarray, lanes: np.ndarray, k: int, way: int, hold_s: float) -> bool:
-    """The lane at step ``k`` is held for ``hold_s`` before (way -1) or after (+1) it."""
-    j = k
-    while 0 <= j + way < len(lanes) and lanes[j + way] == lanes[k]:
-        j += way
-    return abs(float(t[j] - t[k])) >= hold_s - 1e-6
+def _held_changes(t: np.ndarray, lanes: np.ndarray, hold_s: float) -> list[tuple[int, int]]:
+    """``(before, after)`` steps of each change between lanes held for ``hold_s`` (a track's
+    first or last lane may be held for less where the track starts or ends): runs shorter
+    than ``hold_s`` between two held lanes are the crossing itself, not lanes."""
+    spans = runs_of_values(lanes)
+    held = [(a, b) for a, b in spans
+            if t[b] - t[a] >= hold_s - 1e-6 or a == 0 or b == len(t) - 1]
+    changes = []
+    for (_, last), (first, _) in zip(held, held[1:], strict=False):
+        if lanes[last] != lanes[first]:
+            middle = _crossing(lanes, last, first)
+            changes.append((middle - 1, middle))
+    return changes
+
+
+def runs_of_values(values: np.ndarray) -> list[tuple[int, int]]:
+    """``(first, last)`` of each run of equal values."""
+    if not len(values):
+        return []
+    cuts = np.flatnonzero(values[1:] != values[:-1]) + 1
+    starts = np.concatenate([[0], cuts])
+    ends = np.concatenate([cuts - 1, [len(values) - 1]])
+    return list(zip(starts.tolist(), ends.tolist(), strict=True))
+
+
+def _crossing(lanes: np.ndarray, last_old: int, first_new: int) -> int:
+    """The first step of the last stretch of the new lane before ``first_new`` (the
+    flicker's end): the car is over the line then."""
+    k = first_new
+    while k - 1 > last_old and lanes[k - 1] == lanes[first_new]:
+        k -= 1
+    return k
+
+
+def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float,
+           limits: dict[str, float]) -> LaneChange | None:
+    """The lane change's start and end from the car's lateral motion: where it has covered
+    ``edge_share`` of its way across and where it has ``edge_share`` left (clipped to the
+    track); None when it moves less than ``min_lateral_m`` sideways."""
+    track, lateral = scene.tracks[i], scene.lateral[i]
+    if not np.isfinite(lateral[[before, after]]).all():  # lanes only: a change of set length
+        half = limits["duration_s"] / 2
+        crossing = float(track.t[after])
+        return LaneChange(i, before, after, old, new, max(float(track.t[0]), crossing - half),
+                          min(float(track.t[-1]), crossing + half), float("nan"))
+    reach = limits["max_duration_s"]
+    near = np.abs(track.t - track.t[after]) <= reach
+    window = np.flatnonzero(near & np.isfinite(lateral))
+    y0, y1 = float(lateral[window[0]]), float(lateral[window[-1]])
+    moved = y1 - y0
+    if abs(moved) < limits["min_lateral_m"] or np.sign(moved) != (1 if new < old else -1):
+        return None
+    share = (lateral[window] - y0) / moved
+    started = window[:np.searchsorted(window, after)][share[:np.searchsorted(window, after)]
+                                                      <= limits["edge_share"]]
+    ended = window[np.searchsorted(window, after):][share[np.searchsorted(window, after):]
+                                                    >= 1 - limits["edge_share"]]
+    first = int(started[-1]) if len(started) else int(window[0])
+    last = int(ended[0]) if len(ended) else int(window[-1])
+    return LaneChange(i, before, after, old, new, float(track.t[first]), float(track.t[last]),
+                      abs(moved))
 
 
 def cuts(scene: Scene) -> Iterator[Event]:
@@ -172,10 +241,11 @@ def following(scene: Scene) -> Iterator[Event]:
     for i, track in enumerate(scene.tracks):
         for code, find in (("FLF", scene.traffic.leader), ("FLB", scene.traffic.follower)):
             partner = [find(i, k) for k in range(len(track.t))]
-            ids = np.array([-1 if p is None or p.gap_m > limits["max_gap_m"] else p.track
+            least = limits["min_speed_ms"]
+            ids = np.array([-1 if p is None or p.gap_m > limits["max_gap_m"]
+                            or scene.motion[p.track].speed[p.step] < least else p.track
                             for p in partner])
-            slow = scene.motion[i].speed < limits["min_speed_ms"]
-            ids[slow] = -1
+            ids[scene.motion[i].speed < least] = -1
             yield from _episodes(scene, code, i, ids, limits)
 
 
@@ -190,33 +260,20 @@ def _episodes(scene: Scene, code: str, ego: int, ids: np.ndarray,
 
 def _windows(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,
              limits: dict[str, float]) -> Iterator[Event]:
-    """A following episode cut into the longest windows (``min_duration_s`` to
-    ``max_duration_s``) that a linear speed change of both cars describes: a MOOVE following
-    record gives start and end speeds and gaps only, so the end gap must follow from them."""
-    shortest, step = limits["min_duration_s"], limits["window_step_s"]
-    while end - start >= shortest - 1e-6:
-        stop = min(end, start + limits["max_duration_s"])
-        while stop - start >= shortest - 1e-6 and not _linear(scene, ego, npc, start, stop,
-                                                               limits["linear_within_m"]):
-            stop -= step
-        if stop - start < shortest - 1e-6:
-            start += step
-            continue
-        event = follow_event(scene, code, ego, npc, start, stop, limits)
+    """A following episode as one record, or, past ``max_duration_s``, as consecutive
+    records of equal length (each at least ``min_duration_s``): the recorded series carries
+    the speeds between the ends, so no window need be a linear change."""
+    length = end - start
+    if length < limits["min_duration_s"] - 1e-6:
+        return
+    pieces = max(1, int(np.ceil(length / limits["max_duration_s"] - 1e-9)))
+    while pieces > 1 and length / pieces < limits["min_duration_s"]:
+        pieces -= 1
+    bounds = np.linspace(start, end, pieces + 1)
+    for first, last in zip(bounds[:-1], bounds[1:], strict=True):
+        event = follow_event(scene, code, ego, npc, float(first), float(last), limits)
         if event is not None:
             yield event
-        start = stop
-
-
-def _linear(scene: Scene, ego: int, npc: int, start: float, stop: float,
-            within_m: float) -> bool:
-    values = [scene.speed(i, t) for i in (ego, npc) for t in (start, stop)]
-    gaps = [scene.gap(ego, npc, t) for t in (start, stop)]
-    if None in values or None in gaps:
-        return False
-    ego0, ego1, npc0, npc1 = values
-    made = gaps[0] + ((npc0 + npc1) - (ego0 + ego1)) / 2 * (stop - start)
-    return abs(made - gaps[1]) <= within_m
 
 
 def follow_event(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,

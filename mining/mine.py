@@ -18,6 +18,7 @@ from scenweave.files.atomic import write_json_atomic
 from scenweave.ingest import admit, extract_params
 from scenweave.ingest.issues import RecordIssue
 from scenweave.mining.detect import Event, detect
+from scenweave.mining.duplicates import Clock, SeenEvents
 from scenweave.mining.records import record_of
 from scenweave.mining.tracks import Recording
 
@@ -32,6 +33,8 @@ class MiningReport:
     written: Counter = field(default_factory=Counter)
     skipped: list[dict] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    #: events dropped because an earlier file (or the same one) holds them already
+    duplicates: list[dict] = field(default_factory=list)
     #: class -> field -> the written records' values (the report draws histograms of them)
     values: dict[str, dict[str, list[float]]] = field(default_factory=dict)
     seconds: float = 0.0
@@ -46,6 +49,7 @@ class MiningReport:
             "records_written": sum(self.written.values()),
             "records_by_class": dict(sorted(self.written.items())),
             "skipped": self.skipped,
+            "duplicates": self.duplicates,
             "warnings": self.warnings,
             "values": self.values,
             "vehicle_hours": round(self.vehicle_hours, 4),
@@ -61,11 +65,17 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
     report = MiningReport()
     started = time.perf_counter()
     found: dict[str, list[dict]] = {}
+    clock, seen = Clock(), SeenEvents()
     for recording in recordings:
         report.warnings += recording.warnings
+        road, offset = clock.place(recording)
         events = [e for e in detect(recording, thresholds) if not classes or e.code in classes]
         report.files[recording.source] = _file_entry(recording, events)
         for number, event in enumerate(events):
+            earlier = seen.duplicate_of(event, road, offset, recording.source)
+            if earlier is not None:
+                report.duplicates.append({**_where(event, recording), "same_as_in": earlier})
+                continue
             record = _checked_record(event, recording, number, report, thresholds)
             if record is not None:
                 found.setdefault(event.code, []).append(record)
@@ -88,7 +98,7 @@ def _checked_record(event: Event, recording: Recording, number: int, report: Min
         record = record_of(event, Path(recording.source), recording.reader, number)
         admit(record)
     except RecordIssue as issue:
-        report.skipped.append({"file": recording.source, "class": event.code,
+        report.skipped.append({**_where(event, recording),
                                "scenario_id": f"{event.code} event {number}",
                                "field": issue.field, "reason": issue.message})
         return None
@@ -97,6 +107,12 @@ def _checked_record(event: Event, recording: Recording, number: int, report: Min
         if isinstance(value, int | float):
             values.setdefault(name, []).append(value)
     return record
+
+
+def _where(event: Event, recording: Recording) -> dict:
+    """Which event of which file: class, vehicles and window."""
+    return {"file": recording.source, "class": event.code, "ego": event.ego, "npc": event.npc,
+            "start_s": event.start_s, "end_s": event.end_s}
 
 
 def _moving_at_start(event: Event, least_ms: float) -> None:

@@ -3,6 +3,7 @@ road and smoothed, because recorded speeds are noisy (NGSIM's differentiate to +
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,3 +43,103 @@ def runs(mask: np.ndarray) -> list[tuple[int, int]]:
     edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
     return list(zip(starts.tolist(), ends.tolist(), strict=True))
+
+
+#: a bend of the road is only told apart from cars' own sideways motion where this many
+#: cars drive it; with fewer, the road is taken as straight (its axis fitted)
+MIN_TRACKS_FOR_BENDS = 8
+#: the road's course is a broken line with a knot this often along ``s`` (m)
+COURSE_KNOT_M = 20.0
+
+
+def best_second_deceleration(t: np.ndarray, speed: np.ndarray, first: int, last: int,
+                             trusted: np.ndarray) -> float:
+    """The most speed lost within one second between steps ``first`` and ``last`` (m/s^2):
+    a brake shorter than a second counts with what it lost in it. Only ``trusted`` steps
+    (where the smoothing window lies inside the track) are compared, so a fit at a track's
+    end never passes for a brake."""
+    steps = np.flatnonzero(trusted[first:last + 1]) + first
+    if len(steps) < 2:
+        return 0.0
+    best = 0.0
+    for k in steps:
+        later = steps[(t[steps] > t[k]) & (t[steps] <= t[k] + 1.0 + 1e-6)]
+        if len(later):
+            best = max(best, float(speed[k] - speed[later].min()))
+    return best
+
+
+def trusted_steps(t: np.ndarray, window_s: float) -> np.ndarray:
+    """Steps at least half a smoothing window from either end of the track."""
+    half = window_s / 2 - 1e-6
+    return (t - t[0] >= half) & (t[-1] - t >= half) if len(t) else np.zeros(0, bool)
+
+
+def road_axis(tracks: list[Track]) -> np.ndarray | None:
+    """The unit vector along which ``s`` runs, fitted over every position of the recording
+    (``s = axis . (x, y)`` on a road of one direction); None where no single axis fits."""
+    xy = np.concatenate([np.column_stack([tr.x, tr.y]) for tr in tracks]) if tracks else None
+    if xy is None or len(xy) < 3:
+        return None
+    s = np.concatenate([tr.s for tr in tracks])
+    axis, *_ = np.linalg.lstsq(np.column_stack([xy, np.ones(len(xy))]), s, rcond=None)
+    fitted = np.column_stack([xy, np.ones(len(xy))]) @ axis
+    if abs(np.hypot(*axis[:2]) - 1) > 0.01 or np.sqrt(np.mean((fitted - s) ** 2)) > 0.5:
+        return None
+    return axis[:2] / np.hypot(*axis[:2])
+
+
+def lateral_offsets(tracks: list[Track]) -> list[np.ndarray]:
+    """Each track's lateral position (m, + to the left of the direction of travel) measured
+    from the road's own course: a gentle bend moves every lane alike, so one smooth curve in
+    ``s`` plus a lane width per lane index is fitted through every car's position (cars off
+    it, between lanes or on a ramp, trimmed) and the curve removed; what remains moves only
+    when a car moves across the road. A reader's own ``Track.lateral`` wins; NaN where
+    neither is known (no single road axis: lanes are then all a detector knows)."""
+    if tracks and all(len(tr.lateral) == len(tr.t) for tr in tracks):
+        return [np.asarray(tr.lateral, dtype=float) for tr in tracks]
+    axis = road_axis(tracks)
+    if axis is None:
+        return [np.full(len(tr.t), np.nan) for tr in tracks]
+    normal = np.array([-axis[1], axis[0]])
+    lat = [np.column_stack([tr.x, tr.y]) @ normal for tr in tracks]
+    s_all = np.concatenate([tr.s for tr in tracks])
+    lane_all = np.concatenate([_lane_numbers(tr) for tr in tracks])
+    bends = len(tracks) >= MIN_TRACKS_FOR_BENDS
+    course = _road_course(s_all, np.concatenate(lat), lane_all, bends)
+    return [v - course(tr.s) for v, tr in zip(lat, tracks, strict=True)]
+
+
+def _road_course(s: np.ndarray, lat: np.ndarray, lane: np.ndarray, bends: bool,
+                 rounds: int = 4) -> Callable[[np.ndarray], np.ndarray]:
+    """``lat ~ course(s) - width * lane``: the course a broken line with a knot every
+    :data:`COURSE_KNOT_M` (``bends``) or one constant, refitted without the points further
+    off than twice the median residual; returns the course."""
+    knots = np.arange(np.min(s), np.max(s) + COURSE_KNOT_M, COURSE_KNOT_M) if bends \
+        else np.array([float(np.min(s))])
+    known = np.isfinite(lane)
+    design = np.column_stack([_hats(s, knots), np.where(known, lane, 0.0)])
+    keep = known if known.sum() >= design.shape[1] else np.ones(len(s), bool)
+    coefficients = np.zeros(design.shape[1])
+    for _ in range(rounds):
+        coefficients, *_ = np.linalg.lstsq(design[keep], lat[keep], rcond=None)
+        residual = np.abs(design @ coefficients - lat)
+        trimmed = keep & (residual <= max(2 * float(np.median(residual[keep])), 0.05))
+        if trimmed.sum() < design.shape[1] or trimmed.sum() == keep.sum():
+            break
+        keep = trimmed
+    return lambda at: _hats(np.asarray(at, dtype=float), knots) @ coefficients[:-1]
+
+
+def _hats(s: np.ndarray, knots: np.ndarray) -> np.ndarray:
+    """Piecewise-linear basis: one column per knot, 1 at it, falling to 0 at its
+    neighbours (flat beyond the ends); a single knot is a constant."""
+    if len(knots) == 1:
+        return np.ones((len(s), 1))
+    columns = [np.interp(s, knots, np.eye(len(knots))[k]) for k in range(len(knots))]
+    return np.column_stack(columns)
+
+
+def _lane_numbers(track: Track) -> np.ndarray:
+    index = np.asarray(track.lane_index, dtype=float)
+    return index if len(index) == len(track.t) else np.full(len(track.t), np.nan)

@@ -16,6 +16,8 @@ import numpy as np
 from scenweave.mining.tracks import Recording, Track
 from scenweave.player import Playback
 
+#: lanes are about this wide on the CARLA highways; it only scales the lateral positions
+LANE_WIDTH_M = 3.5
 #: the scenario's actors as the record's roles
 ROLE_OF_ENTITY = {"hero": "ego", "npc": "npc"}
 
@@ -43,13 +45,16 @@ def _track(playback: Playback, name: str, xy: np.ndarray, times: np.ndarray,
     own = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
     start = _along(ego_path, xy[0]) if ego_path is not None else 0.0
     lanes = np.asarray(playback.tracks[name]["lane"], dtype=float)
+    offsets = np.asarray(playback.tracks[name].get("lane_offset") or np.zeros(len(lanes)),
+                         dtype=float)
     box = playback.boxes.get(name)
     return Track(id=ROLE_OF_ENTITY.get(name, name), length_m=box.length if box else 4.5,
                  width_m=box.width if box else 1.8, vehicle_type="car", t=times,
                  x=xy[:, 0], y=xy[:, 1], heading=np.asarray(playback.tracks[name]["h"]),
                  speed=np.asarray(playback.tracks[name]["speed"], dtype=float),
                  s=start + own, lane=np.array([str(int(k)) for k in lanes], dtype=object),
-                 lane_index=np.abs(lanes))
+                 lane_index=np.abs(lanes),
+                 lateral=-(np.abs(lanes) - 1) * LANE_WIDTH_M + np.sign(lanes) * -offsets)
 
 
 def _along(path: np.ndarray, point: np.ndarray) -> float:

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scenweave.mining.motion import Motion, smooth_motion
+from scenweave.mining.motion import Motion, lateral_offsets, smooth_motion
 from scenweave.mining.tracks import Recording, Track
 from scenweave.mining.traffic import Traffic
 
@@ -39,11 +39,14 @@ class Scene:
     thresholds: dict[str, dict[str, float]]
     traffic: Traffic = field(init=False)
     motion: list[Motion] = field(init=False)
+    #: each track's lateral position (m, + left) from the road's course (``mining.motion``)
+    lateral: list[np.ndarray] = field(init=False)
 
     def __post_init__(self) -> None:
         self.traffic = Traffic(self.recording)
         window = self.thresholds["smoothing"]["window_s"]
         self.motion = [smooth_motion(track, window) for track in self.recording.tracks]
+        self.lateral = lateral_offsets(self.recording.tracks)
 
     @property
     def tracks(self) -> list[Track]:
@@ -72,15 +75,26 @@ class Scene:
 
     def series(self, roles: dict[str, int], ego: int, start: float,
                end: float) -> dict[str, list[float | None]]:
-        """Speeds of each role and the NPCs' gaps to the ego, every step of the ego."""
+        """Each role's speed, position along the road, lateral position and lane, and the
+        NPCs' gaps to the ego, every step of the ego (``t`` from ``start``)."""
         track = self.tracks[ego]
         times = track.t[(track.t >= start - 1e-6) & (track.t <= end + 1e-6)]
         found: dict[str, list[float | None]] = {"t": [round(float(t - start), 3) for t in times]}
         for role, i in roles.items():
+            steps = [self.step_at(i, t) for t in times]
             found[f"{role}_speed_ms"] = [rounded(self.speed(i, t)) for t in times]
+            found[f"{role}_s_m"] = [self._at(self.tracks[i].s, k) for k in steps]
+            found[f"{role}_lateral_m"] = [self._at(self.lateral[i], k) for k in steps]
+            found[f"{role}_lane"] = [self._at(self.tracks[i].lane_index, k) for k in steps]
             if role != "ego":
                 found[f"{role}_gap_m"] = [rounded(self.gap(ego, i, t)) for t in times]
         return found
+
+    @staticmethod
+    def _at(values: np.ndarray, step: int | None) -> float | None:
+        if step is None or step >= len(values) or not np.isfinite(values[step]):
+            return None
+        return rounded(float(values[step]))
 
 
 def make_event(scene: Scene, code: str, ego: int, npc: int | None, start: float, end: float,

@@ -37,6 +37,9 @@ class Track:
     #: per step: the lane's index counted from the road's left edge in the direction of
     #: travel (1 = leftmost); a higher index is further right. NaN where unknown.
     lane_index: np.ndarray = field(default_factory=lambda: np.empty(0))
+    #: per step: lateral position across the road (m, + to the left), where the reader knows
+    #: it better than the positions tell (a replay's lane and lane offset); else empty
+    lateral: np.ndarray = field(default_factory=lambda: np.empty(0))
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -86,3 +89,6 @@ class Recording:
     reader: str = ""
     #: what the reader could not take and why (one line each)
     warnings: list[str] = field(default_factory=list)
+    #: vehicles the file took out but whose path it implies (CommonRoad's planning-problem
+    #: ego): they are never mined, but nobody's lead or follower is found past them
+    removed: list[Track] = field(default_factory=list)

@@ -14,6 +14,9 @@ import numpy as np
 
 from scenweave.mining.tracks import Recording, Track
 
+#: the owner of the rows of a vehicle the file took out (``Recording.removed``)
+REMOVED = -1
+
 
 @dataclass(frozen=True)
 class Neighbour:
@@ -33,6 +36,7 @@ class Traffic:
         self.tracks = recording.tracks
         self.dt = recording.dt
         rows = [self._rows(i, track) for i, track in enumerate(self.tracks)]
+        rows += [self._rows(REMOVED, track) for track in recording.removed]
         table = np.concatenate(rows, axis=1) if rows else np.empty((4, 0))
         frame, lane, s, owner = table
         order = np.lexsort((s, lane, frame))
@@ -61,7 +65,7 @@ class Traffic:
         lo = np.searchsorted(self._frame, frame - 0.5)
         hi = np.searchsorted(self._frame, frame + 0.5)
         here = np.arange(lo, hi)[self._lane[lo:hi] == lane]
-        here = here[self._owner[here] != i]
+        here = here[(self._owner[here] != i) & (self._owner[here] != REMOVED)]
         if not len(here):
             return None, True
         offsets = self._s[here] - track.s[step]
@@ -75,8 +79,8 @@ class Traffic:
             return None
         j = k + direction
         if not 0 <= j < len(self._frame) or self._frame[j] != self._frame[k] \
-                or self._lane[j] != self._lane[k]:
-            return None
+                or self._lane[j] != self._lane[k] or self._owner[j] == REMOVED:
+            return None  # nobody there, or a car the file took out stands in between
         return self._as_neighbour(i, step, j, direction > 0)
 
     def _as_neighbour(self, i: int, step: int, row: int, ahead: bool) -> Neighbour:

@@ -414,6 +414,45 @@ def _lights(network: LaneletNetwork, lane_map: LaneMap, last_step: int, dt: floa
     return lights
 
 
+def _number(element: etree._Element, path: str) -> float | None:
+    text = element.findtext(path)
+    try:
+        return float(text) if text is not None else None
+    except ValueError:
+        return None
+
+
+def _planned_vehicle(problem: etree._Element, last_step: int, dt: float) -> _Raw | None:
+    """The vehicle CommonRoad took out of the file as its planning problem's ego, along the
+    path its initial state and goal imply: from the start to the goal area's centre (at the
+    middle of the goal's time interval) with a constant acceleration, else at its start
+    speed along its heading. Approximate, but it says where a gap in the traffic is."""
+    start = problem.find("initialState")
+    if start is None:
+        return None
+    x, y = _number(start, "position/point/x"), _number(start, "position/point/y")
+    speed, heading = _number(start, "velocity/exact"), _number(start, "orientation/exact")
+    step0 = _number(start, "time/exact") or 0.0
+    if None in (x, y, speed, heading):
+        return None
+    goal = problem.find("goalState")
+    found = [None if goal is None else _number(goal, path) for path in (
+        "position/rectangle/center/x", "position/rectangle/center/y", "time/intervalStart",
+        "time/intervalEnd")]
+    steps = np.arange(step0, last_step + 1, dtype=float)
+    t = (steps - step0) * dt
+    direction, accel = np.array([np.cos(heading), np.sin(heading)]), 0.0
+    if None not in found and (found[2] + found[3]) / 2 > step0:
+        towards = np.array([found[0] - x, found[1] - y])
+        span_s = ((found[2] + found[3]) / 2 - step0) * dt
+        direction = towards / max(float(np.hypot(*towards)), 1e-9)
+        accel = 2 * (float(np.hypot(*towards)) - speed * span_s) / span_s ** 2
+    along = speed * t + accel * t ** 2 / 2
+    return _Raw(problem.get("id", "planned"), 4.5, 1.8, "car", steps,
+                np.array([x, y]) + along[:, None] * direction, np.full(len(steps), heading),
+                np.clip(speed + accel * t, 0.0, None))
+
+
 def _network(root: etree._Element) -> LaneletNetwork:
     """The lanelet network and traffic lights, read by the library from the file with its
     obstacles and planning problems taken out of ``root`` (the library would parse those)."""
@@ -434,11 +473,15 @@ def read(path: Path) -> Recording:
             scenario, _ = CommonRoadFileReader(str(path)).open()
         parsed = _library_raws(scenario)
     raws, skipped = parsed
+    problems = root.findall("planningProblem")
     network = _network(root)
     warnings = skipped_warning(skipped)
     lane_map = LaneMap.of(network)
     tracks = _tracks(raws, lane_map, dt, warnings)
     last_step = int(max((t.t[-1] for t in tracks), default=0.0) / dt + 0.5)
     lights = _lights(network, lane_map, last_step, dt, warnings)
+    planned = [r for r in (_planned_vehicle(p, last_step, dt) for p in problems) if r is not None]
+    removed = _tracks(planned, lane_map, dt, []) if tracks else []
     return Recording(source=str(path), dt=dt, tracks=sort_tracks(tracks), lights=lights,
-                     reader=NAME, warnings=[f"{path.name}: {w}" for w in warnings])
+                     reader=NAME, warnings=[f"{path.name}: {w}" for w in warnings],
+                     removed=removed)

@@ -50,6 +50,8 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: str,
         click.echo(f"... {len(report.skipped) - SHOWN_SKIPS} more skipped in {REPORT_NAME}",
                    err=True)
     by_class = ", ".join(f"{c} {n}" for c, n in sorted(report.written.items())) or "none"
+    rate = report.vehicle_hours / report.seconds if report.seconds else 0.0
     click.echo(f"mine: {sum(report.written.values())} records ({by_class}) from "
-               f"{len(report.files)} files, {report.vehicle_hours:.2f} vehicle-hours, "
+               f"{len(report.files)} files, {report.vehicle_hours:.2f} vehicle-hours in "
+               f"{report.seconds:.1f} s ({rate:.2f} vehicle-hours/s), "
                f"{len(report.skipped)} skipped -> {out_dir} (open {html})")

@@ -1,0 +1,158 @@
+"""How well ``scenweave mine`` finds what is there: mined records against hand labels.
+
+Mines the shared data (``../shared/data``: the NGSIM US-101 snippets and the urban ones),
+matches every mined event to the labels in ``benchmarks/mining_labels/*.json`` one to one
+(same file, same class, same ego and NPC, overlapping time windows; each label and each
+event used once) and prints precision, recall and F1 per class, the events skipped as
+unplayable (they count as found: detection is judged here, playability in
+``benchmarks/fidelity.py``) and the duplicates: identical records (same class, vehicles and
+fields) and events dropped as repeats of an earlier file's.
+
+A label is ``{"file": stem, "class": CODE, "ego": id, "npc": id|null, "start_s": s,
+"end_s": s, "notes": why}``; every file in the folder is read, so each domain adds its own.
+
+    .venv/bin/python benchmarks/mining_eval.py [DATA] [--labels DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # before benchmarks/, whose ingest.py would shadow the package
+
+from scenweave import maneuvers  # noqa: E402
+from scenweave.mining.mine import REPORT_NAME, mine_recordings  # noqa: E402
+from scenweave.mining.readers import read_recordings  # noqa: E402
+from scenweave.mining.thresholds import load_thresholds  # noqa: E402
+
+DEFAULT_DATA = ROOT.parent / "shared" / "data"
+DEFAULT_LABELS = ROOT / "benchmarks" / "mining_labels"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("data", nargs="?", type=Path, default=DEFAULT_DATA)
+    parser.add_argument("--labels", type=Path, default=DEFAULT_LABELS)
+    args = parser.parse_args()
+    if not args.data.exists():
+        print(f"mining_eval: skipped, no data at {args.data}")
+        return
+    labels = read_labels(args.labels)
+    stems = {label["file"] for label in labels}
+    with tempfile.TemporaryDirectory() as out:
+        found, report = mined(args.data, Path(out), stems)
+    for domain in ("highway", "urban"):
+        judged = [label for label in labels if _domain(label["class"]) == domain]
+        files = {label["file"] for label in judged}
+        events = [e for e in found if _domain(e["class"]) == domain and e["file"] in files]
+        if not judged:
+            continue
+        print(f"== {domain}: {len(judged)} labels in {len(files)} files; {len(events)} events "
+              f"mined there ({sum(1 for e in events if e['skipped'])} of them skipped as "
+              f"unplayable)")
+        print_scores(judged, events)
+        print_duplicates(events, report, files)
+
+
+def read_labels(folder: Path) -> list[dict]:
+    labels = []
+    for path in sorted(folder.glob("*.json")):
+        labels += json.loads(path.read_text(encoding="utf-8"))
+    return labels
+
+
+def mined(data: Path, out: Path, stems: set[str]) -> tuple[list[dict], dict]:
+    """Every event the mine found in the labelled files: written records and skipped ones,
+    each as {file, class, ego, npc, start_s, end_s, params, skipped}."""
+    recordings = (r for r in read_recordings(data) if Path(r.source).stem in stems)
+    mine_recordings(recordings, out, load_thresholds())
+    report = json.loads((out / REPORT_NAME).read_text(encoding="utf-8"))
+    found = []
+    for path in sorted(out.glob("*/*.json")):
+        for record in json.loads(path.read_text(encoding="utf-8")):
+            where = record["provenance"]
+            found.append({"file": Path(where["file"]).stem, "class": record["maneuver_class"],
+                          "ego": where["tracks"]["ego"], "npc": where["tracks"].get("npc"),
+                          "start_s": where["start_s"], "end_s": where["end_s"],
+                          "params": record.get("params"), "skipped": False})
+    for skip in report["skipped"]:
+        found.append({**{k: skip.get(k) for k in ("class", "ego", "npc", "start_s", "end_s")},
+                      "file": Path(skip["file"]).stem, "params": None, "skipped": True})
+    return found, report
+
+
+def matches(labels: list[dict], found: list[dict]) -> list[tuple[int, int]]:
+    """One-to-one pairs (label, event): same file, class and vehicles, overlapping windows;
+    the largest overlaps first."""
+    candidates = []
+    for i, label in enumerate(labels):
+        for j, event in enumerate(found):
+            if (label["file"], label["class"], str(label["ego"]), _id(label["npc"])) != \
+                    (event["file"], event["class"], str(event["ego"]), _id(event["npc"])):
+                continue
+            overlap = min(label["end_s"], event["end_s"]) - max(label["start_s"],
+                                                                event["start_s"])
+            if overlap >= 0:
+                candidates.append((-overlap, i, j))
+    used_labels, used_events, pairs = set(), set(), []
+    for _, i, j in sorted(candidates):
+        if i not in used_labels and j not in used_events:
+            used_labels.add(i)
+            used_events.add(j)
+            pairs.append((i, j))
+    return pairs
+
+
+def _domain(code: str) -> str:
+    return maneuvers.get(code).domain
+
+
+def _id(value) -> str | None:
+    return None if value is None else str(value)
+
+
+def print_scores(labels: list[dict], found: list[dict]) -> None:
+    pairs = matches(labels, found)
+    hit = Counter(labels[i]["class"] for i, _ in pairs)
+    wanted = Counter(label["class"] for label in labels)
+    got = Counter(event["class"] for event in found)
+    print(f"{'class':<7}{'labels':>7}{'mined':>7}{'match':>7}{'prec':>7}{'recall':>8}{'F1':>7}")
+    for code in sorted(set(wanted) | set(got)):
+        p = hit[code] / got[code] if got[code] else float("nan")
+        r = hit[code] / wanted[code] if wanted[code] else float("nan")
+        f1 = 2 * p * r / (p + r) if p + r > 0 else float("nan")
+        print(f"{code:<7}{wanted[code]:>7}{got[code]:>7}{hit[code]:>7}{p:>7.2f}{r:>8.2f}"
+              f"{f1:>7.2f}" + ("" if wanted[code] >= 10 else "   (< 10 labels)"))
+    matched_labels = {i for i, _ in pairs}
+    matched_events = {j for _, j in pairs}
+    for i, label in enumerate(labels):
+        if i not in matched_labels:
+            print(f"  missed: {_describe(label)}  ({label.get('notes', '')})")
+    for j, event in enumerate(found):
+        if j not in matched_events:
+            print(f"  not labelled: {_describe(event)}")
+
+
+def _describe(item: dict) -> str:
+    return (f"{item['file']} {item['class']} ego {item['ego']} npc {item['npc']} "
+            f"{item['start_s']:.1f}-{item['end_s']:.1f} s")
+
+
+def print_duplicates(found: list[dict], report: dict, files: set[str]) -> None:
+    keys = Counter((e["file"], e["class"], e["ego"], e["npc"],
+                    json.dumps(e["params"], sort_keys=True)) for e in found if not e["skipped"])
+    identical = sum(n - 1 for n in keys.values())
+    print(f"identical duplicate records: {identical}")
+    repeats = [d for d in report.get("duplicates", []) if Path(d["file"]).stem in files
+               and _domain(d["class"]) == _domain(found[0]["class"] if found else "BRAKE")]
+    print(f"events dropped as repeats (same vehicles, same absolute time): {len(repeats)}")
+
+
+if __name__ == "__main__":
+    main()

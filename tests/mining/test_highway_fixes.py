@@ -1,0 +1,144 @@
+"""Each highway detector fix of issue 23 (and the measured timing of issue 22, item 5), on
+recordings made from physics: one record per braking phase with its best-second intensity,
+short sharp brakes kept, no brake at a track's end, lane changes that need lateral motion
+and survive a flickering label, timed by that motion, series that carry what was measured,
+no pair across a vehicle the file took out, and no event twice across overlapping files."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from scenweave.mining import Recording, Track
+from scenweave.mining.detect import detect
+from scenweave.mining.mine import mine_recordings
+from scenweave.mining.thresholds import load_thresholds
+from tests.mining.synthetic import DT, braking, car, recording, steady
+
+LIMITS = load_thresholds()
+
+
+def events(*tracks: Track, removed: tuple[Track, ...] = ()) -> dict[str, list]:
+    found: dict[str, list] = {}
+    rec = recording(*tracks)
+    rec.removed.extend(removed)
+    for event in detect(rec, LIMITS):
+        found.setdefault(event.code, []).append(event)
+    return found
+
+
+def profile(*points: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
+    """Speed through ``(time, speed)`` points, linear in between."""
+    times, speeds = zip(*points, strict=True)
+    return lambda t: np.interp(t, times, speeds)
+
+
+def changer(track_id: str, duration_s: float, s0: float, v: float, lane_at: Callable,
+            y_at: Callable) -> Track:
+    """A car at speed ``v`` whose lane label and lateral position (y, m; lanes 3.5 m apart,
+    lane n centred at -3.5 n) follow the given functions of time."""
+    base = car(track_id, duration_s, s0, steady(v), 2)
+    lanes = lane_at(base.t).astype(float)
+    return Track(**{**base.__dict__, "y": y_at(base.t), "lane_index": lanes,
+                    "lane": np.array([str(int(k)) for k in lanes], dtype=object)})
+
+
+def smooth_step(y0: float, y1: float, start: float, duration: float) -> Callable:
+    def y(t: np.ndarray) -> np.ndarray:
+        share = np.clip((t - start) / duration, 0.0, 1.0)
+        return y0 + (y1 - y0) * (3 * share ** 2 - 2 * share ** 3)
+    return y
+
+
+# -- braking ------------------------------------------------------------------------------
+
+def test_a_short_sharp_brake_is_kept_with_its_best_second_as_intensity():
+    # 9.2 -> 6.1 m/s within one second: the rarest, most valuable brake
+    lead = car("lead", 10, 40, profile((0, 9.2), (4, 9.2), (5, 6.1), (10, 6.1)), 2)
+    (brake,) = events(lead, car("ego", 10, 25, steady(9.2), 2))["BR_BK"]
+    assert (brake.ego, brake.npc) == ("ego", "lead")
+    # 3.1 m/s lost within its best second; the 1 s smoothing takes up to a fifth off a brake
+    # this short (a longer one keeps its whole best second, below)
+    assert 0.8 * 3.1 / 8 - 0.01 <= brake.fields["brake_intensity"] <= 3.1 / 8 + 0.01
+    assert -3.1 * 3.6 - 0.5 <= brake.fields["delta_vel_kmh"] <= -0.75 * 3.1 * 3.6
+    assert brake.fields["duration_s"] == pytest.approx(1.0, abs=0.3)
+
+
+def test_two_hard_stretches_of_one_braking_phase_are_one_record():
+    lead = car("lead", 14, 60, profile((0, 25), (3, 25), (4.5, 19), (4.7, 18.9), (6, 12),
+                                       (14, 12)), 2)
+    found = events(lead, car("ego", 14, 30, steady(25), 2))
+    assert len(found["BRAKE"]) == 1
+    brake = found["BRAKE"][0]
+    assert brake.start_s < 3.6 and brake.end_s > 5.4  # both stretches inside it
+    assert brake.fields["brake_intensity"] == pytest.approx(5.3 / 8, abs=0.06)
+
+
+def test_a_mild_slowdown_into_the_track_end_is_no_brake():
+    # 1.5 m/s^2 until the last step: the second derivative of a fit there is no deceleration
+    lead = car("lead", 8, 60, profile((0, 20), (5, 20), (8, 15.5)), 2)
+    assert "BRAKE" not in events(lead, car("ego", 8, 35, steady(20), 2))
+
+
+# -- lane changes ---------------------------------------------------------------------------
+
+def test_a_flickering_lane_label_is_one_lane_change_timed_by_the_lateral_motion():
+    flicker = profile((0, 2), (4.9, 2), (5.0, 1), (5.2, 1), (5.3, 2), (5.5, 2), (5.6, 1),
+                      (12, 1))
+    ego = changer("ego", 12, 30, 20, lambda t: np.round(flicker(t)),
+                  smooth_step(-7.0, -3.5, 4.0, 2.0))
+    found = events(ego, car("other", 12, 70, steady(20), 1), car("slow", 12, 0, steady(20), 2))
+    (change,) = found["LCF"]
+    assert change.fields["direction"] == "Left"
+    assert change.start_s == pytest.approx(4.0 + 0.4, abs=0.35)  # where 10 % of the way is done
+    assert change.fields["duration_s"] == pytest.approx(2.0 * 0.6, abs=0.4)  # 10 % to 90 %
+    assert change.fields["duration_s"] != 3.0
+    assert change.series["ego_lateral_m"][-1] - change.series["ego_lateral_m"][0] > 2.5
+
+
+def test_lateral_drift_with_a_lane_label_change_is_no_lane_change():
+    drifter = changer("drift", 12, 30, 20, lambda t: np.where(t < 6, 2, 1),
+                      smooth_step(-5.5, -4.9, 4.0, 3.0))  # 0.6 m across the line
+    found = events(drifter, car("other", 12, 60, steady(20), 1), car("b", 12, 5, steady(20), 2))
+    assert not found.get("LCF") and not found.get("LCB")
+
+
+def test_the_series_carries_speed_position_lateral_and_lane_of_every_role():
+    lead = car("lead", 10, 40, braking(15, 3, 4, 8), 2)
+    (brake,) = events(lead, car("ego", 10, 20, steady(12), 2))["BR_BK"]
+    series = brake.series
+    n = len(series["t"])
+    for role in ("ego", "npc"):
+        for key in ("speed_ms", "s_m", "lateral_m", "lane"):
+            assert len(series[f"{role}_{key}"]) == n
+    assert series["npc_s_m"][-1] - series["npc_s_m"][0] == pytest.approx(
+        sum(v * DT for v in series["npc_speed_ms"][:-1]), rel=0.05)
+    assert set(series["ego_lane"]) == {2.0}
+
+
+# -- pairs and duplicates ------------------------------------------------------------------
+
+def test_no_following_pair_spans_a_vehicle_the_file_took_out():
+    lead, ego = car("lead", 8, 60, steady(20), 2), car("ego", 8, 20, steady(20), 2)
+    hidden = car("planned", 8, 40, steady(20), 2)
+    assert "FLF" in events(lead, ego)
+    found = events(lead, ego, removed=(hidden,))
+    assert "FLF" not in found and "FLB" not in found
+
+
+def test_an_event_in_two_overlapping_files_is_written_once(tmp_path):
+    def snippet(shift_s: float, source: str) -> Recording:
+        tracks = [car("lead", 14, 60, braking(25, 4, 5, 10), 2), car("ego", 14, 30, steady(25), 2)]
+        cut = [Track(**{**tr.__dict__, **{k: getattr(tr, k)[int(shift_s / DT):] for k in (
+            "t", "x", "y", "heading", "speed", "s", "lane", "lane_index")}}) for tr in tracks]
+        moved = [Track(**{**tr.__dict__, "t": np.round(tr.t - shift_s, 3)}) for tr in cut]
+        return Recording(source=source, dt=DT, tracks=moved, reader="synthetic")
+
+    report = mine_recordings([snippet(0.0, "a.xml"), snippet(2.0, "b.xml")], tmp_path, LIMITS)
+    assert report.written["BRAKE"] == 1
+    assert [(d["file"], d["class"], d["same_as_in"]) for d in report.duplicates
+            if d["class"] == "BRAKE"] == [("b.xml", "BRAKE", "a.xml")]
+    alone = mine_recordings([snippet(2.0, "b.xml")], tmp_path / "alone", LIMITS)
+    assert alone.written["BRAKE"] == 1  # the second file alone still has it

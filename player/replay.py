@@ -88,6 +88,22 @@ def replay_file(xosc_path: Path, map_path: Path,
     return playback
 
 
+def esmini_input(xosc_path: Path, map_path: Path,
+                 settings: ReplaySettings | None = None) -> tuple[bytes, float]:
+    """What ``replay_file`` hands esmini first: the translated scenario pointing at the cut
+    copy of the map (written), and the time it plays until; for timing esmini bare
+    (``benchmarks/scale.py``). Raises ``TranslationError`` for a file it cannot translate."""
+    settings = settings or ReplaySettings()
+    translated = translate(Path(xosc_path).read_bytes(), _MAP_PLACEHOLDER, _lights_of(map_path))
+    scenario = etree.fromstring(translated.xml)
+    until_s = _duration(scenario, settings.default_duration_s)
+    cut = maps.plan_cut(scenario, map_path, until_s + settings.time_step_s,
+                        translated.light_signals.values()) if settings.cut_map else \
+        maps.MapCut(None, reason="ReplaySettings.cut_map is off")
+    scenario.find("RoadNetwork/LogicFile").set("filepath", str(maps.cut_map(map_path, cut.roads)))
+    return etree.tostring(scenario, xml_declaration=True, encoding="utf-8"), until_s
+
+
 def _play(scenario: etree._Element, map_path: Path, cut: maps.MapCut, until_s: float,
           settings: ReplaySettings) -> tuple[Playback, float]:
     """Play ``scenario`` on the copy of the map ``cut`` names; the seconds spent writing it."""

@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit, urlunsplit
 
+from scenweave.errors import InfrastructureError
 from scenweave.handoff import Limits, pack
 from scenweave.inputs import InputSelection, load_input
 from scenweave.pipeline import PipelineSettings, base_outcome
@@ -58,7 +59,7 @@ PENDING_STATES = ("queued", "started", "scheduled", "deferred")
 SCRATCH_ENV = "SCENWEAVE_WORKER_SCRATCH"
 
 
-class QueueError(Exception):
+class QueueError(InfrastructureError):
     """Root of the queue's infrastructure failures (Redis unreachable, ...)."""
 
 
@@ -164,10 +165,21 @@ def connect(url: str | None = None) -> Any:
         connection = Redis.from_url(url)
         connection.ping()
     except (RedisError, ValueError) as err:
+        if _is_refused_login(err):
+            raise QueueError(f"the job queue at {redacted(url)} refused the login ({err}): it "
+                             "needs its password in the URL, redis://:PASSWORD@host:6379/0 "
+                             f"(--queue / {QUEUE_ENV})") from err
         raise QueueError(f"cannot reach the job queue at {redacted(url)}: {err}; start "
                          f"redis-server there or pass --queue / set {QUEUE_ENV} (a password "
                          "goes in the URL: redis://:PASSWORD@host:6379/0)") from err
     return connection
+
+
+def _is_refused_login(err: Exception) -> bool:
+    from redis.exceptions import AuthenticationError
+
+    text = str(err)
+    return isinstance(err, AuthenticationError) or "NOAUTH" in text or "authenticated" in text
 
 
 def job_id(run_id: str, scenario_id: str) -> str:

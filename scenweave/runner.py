@@ -93,7 +93,8 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     this process commits each scenario folder.
     """
     loaded = load_input(Path(data), selection)
-    matcher = matcher or default_matcher(settings.map)
+    if jobs == 1:  # with jobs, each worker loads the default matcher itself, in parallel
+        matcher = matcher or default_matcher(settings.map)
     folder = RunFolder.open(out_root, run_id)
     with folder.started() as started:
         folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
@@ -156,9 +157,9 @@ def _in_this_process(todo: list[tuple[int, dict]], stage: Callable[[dict], Path]
 _worker_matcher: Any = None
 
 
-def _remember_matcher(matcher: Any) -> None:
+def _remember_matcher(matcher: Any, map_name: str | None) -> None:
     global _worker_matcher
-    _worker_matcher = matcher
+    _worker_matcher = matcher if matcher is not None else default_matcher(map_name)
 
 
 def _process_in_worker(params: dict, index: int, staging: Path,
@@ -172,11 +173,13 @@ def _in_processes(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
     """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
 
     Workers are spawned, not forked: a forked copy of this process would inherit the
-    player's engine server, which only its parent can talk to.
+    player's engine server, which only its parent can talk to. Without a ``matcher`` each
+    worker loads the default one for the map (at once, instead of this process loading it
+    and every worker unpickling a copy).
     """
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(jobs, mp_context=context, initializer=_remember_matcher,
-                             initargs=(matcher,)) as pool:
+                             initargs=(matcher, settings.map)) as pool:
         pending = {}
         for index, params in todo:
             staging = stage(params)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from scenweave.errors import InputError
 from scenweave.viewer.run_files import (
     MINING_REPORT_NAME,
     PARAMS_NAME,
@@ -40,7 +41,7 @@ SEARCH_DEPTH = 3
 FILE_PREVIEW_CHARS = 200_000
 
 
-class NotFound(LookupError):
+class NotFound(InputError, LookupError):
     """No run or scenario of that name among the folders the viewer was given."""
 
 
@@ -120,7 +121,7 @@ def _mining_report(info: dict, root: Path) -> str | None:
     """The mining report of the records the run was made from, when ``scenweave mine`` made
     them (it lies beside the records)."""
     source = info.get("input")
-    for folder in ([Path(source), root / source] if source else []):
+    for folder in ([Path(source), root / source, root.parent.parent / source] if source else []):
         report = folder / MINING_REPORT_NAME
         if report.is_file():
             return str(report.resolve())
@@ -143,15 +144,16 @@ def scenario_row(run: Run, name: str) -> dict:
             "status": status.get("status") or "unjudged",
             "attempts": status.get("attempts"), "verdict": verdict,
             "codes": (replay or {}).get("codes") or [],
-            "worst": _worst_errors(folder, replay),
+            "worst": _worst_errors(folder),
             "variants": len(_variant_dirs(folder)),
             "watchable": (folder / REPLAY_NAME).is_file()}
 
 
-def _worst_errors(folder: Path, replay: dict | None) -> list[dict]:
-    """The largest series errors the judge measured (max error per quantity), largest first;
-    empty where the judge kept none."""
-    errors = (replay or {}).get("series_errors") or (replay or {}).get("series")
+def _worst_errors(folder: Path) -> list[dict]:
+    """The largest series errors the judge measured against a mined record's series (max and
+    RMS per quantity, ``replay.json``'s ``series_errors``), largest first; empty without."""
+    errors = read_json(folder / REPLAY_NAME).get("series_errors") \
+        if (folder / REPLAY_NAME).is_file() else None
     if not isinstance(errors, dict):
         return []
     rows = []

@@ -23,11 +23,14 @@ from typing import Any
 
 import numpy as np
 
+from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.schemas.params import number
 from scenweave.schemas.replay import (
     GAP_TOL_M,
     LANE_CHANGE_TOL_S,
+    SERIES_GAP_TOL_M,
+    SERIES_SPEED_TOL_MS,
     SPEED_TOL_MS,
     gap_along_lane,
     judge_replay,
@@ -176,7 +179,7 @@ def _charts(playback: Playback, params: dict, folder: Path, map_path: Path | Non
                     for entity, target, at_s in _speed_targets(folder, params)]
     return {
         "speed": {"series": {n: t["speed"] for n, t in playback.tracks.items()},
-                  "marks": speed_marks, "tol": SPEED_TOL_MS,
+                  "marks": speed_marks, "tol": SPEED_TOL_MS, "series_tol": SERIES_SPEED_TOL_MS,
                   "recorded": {f"{e}": recorded[f"{r}_speed_ms"] for r, e in
                                (("ego", EGO), ("npc", "npc")) if f"{r}_speed_ms" in recorded},
                   "recorded_t": recorded.get("t")},
@@ -210,12 +213,15 @@ def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]
 
 
 def _recorded(folder: Path, params: dict) -> dict:
-    """A mined record's series on the scenario's clock (its event starts with the manoeuvre)."""
-    recorded = read_json(folder / RECORDED_NAME)
+    """A mined record's series (params' ``recorded_series``, else the folder's
+    ``recorded.json``) on the scenario's clock: its event starts with the manoeuvre."""
+    recorded = params.get("recorded_series")
+    if not isinstance(recorded, dict):
+        recorded = read_json(folder / RECORDED_NAME)
     if not isinstance(recorded.get("t"), list):
         return {}
     shift = number(params, "maneuver_start_s") or 0.0
-    return {**recorded, "t": [t + shift for t in recorded["t"]]}
+    return {**recorded, "t": [None if t is None else t + shift for t in recorded["t"]]}
 
 
 def _gap_chart(playback: Playback, params: dict, recorded: dict,
@@ -245,8 +251,13 @@ def _gap_chart(playback: Playback, params: dict, recorded: dict,
     if params and class_of(params).gap_at_end and start is not None and end_gap is not None:
         marks.append({"entity": "npc", "t": start + (number(params, "duration_s") or 0.0),
                       "value": end_gap, "tol": GAP_TOL_M, "what": "gap at end"})
+    kind = params.get("npc_vehicle_type")
+    # the record's gap is between bumpers; the chart's, like the judge's, between reference points
+    recorded_gap = [None if g is None else round(reference_gap_m(g, kind), 3)
+                    for g in recorded.get("npc_gap_m") or []] or None
     return {"times": times, "series": series, "marks": marks, "tol": GAP_TOL_M,
-            "recorded": recorded.get("npc_gap_m"), "recorded_t": recorded.get("t")}
+            "series_tol": SERIES_GAP_TOL_M, "recorded": recorded_gap,
+            "recorded_t": recorded.get("t")}
 
 
 # --- the verdict -----------------------------------------------------------------------------

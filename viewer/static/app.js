@@ -99,7 +99,7 @@ async function showScenario(key) {
   const bar = el("div", { class: "tabs" }, Object.keys(tabs).map((name) => el("button", {
     id: `tab-${name}`, dataset: { tab: name },
     onclick: (e) => { bar.querySelectorAll("button").forEach((b) => b.classList.remove("active")); e.target.classList.add("active"); if (window.viewer.clock) window.viewer.clock.pause(); tabs[name](); },
-  }, name === "trace" ? `trace (${detail.attempts.length} attempts)` : name === "variants" ? `variants (${detail.variants.length})` : name)));
+  }, name === "trace" ? `trace (${detail.attempts.length} attempt${detail.attempts.length === 1 ? "" : "s"})` : name === "variants" ? `variants (${detail.variants.length})` : name)));
   main.replaceChildren(head, bar, body);
   window.viewer = { page: "scenario", key, detail };
   bar.querySelector("button").classList.add("active");

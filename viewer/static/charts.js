@@ -21,7 +21,7 @@ function markPlugin(chart) {
           let started = false;
           const upper = [], lower = [];
           band.t.forEach((t, i) => {
-            if (band.values[i] == null) return;
+            if (band.values[i] == null || t == null) return;
             upper.push([u.valToPos(t, "x", true), u.valToPos(band.values[i] + band.tol, "y", true)]);
             lower.push([u.valToPos(t, "x", true), u.valToPos(band.values[i] - band.tol, "y", true)]);
           });
@@ -96,7 +96,7 @@ function speedChart(holder, scene, clock, colours, findings) {
   for (const [name, values] of Object.entries(c.recorded || {})) {
     data.push(resampled(scene.times, c.recorded_t, values));
     series.push({ label: `${name} recorded`, stroke: colours[name], dash: [6, 4], width: 1.2 });
-    bands.push({ t: c.recorded_t, values, tol: c.tol, colour: colours[name] });
+    bands.push({ t: c.recorded_t, values, tol: c.series_tol || c.tol, colour: colours[name] });
   }
   const marks = c.marks.map((m) => ({ ...m, colour: colours[m.entity] || "#555" }));
   return makeChart(holder, `speed (m/s) — record: ◇ with ±${c.tol} m/s, the judge's tolerance`,
@@ -113,7 +113,7 @@ function gapChart(holder, scene, clock, colours, findings) {
   if (c.recorded && c.recorded_t) {
     data.push(resampled(c.times, c.recorded_t, c.recorded));
     series.push({ label: "npc recorded", stroke: colours.npc || "#555", dash: [6, 4], width: 1.2 });
-    bands.push({ t: c.recorded_t, values: c.recorded, tol: c.tol, colour: colours.npc || "#555" });
+    bands.push({ t: c.recorded_t, values: c.recorded, tol: c.series_tol || c.tol, colour: colours.npc || "#555" });
   }
   const marks = c.marks.map((m) => ({ ...m, colour: colours[m.entity] || "#555" }));
   return makeChart(holder, `gap to the ego along its lane (m) — record: ◇ ±${c.tol} m`,

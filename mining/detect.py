@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
-from scenweave.mining import highway, lights
+from scenweave.mining import highway, lights, urban
 from scenweave.mining.scene import KMH, Event, Scene
 from scenweave.mining.tracks import Recording
 
@@ -25,4 +25,5 @@ def _valid(events: Callable[[Scene], Iterator[Event | None]]) -> Callable[[Scene
 
 DETECTORS: tuple[Callable[[Scene], list[Event]], ...] = tuple(
     _valid(d) for d in (highway.braking_leads, highway.cuts, highway.own_lane_changes,
-                        highway.following, lights.light_events))
+                        highway.following, lights.light_events,
+                        urban.urban_events))

@@ -18,7 +18,8 @@ from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES
 from scenweave.mining.scene import KMH, Event, Scene
 from scenweave.mining.tracks import TrafficLight
 
-CODE_OF_STATE = {state: code for code, state in TRAFFIC_LIGHT_STATES.items()}
+CODE_OF_STATE = {state: code for code, state in TRAFFIC_LIGHT_STATES.items()} | {
+    "yellow": next(c for c, state in TRAFFIC_LIGHT_STATES.items() if state == "orange")}
 #: what a recording without weather or road data is taken as (documented in docs/mining.md)
 ASSUMED_ROAD = {"SpeedLimit": 50, "RoadType": 3, "NumberOfLanes": 2, "LaneWidth": 3.5}
 HISTORY_S = 15.0
@@ -33,7 +34,7 @@ def state_at(light: TrafficLight, t: float) -> str | None:
 
 def light_events(scene: Scene) -> Iterator[Event]:
     for light in scene.recording.lights:
-        if light.stop_line_s is None:
+        if light.stop_line_s is None or light.stop_lines:  # lines as segments: mining.urban
             continue
         for i, track in enumerate(scene.tracks):
             on = np.isin(track.lane.astype(str), list(light.lanes))
@@ -96,10 +97,18 @@ def adscene_of(scene: Scene, code: str, i: int, first: int, last: int, light: Tr
     """The event as an ADScene object (MOOVE's urban file format)."""
     track, speed = scene.tracks[i], scene.motion[i].speed
     odometer = track.s[first:last + 1] - track.s[first]
-    frames = [_frame(scene, i, k, float(speed[k]), float(odo))
+    frames = [frame_of(scene, i, k, float(speed[k]), float(odo))
               for k, odo in zip(range(first, last + 1), odometer, strict=True)]
     light_at = float(light.stop_line_s - track.s[first])
-    start, end = float(track.t[first]), float(track.t[last])
+    signs = [{"position_longi_from_0": round(light_at, 2), "infrastructure_elements": [
+        {"type": "TrafficSignType", "value": CODE_OF_STATE[colour]}]}]
+    return adscene_header(scene, code, float(track.t[first]), float(track.t[last]), signs,
+                          frames)
+
+
+def adscene_header(scene: Scene, code: str, start: float, end: float, signs: list[dict],
+                   frames: list[dict]) -> dict:
+    """An ADScene object: the segment, the assumed road with ``signs`` along it, ``frames``."""
     return {
         "scenario_code": code,
         "segment": {"type": code, "begin_time": round(start, 3), "end_time": round(end, 3),
@@ -109,13 +118,12 @@ def adscene_of(scene: Scene, code: str, i: int, first: int, last: int, light: Tr
         "environment": {"infrastructure": {"way_points": [
             {"position_longi_from_0": 0.0, "infrastructure_elements": [
                 {"type": kind, "value": value} for kind, value in ASSUMED_ROAD.items()]},
-            {"position_longi_from_0": round(light_at, 2), "infrastructure_elements": [
-                {"type": "TrafficSignType", "value": CODE_OF_STATE[colour]}]}]}},
+            *signs]}},
         "key_times": frames,
     }
 
 
-def _frame(scene: Scene, i: int, k: int, speed: float, odometer: float) -> dict:
+def frame_of(scene: Scene, i: int, k: int, speed: float, odometer: float) -> dict:
     track = scene.tracks[i]
     lead = scene.traffic.leader(i, k)
     obstacles = [] if lead is None else [_obstacle(scene, i, k, lead.track, speed)]

@@ -37,6 +37,9 @@ class Track:
     #: per step: the lane's index counted from the road's left edge in the direction of
     #: travel (1 = leftmost); a higher index is further right. NaN where unknown.
     lane_index: np.ndarray = field(default_factory=lambda: np.empty(0))
+    #: per step: the frame ``s`` is measured in (urban maps: a direction group); two cars'
+    #: ``s`` compare only where their frames are equal. Empty: one frame for the recording.
+    road: np.ndarray = field(default_factory=lambda: np.empty(0))
     #: per step: lateral position across the road (m, + to the left), where the reader knows
     #: it better than the positions tell (a replay's lane and lane offset); else empty
     lateral: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -47,6 +50,8 @@ class Track:
             if len(getattr(self, name)) != n:
                 raise ValueError(f"track {self.id}: {name} has {len(getattr(self, name))} "
                                  f"values for {n} steps")
+        if len(self.road) not in (0, n):
+            raise ValueError(f"track {self.id}: road has {len(self.road)} values for {n} steps")
         if len(self.lane_index) not in (0, n):
             raise ValueError(f"track {self.id}: lane_index has {len(self.lane_index)} values "
                              f"for {n} steps")
@@ -74,6 +79,11 @@ class TrafficLight:
     lanes: tuple[str, ...]
     stop_line_s: float | None
     phases: tuple[LightPhase, ...]
+    #: the movements it controls, as CommonRoad names them ("all", "left", "straightRight"...)
+    direction: str = "all"
+    #: per controlled lane: (lane, x0, y0, x1, y1) of its stop line in the file's frame, from
+    #: the left end to the right end as seen driving the lane
+    stop_lines: tuple[tuple[str, float, float, float, float], ...] = ()
 
 
 @dataclass
@@ -89,6 +99,8 @@ class Recording:
     reader: str = ""
     #: what the reader could not take and why (one line each)
     warnings: list[str] = field(default_factory=list)
+    #: lanes inside junctions (where roads cross), as ``Track.lane`` names them
+    junction_lanes: frozenset[str] = frozenset()
     #: vehicles the file took out but whose path it implies (CommonRoad's planning-problem
     #: ego): they are never mined, but nobody's lead or follower is found past them
     removed: list[Track] = field(default_factory=list)

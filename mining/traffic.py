@@ -49,6 +49,7 @@ class Traffic:
         return int(round(track.t[step] / self.dt))
 
     def lane_of(self, track: Track, step: int) -> float:
+        """The lane's key at ``step`` (its road left out: a turn is no lane change)."""
         return float(_lane_keys(track)[step])
 
     def leader(self, i: int, step: int) -> Neighbour | None:
@@ -64,6 +65,7 @@ class Traffic:
         frame = self.frame(track, step)
         lo = np.searchsorted(self._frame, frame - 0.5)
         hi = np.searchsorted(self._frame, frame + 0.5)
+        lane = lane + float(_road_keys(track)[step])
         here = np.arange(lo, hi)[self._lane[lo:hi] == lane]
         here = here[(self._owner[here] != i) & (self._owner[here] != REMOVED)]
         if not len(here):
@@ -92,7 +94,9 @@ class Traffic:
 
     def _rows(self, i: int, track: Track) -> np.ndarray:
         frames = np.round(track.t / self.dt)
-        return np.vstack([frames, _lane_keys(track), track.s, np.full(len(track.t), i)])
+        # lanes of different roads are different lanes
+        lanes = _lane_keys(track) + _road_keys(track)
+        return np.vstack([frames, lanes, track.s, np.full(len(track.t), i)])
 
 
 def _lane_keys(track: Track) -> np.ndarray:
@@ -100,8 +104,17 @@ def _lane_keys(track: Track) -> np.ndarray:
     stable code of the lane's name."""
     index = np.asarray(track.lane_index, dtype=float)
     if len(index) == len(track.t) and np.all(np.isfinite(index)):
-        return index
-    return np.array([_code(str(name)) for name in track.lane], dtype=float)
+        keys = index
+    else:
+        keys = np.array([_code(str(name)) for name in track.lane], dtype=float)
+    return keys
+
+
+def _road_keys(track: Track) -> np.ndarray:
+    """A number per step naming the frame its ``s`` is in (0: the recording's one frame)."""
+    if len(track.road) != len(track.t):
+        return np.zeros(len(track.t))
+    return np.array([_code(str(road)) for road in track.road]) * 1e3
 
 
 def _code(name: str) -> float:

@@ -64,6 +64,17 @@ MAX_OFF_MAP_M = 2.0
 #: a lanelet running more than this against the car's heading is a poor match
 WRONG_WAY_DEG = 60.0
 WRONG_WAY_COST_M = 100.0
+#: a car's ``s`` that strayed further than this from its group's axis projection (after a
+#: turn) is compared with nobody else's
+SAME_FRAME_M = 1.0
+#: a step further off its group's axis advances ``s`` by the distance driven
+ALONG_AXIS_DEG = 30.0
+#: a step shorter than this is a standing car's jitter, whatever its direction
+STILL_STEP_M = 0.05
+#: a change of lanelet counts as a lane change only after this much motion across the road
+#: within the last LANE_CHANGE_WINDOW_S
+MIN_LANE_CHANGE_M = 1.5
+LANE_CHANGE_WINDOW_S = 3.0
 COLOURS = {
     TrafficLightState.GREEN: "green", TrafficLightState.YELLOW: "yellow",
     TrafficLightState.RED: "red", TrafficLightState.RED_YELLOW: "red",
@@ -159,6 +170,9 @@ class LaneMap:
     group: np.ndarray
     axes: np.ndarray
     lane_index: np.ndarray
+    #: a town's map (junctions or traffic lights): lane indexes are held without lateral motion
+    urban: bool = False
+    junctions: frozenset[str] = frozenset()
 
     @classmethod
     def of(cls, network: LaneletNetwork) -> LaneMap:
@@ -339,14 +353,89 @@ def _step_groups(lane_map: LaneMap, row: np.ndarray, heading: np.ndarray) -> np.
     return np.full(len(row), int(np.argmax(lane_map.axes @ np.nan_to_num(mean))))
 
 
+def continuous_s(xy: np.ndarray, group: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray,
+                                                                              np.ndarray]:
+    """Position along the road that never jumps: the projection on each step's direction
+    group axis, except that a step into another group, or one more than
+    :data:`ALONG_AXIS_DEG` off its axis (inside a junction, where a lanelet's group need not
+    be the way the car drives), advances by the distance driven (the projections on two
+    axes differ by up to the whole distance from the origin). Returns it and how far it is
+    from the projection on the step's own axis."""
+    projected = np.einsum("ij,ij->i", xy, axes[group])
+    if len(xy) < 2:
+        return projected, np.zeros(len(xy))
+    ds = np.diff(projected)
+    driven = np.hypot(*np.diff(xy, axis=0).T)
+    off_axis = (driven > STILL_STEP_M) & (np.abs(ds) < np.cos(np.radians(ALONG_AXIS_DEG)) * driven)
+    changed = (group[1:] != group[:-1]) | off_axis
+    ds[changed] = driven[changed]
+    s = projected[0] + np.concatenate([[0.0], np.cumsum(ds)])
+    return s, s - projected
+
+
+def lane_lateral(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
+                 group: np.ndarray) -> np.ndarray:
+    """How far the car moved across its lane since its first step (m, + to the left): each
+    step's motion across the lanelet's centre line where the car is (its group's axis off
+    the map), summed. A car following its lane, through a bend or a turn, or from one
+    lanelet into the next, keeps its value; a lane change moves it by a lane's width."""
+    along = lane_map.axes[group].copy()
+    on = row >= 0
+    if on.any():
+        centres, points = lane_map.centres[row[on]], shapely.points(xy[on])
+        at = shapely.line_locate_point(centres, points)
+        ahead = shapely.get_coordinates(shapely.line_interpolate_point(centres, at + 0.5))
+        behind = shapely.get_coordinates(shapely.line_interpolate_point(centres, at - 0.5))
+        tangent = ahead - behind
+        norm = np.hypot(*tangent.T)
+        good = norm > 0
+        along[np.flatnonzero(on)[good]] = tangent[good] / norm[good, None]
+    normal = np.column_stack([-along[:, 1], along[:, 0]])
+    moved = np.einsum("ij,ij->i", np.diff(xy, axis=0), normal[1:]) if len(xy) > 1 else []
+    return np.concatenate([[0.0], np.cumsum(moved)])
+
+
+def held_lane_index(index: np.ndarray, lateral: np.ndarray, group: np.ndarray,
+                    in_junction: np.ndarray | None = None, window: int = 30,
+                    min_move_m: float = MIN_LANE_CHANGE_M) -> np.ndarray:
+    """The lane index, changed only where the car moved at least ``min_move_m`` across the
+    road within the last ``window`` steps, never inside a junction: at lanelet boundaries,
+    merges, turns and across junctions (where lanes are added or shifted) the index of the
+    lanelet under a car changes without the car changing lane. The window keeps a slow drift
+    against a group's straight axis (a road that bends a little) from passing for a move."""
+    held = index.copy()
+    current, since = np.nan, 0
+    inside = np.zeros(len(index), bool) if in_junction is None else in_junction
+    for k in range(len(index)):
+        if k and group[k] != group[k - 1] or inside[k]:
+            since = k  # a new axis, or lanes that shift: lateral positions restart
+        recent = lateral[max(since, k - window):k + 1]
+        moved = np.isfinite(index[k]) and index[k] != current and not inside[k] \
+            and float(np.max(np.abs(recent - lateral[k]))) >= min_move_m
+        if not np.isfinite(current) or moved:
+            current = index[k]
+        held[k] = current
+    return held
+
+
 def _track(raw: _Raw, row: np.ndarray, lane_map: LaneMap, dt: float) -> Track:
     lane_ids = np.array([str(lane_map.ids[r]) if r >= 0 else "" for r in row])
     index = np.where(row >= 0, lane_map.lane_index[row], np.nan)
+    group = _step_groups(lane_map, row, raw.heading)
+    s, off_axis = continuous_s(raw.xy, group, lane_map.axes)
+    lateral = lane_lateral(lane_map, raw.xy, row, group) if lane_map.urban else np.empty(0)
+    held = index
+    if lane_map.urban:
+        held = held_lane_index(index, lateral, group, np.isin(lane_ids, list(lane_map.junctions)),
+                               window=int(round(LANE_CHANGE_WINDOW_S / dt)))
+    # where s left the group's frame or the lane index is held against the map, the car is
+    # compared with nobody
+    own = (np.abs(off_axis) > SAME_FRAME_M) | (np.isfinite(index) & (held != index))
+    road = np.where(own, np.char.add(f"{raw.id}/", group.astype(str)), group.astype(str))
     return Track(id=raw.id, length_m=raw.length, width_m=raw.width, vehicle_type=raw.kind,
                  t=raw.step * dt, x=raw.xy[:, 0], y=raw.xy[:, 1], heading=raw.heading,
-                 speed=raw.speed,
-                 s=lane_map.s(raw.xy, _step_groups(lane_map, row, raw.heading)),
-                 lane=lane_ids, lane_index=index)
+                 speed=raw.speed, s=s, lane=lane_ids, lane_index=held, road=road,
+                 lateral=lateral)
 
 
 def _tracks(raws: list[_Raw], lane_map: LaneMap, dt: float, warnings: list[str]
@@ -373,6 +462,42 @@ def _stop_point(lanelet: Lanelet) -> np.ndarray:
     if line is not None and line.start is not None and line.end is not None:
         return (np.asarray(line.start, float) + np.asarray(line.end, float)) / 2
     return np.asarray(lanelet.center_vertices[-1], float)
+
+
+def _stop_line(lanelet: Lanelet) -> tuple[str, float, float, float, float]:
+    """The lanelet's stop line (its end across the lane where it has none)."""
+    line = lanelet.stop_line
+    if line is not None and line.start is not None and line.end is not None:
+        ends = np.asarray(line.start, float), np.asarray(line.end, float)
+    else:
+        ends = np.asarray(lanelet.left_vertices[-1], float), \
+            np.asarray(lanelet.right_vertices[-1], float)
+    centre = np.asarray(lanelet.center_vertices, float)
+    travel = centre[-1] - centre[-2]
+    across = ends[1] - ends[0]
+    if travel[0] * across[1] - travel[1] * across[0] > 0:  # make it run left to right
+        ends = ends[1], ends[0]
+    return (str(lanelet.lanelet_id), *(round(float(v), 4) for v in (*ends[0], *ends[1])))
+
+
+def _movements(light: CrLight) -> str:
+    direction = getattr(light, "direction", None)
+    return str(getattr(direction, "value", direction) or "all")
+
+
+def junction_lanelets(network: LaneletNetwork, lane_map: LaneMap) -> frozenset[str]:
+    """Lanelets inside junctions: those an intersection's incomings lead into, and those
+    crossing a lanelet that runs another way (more than 30 deg apart, 1 m^2 shared)."""
+    inside = {str(i) for it in network.intersections for inc in it.incomings
+              for i in (*inc.outgoing_right, *inc.outgoing_straight, *inc.outgoing_left)}
+    shrunk = shapely.buffer(lane_map.polygons, -0.3)
+    a, b = shapely.STRtree(shrunk).query(shrunk, predicate="intersects")
+    directions = np.array([_direction(np.asarray(c.coords)) for c in lane_map.centres])
+    for i, j in zip(a.tolist(), b.tolist(), strict=True):
+        if i != j and abs(directions[i] @ directions[j]) < np.cos(np.radians(30)) \
+                and shapely.area(shapely.intersection(shrunk[i], shrunk[j])) > 1.0:
+            inside.add(str(lane_map.ids[i]))
+    return frozenset(inside)
 
 
 def light_phases(light: CrLight, last_step: int, dt: float) -> tuple[LightPhase, ...]:
@@ -410,7 +535,9 @@ def _lights(network: LaneletNetwork, lane_map: LaneMap, last_step: int, dt: floa
             stop_s = float(np.mean(lane_map.s(points, lane_map.group[rows])))
         lights.append(TrafficLight(id=str(light.traffic_light_id),
                                    lanes=tuple(str(ll.lanelet_id) for ll in lanelets),
-                                   stop_line_s=stop_s, phases=phases))
+                                   stop_line_s=stop_s, phases=phases,
+                                   direction=_movements(light),
+                                   stop_lines=tuple(_stop_line(ll) for ll in lanelets)))
     return lights
 
 
@@ -477,6 +604,9 @@ def read(path: Path) -> Recording:
     network = _network(root)
     warnings = skipped_warning(skipped)
     lane_map = LaneMap.of(network)
+    junctions = junction_lanelets(network, lane_map)
+    lane_map.urban = bool(junctions or network.traffic_lights)
+    lane_map.junctions = junctions
     tracks = _tracks(raws, lane_map, dt, warnings)
     last_step = int(max((t.t[-1] for t in tracks), default=0.0) / dt + 0.5)
     lights = _lights(network, lane_map, last_step, dt, warnings)
@@ -484,4 +614,5 @@ def read(path: Path) -> Recording:
     removed = _tracks(planned, lane_map, dt, []) if tracks else []
     return Recording(source=str(path), dt=dt, tracks=sort_tracks(tracks), lights=lights,
                      reader=NAME, warnings=[f"{path.name}: {w}" for w in warnings],
+                     junction_lanes=junctions,
                      removed=removed)

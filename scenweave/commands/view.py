@@ -16,8 +16,8 @@ DEFAULT_RUNS = Path("runs")
 
 @click.command("view")
 @click.argument("paths", nargs=-1, type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--port", default=8765, show_default=True, type=click.IntRange(0, 65535),
-              help="Port on 127.0.0.1 to serve the viewer on (0: any free port).")
+@click.option("--port", default=8765, show_default=True, type=click.IntRange(1, 65535),
+              help="Port on 127.0.0.1 to serve the viewer on.")
 @click.option("--static", "static_out", type=click.Path(file_okay=False, path_type=Path),
               help="Write the viewer as static files into this folder instead of serving it "
                    "(open OUT/index.html from disk or any web server).")

@@ -189,7 +189,33 @@ def _charts(playback: Playback, params: dict, folder: Path, map_path: Path | Non
                     "tol_s": LANE_CHANGE_TOL_S},
         "light": [light_state(playback, t) for t in playback.times] if playback.lights else [],
         "maneuver": [number(params, "maneuver_start_s"), number(params, "duration_s")],
+        "stop_line": _stop_line_chart(playback, params),
     }
+
+
+def _driven(playback: Playback, entity: str) -> np.ndarray:
+    """Metres ``entity`` has driven at every sample (the trapezoid the judge sums)."""
+    speeds, times = np.asarray(playback.tracks[entity]["speed"]), np.asarray(playback.times)
+    return np.concatenate([[0.0], np.cumsum((speeds[1:] + speeds[:-1]) / 2 * np.diff(times))])
+
+
+def _stop_line_chart(playback: Playback, params: dict) -> dict:
+    """Urban: the ego's distance driven against the record's stop line, and where that line
+    lies on the ego's path (across it, for the map)."""
+    stop_line = number(params, "spawn_stop_line_distance_m")
+    if stop_line is None or EGO not in playback.tracks:
+        return {}
+    driven = _driven(playback, EGO)
+    track = playback.tracks[EGO]
+    reached = np.nonzero(driven >= stop_line)[0]
+    if len(reached):
+        i = int(reached[0])
+        x, y, h = track["x"][i], track["y"][i], track["h"][i]
+    else:  # not reached: the line lies ahead of where the ego ended, along its heading
+        ahead, h = stop_line - float(driven[-1]), track["h"][-1]
+        x, y = track["x"][-1] + ahead * math.cos(h), track["y"][-1] + ahead * math.sin(h)
+    return {"distance": np.round(driven, 3).tolist(), "line_m": stop_line,
+            "at": [round(x, 3), round(y, 3), round(h, 5)]}
 
 
 def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]:

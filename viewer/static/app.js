@@ -134,7 +134,8 @@ function replayTab(body, detail) {
   const charts = el("div", { class: "charts", id: "charts" });
   body.replaceChildren(el("div", { class: "replay" }, stage, charts));
   const made = [speedChart(charts, scene, clock, player.colours, findings), gapChart(charts, scene, clock, player.colours, findings),
-    lateralChart(charts, scene, clock, player.colours, findings), lightStrip(charts, scene, clock)].filter(Boolean);
+    stopLineChart(charts, scene, clock, player.colours, findings), lateralChart(charts, scene, clock, player.colours, findings),
+    lightStrip(charts, scene, clock)].filter(Boolean);
   clock.on((t) => {
     player.t = t;
     player.draw();

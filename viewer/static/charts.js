@@ -162,3 +162,12 @@ function lightStrip(holder, scene, clock) {
   move(clock.t);
   return { name: "light", box };
 }
+
+function stopLineChart(holder, scene, clock, colours, findings) {
+  const c = scene.charts.stop_line;
+  if (!c || !c.distance) return null;
+  const line = scene.times.map(() => c.line_m);
+  return makeChart(holder, `distance the ego drove (m) against the record's stop line (${c.line_m.toFixed(1)} m)`,
+    { name: "stop_line", unit: "m", data: [scene.times, c.distance, line],
+      series: [{ label: "ego driven", stroke: colours[EGO], width: 1.6 }, { label: "stop line", stroke: "#1f2328", dash: [6, 4], width: 1.2 }], findings }, clock);
+}

@@ -131,6 +131,7 @@ class Player {
     this.drawLanes(ctx, v);
     this.drawPaths(ctx, v);
     this.drawGhost(ctx, v);
+    this.drawStopLine(ctx, v);
     for (const light of this.scene.lights) this.drawLight(ctx, v, light);
     for (const name of Object.keys(this.scene.actors)) this.drawActor(ctx, v, name);
     this.drawCollisions(ctx, v);
@@ -150,16 +151,41 @@ class Player {
     }
   }
 
+  // each actor's whole path, faint, with a tick every second and the time every 5 s
   drawPaths(ctx, v) {
+    const times = this.scene.times;
     for (const [name, actor] of Object.entries(this.scene.actors)) {
       ctx.strokeStyle = this.colours[name];
+      ctx.fillStyle = this.colours[name];
       ctx.globalAlpha = 0.35;
       ctx.lineWidth = 1.5;
       ctx.beginPath();
       actor.x.forEach((x, i) => { const [px, py] = v.toPx(x, actor.y[i]); if (i) ctx.lineTo(px, py); else ctx.moveTo(px, py); });
       ctx.stroke();
+      ctx.globalAlpha = 0.8;
+      ctx.font = "10px system-ui, sans-serif";
+      for (let second = 1; second <= times[times.length - 1]; second++) {
+        const p = this.pose(name, second);
+        const [px, py] = v.toPx(p.x, p.y);
+        ctx.beginPath(); ctx.arc(px, py, 2, 0, 2 * Math.PI); ctx.fill();
+        if (second % 5 === 0) ctx.fillText(`${second} s`, px + 4, py + 12);
+      }
       ctx.globalAlpha = 1;
     }
+  }
+
+  // the record's stop line across the ego's path (urban records)
+  drawStopLine(ctx, v) {
+    const c = this.scene.charts && this.scene.charts.stop_line;
+    if (!c || !c.at) return;
+    const [x, y, h] = c.at, half = 2.5;
+    const [ax, ay] = v.toPx(x - half * Math.sin(h), y + half * Math.cos(h));
+    const [bx, by] = v.toPx(x + half * Math.sin(h), y - half * Math.cos(h));
+    ctx.strokeStyle = "#1f2328";
+    ctx.lineWidth = 3;
+    ctx.beginPath(); ctx.moveTo(ax, ay); ctx.lineTo(bx, by); ctx.stroke();
+    ctx.fillStyle = "#1f2328";
+    ctx.fillText("stop line (record)", bx + 4, by + 4);
   }
 
   // The record's own gap (mined data) as a ghost car ahead of the ego along its heading.

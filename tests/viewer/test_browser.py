@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import pytest
@@ -158,3 +159,36 @@ def test_the_static_export_plays_offline_from_disk(page, viewer_runs, tmp_path, 
     page.click("a[data-file='params.json']")
     assert json.loads(page.inner_text("#file-view"))["scenario_id"] == CUT_IN
     page.screenshot(path=str(artifacts / "static-export.png"), full_page=True)
+
+
+def test_the_variants_of_a_record_play_side_by_side(page, viewer_runs, tmp_path, artifacts):
+    """A record with two variants as ``run --vary`` lays them out (``variants/vNN/`` with
+    ``variant.json``): the hand-edited cut-in, kept, and one the agent could not ask for."""
+    from scenweave.viewer.static_site import write_static_site
+
+    run = tmp_path / "runs" / RUN_ID
+    shutil.copytree(viewer_runs["run"], run)
+    variants = run / CUT_IN / "variants"
+    shutil.copytree(viewer_runs["edited"], variants / "v01")
+    (variants / "v01" / "variant.json").write_text(json.dumps(
+        {"id": "v01", "aspect": "vehicles", "kept": True, "changed": ["npc_speed_change"],
+         "asked": {}, "errors": []}))
+    (variants / "v02").mkdir()
+    (variants / "v02" / "variant.json").write_text(json.dumps(
+        {"id": "v02", "aspect": "lane", "kept": False, "changed": [], "asked": {},
+         "errors": ["VARY_NO_LANE: no lane beside"]}))
+    write_static_site([tmp_path / "runs"], tmp_path / "site")
+    page.goto((tmp_path / "site" / "index.html").as_uri())
+    page.wait_for_selector("tr.scenario")
+    assert page.locator(f"tr[data-key='{RUN_ID}/{CUT_IN}'] td").last.inner_text() == "2"
+    page.click(f"tr[data-key='{RUN_ID}/{CUT_IN}']")
+    page.wait_for_function("window.viewer.page === 'scenario' && window.viewer.clock")
+    page.click("#tab-variants")
+    page.wait_for_function("document.querySelectorAll('#variants .stage').length === 3")
+    cards = page.locator("#variants .stage")
+    assert "kept · vehicles · changed: npc_speed_change" in cards.nth(1).inner_text()
+    assert "not kept · lane · VARY_NO_LANE" in cards.nth(2).inner_text()
+    assert cards.nth(2).locator("p.note").inner_text() == "not played: no replay.json in the folder"
+    page.click("#play-variants")
+    page.wait_for_function("window.viewer.clock.t > 1", timeout=20_000)
+    page.screenshot(path=str(artifacts / "variants.png"), full_page=True)

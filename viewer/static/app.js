@@ -93,7 +93,7 @@ async function showScenario(key) {
     el("strong", {}, scene.scenario_id), " · ", scene.maneuver_class || "?", " · ", scene.domain || "", " · ",
     badge(status.status || "unjudged"), " ",
     scene.played ? badge(scene.findings.length ? "replay failed" : "replay passed", scene.findings.length ? "failed" : "passed") : badge("not played"),
-    detail.variant ? el("span", {}, " · variant: ", JSON.stringify(detail.variant.changed || detail.variant.asked || "")) : null);
+    detail.variant ? el("span", {}, " · variant: ", variantFacts(detail.variant)) : null);
   const body = el("div", { id: "tab-body" });
   const tabs = { replay: () => replayTab(body, detail), trace: () => traceTab(body, detail), variants: () => variantsTab(body, detail), files: () => filesTab(body, detail) };
   const bar = el("div", { class: "tabs" }, Object.keys(tabs).map((name) => el("button", {
@@ -211,7 +211,7 @@ function variantsTab(body, detail) {
     const canvas = el("canvas", { class: "scene" });
     const v = entry.variant || {};
     const card = el("div", { class: "stage", dataset: { variant: entry.name } }, el("h3", {}, el("a", { href: "#/s/" + entry.key }, entry.name)),
-      el("div", { class: "facts" }, entry.variant ? `${v.kept ? "kept" : "not kept"}${v.aspect ? " · " + v.aspect : ""}${v.reason ? " · " + v.reason : ""}` : "what the record became"), canvas);
+      el("div", { class: "facts" }, entry.variant ? variantFacts(v) : "what the record became"), canvas);
     grid.append(card);
     const scene = entry.scene || (await SW.api.scenario(entry.key)).scene;
     if (!scene.played) { card.append(el("p", { class: "note" }, scene.problem || "not played")); return; }
@@ -220,6 +220,12 @@ function variantsTab(body, detail) {
     players.push(player);
     player.draw();
   });
+}
+
+// what a variant changed (variant.json), whether it was kept, and why not
+function variantFacts(v) {
+  const changed = (v.changed || []).map((c) => (typeof c === "string" ? c : JSON.stringify(c))).join(", ");
+  return [v.kept ? "kept" : "not kept", v.aspect, changed && `changed: ${changed}`, (v.errors || [])[0]].filter(Boolean).join(" · ");
 }
 
 function filesTab(body, detail) {

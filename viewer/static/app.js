@@ -214,9 +214,9 @@ function variantsTab(body, detail) {
       el("div", { class: "facts" }, entry.variant ? variantFacts(v) : "what the record became"), canvas);
     grid.append(card);
     const scene = entry.scene || (await SW.api.scenario(entry.key)).scene;
-    if (!scene.played) { card.append(el("p", { class: "note" }, scene.problem || "not played")); return; }
+    if (!scene.played) { canvas.replaceWith(el("p", { class: "note" }, scene.problem || "not played")); return; }
     clock.duration = Math.max(clock.duration, scene.duration_s);
-    const player = new Player(canvas, scene, { camera: "whole" });
+    const player = new Player(canvas, scene, { camera: "follow" });
     players.push(player);
     player.draw();
   });

@@ -71,7 +71,7 @@ def scene(folder: Path) -> dict[str, Any]:
         return out
     map_path = _map_path(playback.map or params.get("map"))
     out.update(played=True, duration_s=playback.duration_s, times=playback.times,
-               actors=_actors(playback), lights=_lights(playback),
+               actors=_actors(playback), lights=_lights(playback, params),
                collisions=[list(c) for c in playback.collisions],
                lanes=_lanes_near(map_path, playback),
                map=Path(map_path).stem if map_path else None,
@@ -113,13 +113,17 @@ def _actors(playback: Playback) -> dict[str, dict]:
     return actors
 
 
-def _lights(playback: Playback) -> list[dict]:
-    """Each light of the scenario: where it stands and its colour from when to when."""
+def _lights(playback: Playback, params: dict) -> list[dict]:
+    """Each light of the scenario: where it stands and its colour from when to when (a
+    replay.json written before it said where lights stand: the params' light, CARLA frame)."""
     started = playback.fired("action")
     changes = sorted((t, name) for name, t in started.items() if name in playback.lights)
     spans = [[t, changes[i + 1][0] if i + 1 < len(changes) else playback.duration_s,
               playback.lights[name]] for i, (t, name) in enumerate(changes)]
     positions = {tuple(xy) for xy in playback.light_positions.values()}
+    carla = (number(params, "tfl_x_carla"), number(params, "tfl_y_carla"))
+    if not positions and spans and None not in carla:
+        positions = {(carla[0], -carla[1])}
     return [{"x": x, "y": y, "spans": spans} for x, y in sorted(positions)]
 
 

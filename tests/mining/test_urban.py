@@ -10,8 +10,10 @@ import math
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 from lxml import etree
 
+from scenweave.cli import cli
 from scenweave.mining.detect import detect
 from scenweave.mining.readers import commonroad
 from scenweave.mining.readers.commonroad import continuous_s, held_lane_index
@@ -24,14 +26,16 @@ DT = 0.1
 CYCLE = [("green", 80), ("yellow", 30), ("red", 200)]
 
 
-def _lane(root, lid, left, right, successor=None, light=True, stop_x=None):
+def _lane(root, lid, left, right, successor=None, light=True, stop_x=None, beside=None):
     """A lanelet between ``left`` and ``right`` bounds, under light 200 unless ``light`` is
-    False, with a stop line across its end at ``stop_x``."""
+    False, with a stop line across its end at ``stop_x``; ``beside``: ("Left"|"Right", id)."""
     lanelet = _sub(root, "lanelet", id=str(lid))
     _points(lanelet, "leftBound", left)
     _points(lanelet, "rightBound", right)
-    if successor is not None:
-        _sub(lanelet, "successor", ref=str(successor))
+    for after in [successor] if isinstance(successor, int) else successor or []:
+        _sub(lanelet, "successor", ref=str(after))
+    if beside is not None:
+        _sub(lanelet, f"adjacent{beside[0]}", ref=str(beside[1]), drivingDir="same")
     if stop_x is not None:
         line = _sub(lanelet, "stopLine")
         for y in (left[-1][1], right[-1][1]):
@@ -87,9 +91,14 @@ def write_junction(path, stop_past_m: float = 1.2, queue: bool = False) -> None:
     for tag, value in (("geoNameId", -999), ("gpsLatitude", 48.26), ("gpsLongitude", 11.67)):
         _sub(location, tag, value)
     _sub(_sub(root, "scenarioTags"), "urban")
-    _lane(root, 10, [(0, 3.5), (100, 3.5)], [(0, 0.0), (100, 0.0)], 11, stop_x=100.0)
-    _lane(root, 13, [(0, 0.0), (100, 0.0)], [(0, -3.5), (100, -3.5)], 12, stop_x=100.0)
-    _lane(root, 11, [(100, 3.5), (160, 3.5)], [(100, 0.0), (160, 0.0)], light=False)
+    _lane(root, 10, [(0, 3.5), (100, 3.5)], [(0, 0.0), (100, 0.0)], 11, stop_x=100.0,
+          beside=("Right", 13))
+    _lane(root, 13, [(0, 0.0), (100, 0.0)], [(0, -3.5), (100, -3.5)], [12, 14], stop_x=100.0,
+          beside=("Left", 10))
+    _lane(root, 11, [(100, 3.5), (160, 3.5)], [(100, 0.0), (160, 0.0)], light=False,
+          beside=("Right", 14))
+    _lane(root, 14, [(100, 0.0), (160, 0.0)], [(100, -3.5), (160, -3.5)], light=False,
+          beside=("Left", 11))
     _lane(root, 12, [(100, 0.0), (102.5, -0.5), (105, -3.0), (105, -40.0)],
           [(100, -3.5), (100.8, -3.6), (101.5, -4.0), (101.5, -40.0)], light=False)
     _light(root, 200, CYCLE, 0)
@@ -194,3 +203,19 @@ def test_the_shared_lankershim_crossings(ngsim_snippets):
     speeds = [v for e in events if e.adscene for v in e.series["ego_speed_ms"]]
     assert max(speeds) < 22.0
     assert math.isfinite(sum(speeds))
+
+
+def test_every_urban_record_of_the_junction_plays_back(tmp_path, esmini):
+    (tmp_path / "data").mkdir()
+    write_junction(tmp_path / "data" / "ZAM_Junction-1_1_T-1.xml")
+    runner = CliRunner()
+    mined = runner.invoke(cli, ["mine", str(tmp_path / "data"), "--out", str(tmp_path / "mined")])
+    assert mined.exit_code == 0, mined.output
+    report = json.loads((tmp_path / "mined" / "mining_report.json").read_text())
+    urban = {code: n for code, n in report["records_by_class"].items() if code[0] == "U"}
+    assert urban == {"U1_1": 1, "U4_1": 1, "U4_2": 1, "U4_3": 1, "U4_4": 1}, report["skipped"]
+    ran = runner.invoke(cli, ["run", str(tmp_path / "mined"), "--no-llm", "--out",
+                              str(tmp_path / "runs"), "--run-id", "junction"])
+    assert ran.exit_code == 0, ran.output
+    summary = json.loads((tmp_path / "runs" / "junction" / "summary.json").read_text())
+    assert {o["status"] for o in summary["scenarios"]} == {"ok"}, summary["scenarios"]

@@ -330,14 +330,13 @@ def lead_keeps_ahead(params: Mapping[str, Any],
     return [] if profile is None else [_profile_change("lead", profile)]
 
 
-def urban_hero_profile(params: Mapping[str, Any], stops_at_line: bool) -> SpeedProfile:
-    """How the urban ego drives: the stop at the line or its recorded speed change."""
+def urban_hero_profile(params: Mapping[str, Any],
+                       stops_at_line: bool) -> SpeedProfile | PhasedProfile:
+    """How the urban ego drives: the stop at the line or its recorded speed profile."""
     if stops_at_line:
         return stop_at_line(number(params, "ego_speed_ms"), number(params, "brake_time_s"),
                             stop_line_m(params))
-    duration, start = manoeuvre_timing(params)
-    return SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
-                        start, duration)
+    return motion(params, "ego")
 
 
 def _vehicle(actor: Actor) -> xosc.Vehicle:
@@ -583,9 +582,7 @@ def red_light_for_stop(params: Mapping[str, Any]) -> list[StoryEvent]:
 
 def orange_light_for_pass(params: Mapping[str, Any]) -> list[StoryEvent]:
     """A pass on orange: yellow as the ego is 5 m before the stop line, then red."""
-    duration, start = manoeuvre_timing(params)
-    ego = SpeedProfile(number(params, "ego_speed_ms"), number(params, "ego_end_speed_ms"),
-                       start, duration)
+    ego = motion(params, "ego")
     return light_turns_red(params, orange_light_yellow_s(ego, stop_line_m(params)))
 
 

@@ -13,7 +13,7 @@ from scenweave.corpus.corpus_utils import bumper_gap_m, reference_gap_m
 from scenweave.corpus.phases import PHASED_ACTORS, is_single_ramp, profile_of
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
-from scenweave.ingest.phases import NoProfile, fit_end_values, fit_series
+from scenweave.ingest.phases import SPEED_TOL_MS, NoProfile, fit_end_values, fit_series
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.maneuver import RecordFieldError
 from scenweave.schemas.params import ParamsInvalid, check_params
@@ -170,6 +170,12 @@ def _extract_urban(record: dict) -> dict:
         "min_ttc_s": record["semantics"]["criticality_metric"]["min_ttc_s"],
         **record["perturbation"],
     }
+    series = record.get("series")
+    if isinstance(series, dict) and isinstance(series.get("t"), list) \
+            and not maneuvers.get(record["maneuver_class"]).stops_at_line:
+        # a stop at red is played to the map's stop line, not on the recorded clock
+        params["recorded_series"] = {k: list(v) for k, v in series.items()
+                                     if isinstance(v, list)}
     params.update(dict.fromkeys(SPAWN_KEYS))
     return finish(params)
 
@@ -225,8 +231,7 @@ def finish(params: dict) -> dict:
         params["final_speed_ms"] = params["ego_end_speed_ms"]
     params["timeout_s"] = TIMEOUT_FACTOR * (params["maneuver_start_s"] + params["duration_s"])
     params["required_lane_sides"] = maneuver.lane_sides(params)
-    if params["domain"] == "highway":
-        fit_phases(params)
+    fit_phases(params)
     speeds = [v for k, v in params.items() if k.endswith("speed_ms") and isinstance(v, float)]
     speeds += [p["target_ms"] for k in PHASED_ACTORS for p in params.get(f"{k}_phases") or ()]
     params["max_speed_ms"] = max(speeds, default=0.0)
@@ -295,7 +300,9 @@ def _keep(params: dict, prefix: str, phases: tuple) -> None:
     """``<prefix>_phases`` unless they are the single ramp params describe anyway."""
     records = [p.record() for p in phases]
     params[f"{prefix}_phases"] = records
-    if is_single_ramp(params, prefix):
+    holds = not records and abs(params[f"{prefix}_end_speed_ms"] - params[f"{prefix}_speed_ms"]) \
+        <= SPEED_TOL_MS  # the ramp from start to end speed is a hold within the tolerance
+    if holds or is_single_ramp(params, prefix):
         del params[f"{prefix}_phases"]
 
 

@@ -19,6 +19,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+
 from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.corpus.phases import Phase, PhasedProfile
 
@@ -34,10 +36,15 @@ NO_CHANGE_MS = 1e-3
 #: a phase's corner speed may lie this far from the recorded sample it ends at (m/s): room to
 #: keep the distance where speeds and positions of a record disagree a little
 CORNER_SHIFTS_MS = (0.0, -0.1, 0.1, -0.2, 0.2)
-#: a segment that left a tolerance is tried this many samples further before giving up
-LOOK_AHEAD = 3
+#: a straight segment spans at most this many samples (a longer ramp is two phases): keeps
+#: the search quadratic in this, not in the record's length
+MAX_SEGMENT_SAMPLES = 60
 #: where a two-phase profile may put its corner, as shares of the duration
 CORNERS = tuple(k / 100 for k in range(5, 96))
+
+
+#: distances a fit must keep, each with its tolerance (None: no value at that sample)
+Targets = list[tuple[list[float | None], float]]
 
 
 class NoProfile(ValueError):
@@ -75,59 +82,73 @@ def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], st
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field
         phases.append(Phase(_ms(start_s + t[0]), 0.0, _ms(v[0]), "step"))
         knot = v[0]
-    i, fitted = 0, 0.0
-    while i < len(t) - 1:
-        j, corner, fitted = _longest_segment(t, v, targets, i, knot, fitted)
+    for i, j, corner in _fewest_segments(t, v, targets, knot):
         if abs(corner - knot) > NO_CHANGE_MS:
-            phases.append(Phase(_ms(start_s + t[i]), _ms(t[j] - t[i]), _ms(corner)))
-        i, knot = j, _ms(corner)
+            phases.append(Phase(_ms(start_s + t[i]), _ms(t[j] - t[i]), corner))
+        knot = corner
     return tuple(phases)
 
 
-Targets = list[tuple[list[float | None], float]]
+def _fewest_segments(t: list[float], v: list[float], targets: Targets,
+                     knot: float) -> list[tuple[int, int, float]]:
+    """``(from sample, to sample, corner speed)`` of the straight segments that cover the
+    samples with the fewest speed changes (a segment that keeps its speed costs none),
+    closest to the record's distance among equals: a shortest path over the samples."""
+    times, speeds = np.asarray(t), np.asarray(v)
+    wanted = [(np.array([np.nan if w is None else w for w in values]), tolerance)
+              for values, tolerance in targets]
+    # best[j]: (phases, distance error, corner speed, fitted distance, previous sample)
+    best: dict[int, tuple[int, float, float, float, int]] = {0: (0, 0.0, knot, 0.0, -1)}
+    for i in range(len(t) - 1):
+        if i not in best:
+            continue
+        count, _, start, fitted, _ = best[i]
+        for j, corner, reached, error in _segments_from(times, speeds, wanted, i, start,
+                                                       fitted):
+            cost = count + (abs(corner - start) > NO_CHANGE_MS)
+            if j not in best or (cost, error) < best[j][:2]:
+                best[j] = (cost, error, corner, reached, i)
+        if i + 1 not in best:  # nothing keeps the tolerances: the next sample, as it is
+            corner = _ms(v[i + 1])
+            best[i + 1] = (count + 1, math.inf, corner,
+                           fitted + (start + corner) / 2 * (t[i + 1] - t[i]), i)
+    segments, j = [], len(t) - 1
+    while j > 0:
+        i = best[j][4]
+        segments.append((i, j, best[j][2]))
+        j = i
+    return segments[::-1]
 
 
-def _longest_segment(t: list[float], v: list[float], targets: Targets, i: int, knot: float,
-                     fitted: float) -> tuple[int, float, float]:
-    """The furthest sample ``j`` a straight line from ``(t[i], knot)`` to ``(t[j], corner)``
-    reaches within both tolerances at every sample between, ``corner`` one of the speeds near
-    ``v[j]`` that keeps the distance closest; and the fitted distance at ``t[j]``
-    (``fitted``: at ``t[i]``). Without any, the next sample, as close as it gets."""
-    best: tuple[int, float, float] | None = None
-    for j in range(i + 1, len(t)):
-        options = [o for o in (_segment(t, v, targets, i, j, knot, fitted, v[j] + shift)
-                               for shift in CORNER_SHIFTS_MS) if o is not None]
-        if options:
-            corner, reached, _ = min(options, key=lambda o: o[2])
-            best = (j, corner, reached)
-        elif best is not None and j - best[0] > LOOK_AHEAD:
-            break
-    if best is None:
-        corner = v[i + 1]
-        reached = fitted + (knot + corner) / 2 * (t[i + 1] - t[i])
-        return i + 1, corner, reached
-    return best
-
-
-def _segment(t: list[float], v: list[float], targets: Targets, i: int, j: int, knot: float,
-             fitted: float, corner: float) -> tuple[float, float, float] | None:
-    """``(corner, fitted distance at t[j], worst distance error)`` of the line from
-    ``(t[i], knot)`` to ``(t[j], corner)``, or None when it leaves a tolerance."""
-    if corner < 0:
-        return None
-    slope = (corner - knot) / (t[j] - t[i]) if t[j] > t[i] else 0.0
-    reached, worst, previous = fitted, 0.0, knot
-    for k in range(i + 1, j + 1):
-        speed = knot + slope * (t[k] - t[i])
-        if abs(speed - v[k]) > SPEED_TOL_MS + 1e-9:
-            return None
-        reached += (previous + speed) / 2 * (t[k] - t[k - 1])
-        previous = speed
-        for wanted, tolerance in targets:
-            if wanted[k] is not None and abs(reached - wanted[k]) > tolerance:
-                return None
-        worst = max(worst, abs(reached - targets[0][0][k]))
-    return corner, reached, sum(abs(reached - w[j]) for w, _ in targets if w[j] is not None)
+def _segments_from(times: np.ndarray, speeds: np.ndarray,
+                   wanted: list[tuple[np.ndarray, float]], i: int, knot: float,
+                   fitted: float) -> list[tuple[int, float, float, float]]:
+    """Every straight segment from ``(times[i], knot)`` to ``(times[j], speeds[j] + shift)``
+    (each of ``CORNER_SHIFTS_MS``) that keeps the tolerances at each sample between:
+    ``(j, corner, fitted distance at j, distance error at j)``. One matrix: a row per
+    segment (end and shift), a column per sample after ``i``."""
+    after = np.arange(i + 1, min(len(times), i + 1 + MAX_SEGMENT_SAMPLES))
+    shifts = len(CORNER_SHIFTS_MS)
+    ends = np.tile(np.arange(len(after)), shifts)  # row -> column where its segment ends
+    corners = np.round(np.tile(speeds[after], shifts)
+                       + np.repeat(CORNER_SHIFTS_MS, len(after)), 3)
+    since = times[after] - times[i]
+    line = knot + ((corners - knot) / since[ends])[:, None] * since[None, :]
+    inside = np.arange(len(after))[None, :] <= ends[:, None]
+    ok = (corners >= 0) & ~np.any(inside & (np.abs(line - speeds[after][None, :])
+                                            > SPEED_TOL_MS + 1e-9), axis=1)
+    steps = np.diff(np.concatenate([[times[i]], times[after]]))
+    before = np.concatenate([np.full((len(ends), 1), knot), line[:, :-1]], axis=1)
+    reached = fitted + np.cumsum((before + line) / 2 * steps[None, :], axis=1)
+    at_end = reached[np.arange(len(ends)), ends]
+    error = np.zeros(len(ends))
+    for values, tolerance in wanted:
+        target = values[after]
+        known = inside & ~np.isnan(target)[None, :]
+        ok &= ~np.any(known & (np.abs(reached - target[None, :]) > tolerance), axis=1)
+        error += np.nan_to_num(np.abs(at_end - target[ends]))
+    return [(int(after[ends[r]]), float(corners[r]), float(at_end[r]), float(error[r]))
+            for r in np.flatnonzero(ok)]
 
 
 def fit_end_values(v0: float, v1: float, start_s: float, duration_s: float,

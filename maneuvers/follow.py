@@ -66,10 +66,34 @@ def sample(rng: np.random.Generator, n: int, code: str) -> Columns:
             "lead_vehicle_type": vehicle_types(rng, n)}
 
 
+#: a phased row's lead dips this much (km/h) below its ramp half way through
+PHASED_DIP_KMH = (8.0, 20.0)
+#: a phased row's gap never comes closer than this (m, bumpers)
+PHASED_CLOSEST_M = 8.0
+
+
+def sample_phased(rng: np.random.Generator, n: int, code: str) -> Columns:
+    """Rows whose end gap no single ramp of the other car reaches: it slows down in between
+    and catches up again (a dip of 8-20 km/h half way), so its record needs two phases."""
+    rows = sample(rng, n, code)
+    duration = rows["duration_s"]
+    loss = np.round(rng.uniform(*PHASED_DIP_KMH, n) / KMH / 2 * duration, 1)
+    begin, end = rows["npc_distance_begin_m"], rows["npc_distance_end_m"]
+    if code == "FLF":  # the lead falls back toward the ego: room for it first
+        shift = np.maximum(PHASED_CLOSEST_M + loss - np.minimum(begin, end), 0.0)
+        begin, end = begin + shift, end + shift - loss
+    else:  # the car behind falls further back
+        end = end + loss
+    return {**rows, "npc_distance_begin_m": np.round(begin, 1),
+            "npc_distance_end_m": np.round(end, 1),
+            "lead_dist_traveled_m": np.round(rows["lead_dist_traveled_m"] - loss, 1)}
+
+
 MANEUVERS = tuple(
     Maneuver(code=code, tag=tag, domain="highway", name=name,
              script=f"gen_hw_{code.lower()}.py", family="FL", layout_fields=LAYOUT_FIELDS,
-             extract=extract, sample=sample, npc_position=position,
+             extract=extract, sample=sample, sample_phased=sample_phased,
+             npc_position=position,
              same_lane=SameLane("npc", "npc_distance_begin_m", "all_along"),
              npc_speed_change=True, gap_at_end=True)
     for code, tag, name, position in (

@@ -76,6 +76,8 @@ class Maneuver:
     extract: Extractor | None = None
     #: the sample-data generator of its rows
     sample: Sampler | None = None
+    #: rows only a speed profile of two or more phases shows (``sample-data --phased``)
+    sample_phased: Sampler | None = None
     #: the layout holds ``relative_speed_sign`` (npc = ego + sign * relative speed)
     relative_speed: bool = False
     #: the ego's end speed follows from its start speed (None: the record gives it)

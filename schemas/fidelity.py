@@ -443,4 +443,5 @@ def _light_plan(params: dict) -> tuple[str, float | None]:
     if None in keys:
         return "green", None
     *profile, stop_line = keys
-    return "green", orange_light_yellow_s(SpeedProfile(*profile), stop_line)
+    ego = SpeedProfile(*profile) if _single_ramp(params, "ego") else profile_of(params, "ego")
+    return "green", orange_light_yellow_s(ego, stop_line)

@@ -16,9 +16,11 @@ from scenweave.ingest.layouts import ClassLayout, HighwayLayouts, load_layouts
 
 
 def write_highway_samples(out_dir: Path, seed: int, per_class: int,
-                          layouts: HighwayLayouts | None = None) -> list[Path]:
+                          layouts: HighwayLayouts | None = None, phased: int = 0) -> list[Path]:
     """Write one file per highway class into ``out_dir`` (each class's generator,
-    ``Maneuver.sample``); return the paths."""
+    ``Maneuver.sample``); return the paths. ``phased`` more rows per class that has them
+    (``Maneuver.sample_phased``: records a single speed ramp cannot show) follow the
+    ``per_class`` rows, drawn from their own stream, so those rows stay the same."""
     layouts = layouts or load_layouts()
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -26,7 +28,13 @@ def write_highway_samples(out_dir: Path, seed: int, per_class: int,
         code = layout.code
         rng = np.random.default_rng([seed, offset])
         columns = layout.maneuver.sample(rng, per_class, code)
-        table = np.empty((per_class, len(layout.columns)), dtype=object)
+        rows = per_class
+        if phased and layout.maneuver.sample_phased is not None:
+            extra = layout.maneuver.sample_phased(np.random.default_rng([seed, offset, 1]),
+                                                  phased, code)
+            columns = {k: np.concatenate([v, extra[k]]) for k, v in columns.items()}
+            rows += phased
+        table = np.empty((rows, len(layout.columns)), dtype=object)
         for index, name in enumerate(layout.names):
             table[:, index] = _as_strings(columns[name])
         path = out_dir / f"{code}_BINS_VALUES.npy"

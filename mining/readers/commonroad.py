@@ -75,6 +75,8 @@ STILL_STEP_M = 0.05
 #: within the last LANE_CHANGE_WINDOW_S
 MIN_LANE_CHANGE_M = 1.5
 LANE_CHANGE_WINDOW_S = 3.0
+#: a car heading further than this off its lane is turning into or out of it
+ACROSS_LANE_DEG = 20.0
 COLOURS = {
     TrafficLightState.GREEN: "green", TrafficLightState.YELLOW: "yellow",
     TrafficLightState.RED: "red", TrafficLightState.RED_YELLOW: "red",
@@ -373,12 +375,10 @@ def continuous_s(xy: np.ndarray, group: np.ndarray, axes: np.ndarray) -> tuple[n
     return s, s - projected
 
 
-def lane_lateral(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
-                 group: np.ndarray) -> np.ndarray:
-    """How far the car moved across its lane since its first step (m, + to the left): each
-    step's motion across the lanelet's centre line where the car is (its group's axis off
-    the map), summed. A car following its lane, through a bend or a turn, or from one
-    lanelet into the next, keeps its value; a lane change moves it by a lane's width."""
+def lane_directions(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
+                    group: np.ndarray) -> np.ndarray:
+    """The unit direction of the lane where the car is, per step: the tangent of its
+    lanelet's centre line there (its group's axis off the map)."""
     along = lane_map.axes[group].copy()
     on = row >= 0
     if on.any():
@@ -390,9 +390,26 @@ def lane_lateral(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
         norm = np.hypot(*tangent.T)
         good = norm > 0
         along[np.flatnonzero(on)[good]] = tangent[good] / norm[good, None]
+    return along
+
+
+def lane_lateral(xy: np.ndarray, along: np.ndarray) -> np.ndarray:
+    """How far the car moved across its lane since its first step (m, + to the left): each
+    step's motion across the lane's direction ``along`` (:func:`lane_directions`), summed.
+    A car following its lane, through a bend or a turn, or from one lanelet into the next,
+    keeps its value; a lane change moves it by a lane's width."""
     normal = np.column_stack([-along[:, 1], along[:, 0]])
     moved = np.einsum("ij,ij->i", np.diff(xy, axis=0), normal[1:]) if len(xy) > 1 else []
     return np.concatenate([[0.0], np.cumsum(moved)])
+
+
+def across_lane(heading: np.ndarray, along: np.ndarray,
+                max_deg: float = ACROSS_LANE_DEG) -> np.ndarray:
+    """Steps where the car heads more than ``max_deg`` off its lane: it is turning into or
+    out of the road, which is no lane change."""
+    lane_heading = np.arctan2(along[:, 1], along[:, 0])
+    off = np.abs(np.angle(np.exp(1j * (heading - lane_heading))))
+    return np.nan_to_num(off, nan=0.0) > np.radians(max_deg)
 
 
 def held_lane_index(index: np.ndarray, lateral: np.ndarray, group: np.ndarray,
@@ -423,10 +440,12 @@ def _track(raw: _Raw, row: np.ndarray, lane_map: LaneMap, dt: float) -> Track:
     index = np.where(row >= 0, lane_map.lane_index[row], np.nan)
     group = _step_groups(lane_map, row, raw.heading)
     s, off_axis = continuous_s(raw.xy, group, lane_map.axes)
-    lateral = lane_lateral(lane_map, raw.xy, row, group) if lane_map.urban else np.empty(0)
-    held = index
+    held, lateral = index, np.empty(0)
     if lane_map.urban:
-        held = held_lane_index(index, lateral, group, np.isin(lane_ids, list(lane_map.junctions)),
+        along = lane_directions(lane_map, raw.xy, row, group)
+        lateral = lane_lateral(raw.xy, along)
+        no_change = np.isin(lane_ids, list(lane_map.junctions)) | across_lane(raw.heading, along)
+        held = held_lane_index(index, lateral, group, no_change,
                                window=int(round(LANE_CHANGE_WINDOW_S / dt)))
     # where s left the group's frame or the lane index is held against the map, the car is
     # compared with nobody

@@ -16,7 +16,12 @@ from lxml import etree
 from scenweave.cli import cli
 from scenweave.mining.detect import detect
 from scenweave.mining.readers import commonroad
-from scenweave.mining.readers.commonroad import continuous_s, held_lane_index
+from scenweave.mining.readers.commonroad import (
+    across_lane,
+    continuous_s,
+    held_lane_index,
+    lane_lateral,
+)
 from scenweave.mining.thresholds import load_thresholds
 from tests.mining.conftest import REPO
 from tests.mining.make_fixtures import _light, _points, _state, _sub
@@ -181,6 +186,14 @@ def test_a_lane_index_changes_only_with_motion_across_the_road():
     shift = np.array([2, 2, 3, 4, 4, 4], float)
     jog = np.array([0.0, 0.0, 1.0, 2.0, 2.0, 2.0])  # the lanes shift inside the junction
     assert held_lane_index(shift, jog, np.zeros(6, int), inside).tolist() == [2] * 6
+
+
+def test_lateral_motion_is_measured_across_the_lane_and_turning_in_is_no_lane_change():
+    along = np.tile([[1.0, 0.0]], (5, 1))
+    change = np.array([[0, 0], [10, 0.5], [20, 1.75], [30, 3.0], [40, 3.5]], float)
+    assert lane_lateral(change, along).tolist() == pytest.approx([0, 0.5, 1.75, 3.0, 3.5])
+    heading = np.radians([0.0, 5.0, 15.0, 25.0, -40.0])
+    assert across_lane(heading, along).tolist() == [False, False, False, True, True]
 
 
 def test_urban_labels_are_well_formed():

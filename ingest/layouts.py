@@ -40,6 +40,8 @@ class ClassLayout:
     columns: tuple[Column, ...]
     relative_speed_sign: int | None = None
     gaps_between: str | None = None
+    #: cut-in classes: what the ``direction`` column names (:data:`DIRECTION_MEANINGS`)
+    direction_is: str | None = None
 
     @property
     def maneuver(self) -> maneuvers.Maneuver:
@@ -64,6 +66,8 @@ class ClassLayout:
             found["relative_speed_sign"] = self.relative_speed_sign
         if self.gaps_between is not None:
             found["gaps_between"] = self.gaps_between
+        if self.direction_is is not None:
+            found["direction_is"] = self.direction_is
         sentinels = {c.name: list(c.sentinels) for c in self.columns if c.sentinels}
         if sentinels:
             found["sentinels"] = sentinels
@@ -73,6 +77,9 @@ class ClassLayout:
 #: how a layout's gap columns are measured: between the facing bumpers (what a radar on the
 #: recording car measures) or between the vehicles' reference points (rear axles)
 GAP_CONVENTIONS = ("bumpers", "reference_points")
+#: what a cut-in's ``direction`` names: the way the cutter moves (``move``, ScenWeave's
+#: default) or the side of the ego it comes from (``from_side``); docs/highway-layouts.md
+DIRECTION_MEANINGS = ("move", "from_side")
 
 
 @dataclass(frozen=True)
@@ -136,12 +143,17 @@ def _class_layout(code: str, spec: Any, where: str) -> ClassLayout:
     if gaps_between not in (*GAP_CONVENTIONS, None):
         raise LayoutError(f"{where}.gaps_between: must be one of {', '.join(GAP_CONVENTIONS)} "
                           f"or absent, got {gaps_between!r}")
+    direction_is = spec.get("direction_is")
+    if direction_is is not None and (direction_is not in DIRECTION_MEANINGS
+                                     or not maneuver.npc_ends_in_ego_lane):
+        raise LayoutError(f"{where}.direction_is: cut-in classes only, one of "
+                          f"{', '.join(DIRECTION_MEANINGS)}, got {direction_is!r}")
     return ClassLayout(code=code, tag=_class_fact(spec, "tag", maneuver.tag, where),
                        npc_position=_class_fact(spec, "npc_position", maneuver.npc_position,
                                                 where),
                        columns=columns,
                        relative_speed_sign=int(sign) if sign in (1, -1) else None,
-                       gaps_between=gaps_between)
+                       gaps_between=gaps_between, direction_is=direction_is)
 
 
 def _class_fact(spec: dict, key: str, known: Any, where: str) -> Any:

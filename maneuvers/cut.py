@@ -30,9 +30,17 @@ def extract(raw: dict, code: str, conventions: dict) -> dict:
         "npc_speed_ms": max(raw["ego_vel_kmh"] + sign * raw["cutter_vel_kmh"], 0.0) / KMH,
         "delta_speed_ms": raw["delta_vel_kmh"] / KMH,
         "npc_distance_m": raw["npc_distance_m"],
-        "lane_change_direction": raw["direction"].lower(),
+        "lane_change_direction": _move(raw["direction"].lower(), conventions),
         "npc_vehicle_type": raw["lead_vehicle_type"].lower(),
     }
+
+
+def _move(direction: str, conventions: dict) -> str:
+    """The way the cutter moves: a layout whose cut-in ``direction`` names the side the
+    cutter comes from (``direction_is: from_side``) means the other way."""
+    if conventions.get("direction_is") == "from_side":
+        return {"left": "right", "right": "left"}.get(direction, direction)
+    return direction
 
 
 def sample(rng: np.random.Generator, n: int, code: str) -> Columns:
@@ -75,7 +83,7 @@ def cut_out_sides(params) -> list[str]:
 def _cut_class(code: str, name: str, tag: str, cut_in: bool, behind: bool) -> Maneuver:
     return Maneuver(
         code=code, tag=tag, domain="highway", name=name, script=f"gen_hw_{code.lower()}.py",
-        family="CUT", layout_fields=LAYOUT_FIELDS, extract=extract, sample=sample,
+        layout_fields=LAYOUT_FIELDS, extract=extract, sample=sample,
         relative_speed=True, ego_end_speed_factor=1.0 if cut_in or behind else 1.05,
         npc_position="behind" if behind else "front",
         lane_sides=cut_in_sides if cut_in else cut_out_sides, npc_starts_beside=cut_in,

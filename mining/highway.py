@@ -34,21 +34,10 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
             if best < limits["deceleration_ms2"] or drop < limits["min_speed_drop_ms"] \
                     or motion.speed[first] < limits["min_start_speed_ms"]:
                 continue
-            first, last = _core(track.t, motion.speed, first, last, limits["edge_share"])
             follower = scene.traffic.follower(i, first)
             if follower is None or follower.gap_m > limits["follower_within_m"]:
                 continue
             yield _brake_event(scene, i, follower, first, last, best, limits)
-
-
-def _core(t: np.ndarray, speed: np.ndarray, first: int, last: int,
-          share: float) -> tuple[int, int]:
-    """The phase without the smoothing's blur at its edges: from the first to the last step
-    decelerating at least ``share`` of the phase's peak (at a half, a linear speed change
-    measures as long as it lasts, so a played brake mines back to the same record)."""
-    deceleration = -np.gradient(speed, t)[first:last + 1]
-    strong = np.flatnonzero(deceleration >= share * deceleration.max())
-    return first + int(strong[0]), first + int(strong[-1])
 
 
 def braking_phases(t: np.ndarray, speed: np.ndarray, onset_ms2: float,
@@ -97,9 +86,11 @@ class LaneChange:
     after: int
     old_lane: float
     new_lane: float
-    #: when the lateral motion starts and ends
+    #: the event's window: the lane change, clipped to the track
     start_s: float
     end_s: float
+    #: how long the lane change takes (a linear one as fast as recorded), s
+    duration_s: float
     #: how far the car moved across the road (m)
     lateral_m: float
 
@@ -159,31 +150,49 @@ def _crossing(lanes: np.ndarray, last_old: int, first_new: int) -> int:
 
 def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float,
            limits: dict[str, float]) -> LaneChange | None:
-    """The lane change's start and end from the car's lateral motion: where it has covered
-    ``edge_share`` of its way across and where it has ``edge_share`` left (clipped to the
-    track); None when it moves less than ``min_lateral_m`` sideways."""
+    """The lane change's timing from the car's lateral motion: the time it takes from
+    ``edge_share`` of its way across to ``edge_share`` left, as the linear lane change a
+    scenario plays that is as fast there (that span / (1 - 2 x edge_share)); None when it
+    moves less than ``min_lateral_m`` sideways. The event's window is clipped to the track;
+    its duration is the lane change's."""
     track, lateral = scene.tracks[i], scene.lateral[i]
     if not np.isfinite(lateral[[before, after]]).all():  # lanes only: a change of set length
         half = limits["duration_s"] / 2
         crossing = float(track.t[after])
         return LaneChange(i, before, after, old, new, max(float(track.t[0]), crossing - half),
-                          min(float(track.t[-1]), crossing + half), float("nan"))
-    reach = limits["max_duration_s"]
-    near = np.abs(track.t - track.t[after]) <= reach
+                          min(float(track.t[-1]), crossing + half), limits["duration_s"],
+                          float("nan"))
+    near = np.abs(track.t - track.t[after]) <= limits["max_duration_s"]
     window = np.flatnonzero(near & np.isfinite(lateral))
     y0, y1 = float(lateral[window[0]]), float(lateral[window[-1]])
     moved = y1 - y0
     if abs(moved) < limits["min_lateral_m"] or np.sign(moved) != (1 if new < old else -1):
         return None
-    share = (lateral[window] - y0) / moved
-    started = window[:np.searchsorted(window, after)][share[:np.searchsorted(window, after)]
-                                                      <= limits["edge_share"]]
-    ended = window[np.searchsorted(window, after):][share[np.searchsorted(window, after):]
-                                                    >= 1 - limits["edge_share"]]
-    first = int(started[-1]) if len(started) else int(window[0])
-    last = int(ended[0]) if len(ended) else int(window[-1])
-    return LaneChange(i, before, after, old, new, float(track.t[first]), float(track.t[last]),
-                      abs(moved))
+    share = limits["edge_share"]
+    done = (lateral[window] - y0) / moved
+    split = int(np.searchsorted(window, after))
+    started = window[:split][done[:split] <= share]
+    ended = window[split:][done[split:] >= 1 - share]
+    first = _when(track.t, done, window, started[-1], share) if len(started) \
+        else float(track.t[window[0]])
+    last = _when(track.t, done, window, ended[0] - 1, 1 - share) if len(ended) \
+        else float(track.t[window[-1]])
+    duration = (last - first) / (1 - 2 * share)
+    start = first - share * duration
+    return LaneChange(i, before, after, old, new, max(start, float(track.t[0])),
+                      min(start + duration, float(track.t[-1])), duration, abs(moved))
+
+
+def _when(t: np.ndarray, done: np.ndarray, window: np.ndarray, step: int,
+          share: float) -> float:
+    """When the share of the way done passes ``share`` between ``step`` and the next step
+    (linear in between)."""
+    k = int(np.searchsorted(window, step))
+    if k + 1 >= len(window):
+        return float(t[step])
+    a, b = float(done[k]), float(done[k + 1])
+    part = 0.0 if b == a else min(max((share - a) / (b - a), 0.0), 1.0)
+    return float(t[window[k]] + part * (t[window[k + 1]] - t[window[k]]))
 
 
 def cuts(scene: Scene) -> Iterator[Event]:
@@ -209,7 +218,7 @@ def _cut_event(scene: Scene, code: str, change: LaneChange, ego: int) -> Event |
     fields = {
         "ego_vel_kmh": ego_start * KMH, "cutter_vel_kmh": (npc_start - ego_start) * KMH,
         "delta_vel_kmh": (npc_end - npc_start) * KMH,
-        "duration_s": change.end_s - change.start_s, "npc_distance_m": gap,
+        "duration_s": change.duration_s, "npc_distance_m": gap,
         "other_dir_traffic": "No", "direction": change.direction,
         "lead_vehicle_type": vehicle(scene.tracks[npc]),
     }
@@ -228,7 +237,7 @@ def own_lane_changes(scene: Scene) -> Iterator[Event]:
         if start is None or end is None:
             continue
         fields = {"ego_vel_begin_kmh": start * KMH, "ego_vel_end_kmh": end * KMH,
-                  "duration_s": change.end_s - change.start_s, "other_dir_traffic": "No",
+                  "duration_s": change.duration_s, "other_dir_traffic": "No",
                   "direction": change.direction}
         yield make_event(scene, "LCB" if behind else "LCF", i, None, change.start_s,
                          change.end_s, fields)

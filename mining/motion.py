@@ -22,10 +22,11 @@ class Motion:
 
 def smooth_motion(track: Track, window_s: float) -> Motion:
     """Savitzky-Golay (order 2) derivatives of ``s`` over a centred window of ``window_s``;
-    tracks shorter than a window keep their recorded speed, differentiated by steps."""
+    tracks shorter than a window, and a window under 5 steps (exact speeds, a replay's),
+    keep their recorded speed, differentiated by steps."""
     dt = _step(track.t)
-    points = int(round(window_s / dt)) | 1  # odd
-    if len(track.t) < max(points, 5) or dt <= 0:
+    points = int(round(window_s / dt)) | 1 if dt > 0 else 1  # odd
+    if len(track.t) < max(points, 5) or dt <= 0 or points < 5:
         speed = np.asarray(track.speed, dtype=float)
         return Motion(speed, np.gradient(speed, track.t) if len(speed) > 1 else speed * 0)
     s = np.asarray(track.s, dtype=float)

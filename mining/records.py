@@ -20,6 +20,8 @@ def highway_record(event: Event, source: Path, reader: str, number: int) -> dict
     conventions: dict = {"gaps_between": "bumpers"}
     if maneuver.relative_speed:
         conventions["relative_speed_sign"] = 1
+    if maneuver.npc_ends_in_ego_lane:
+        conventions["direction_is"] = "move"  # the cutter's own move (docs/highway-layouts.md)
     stem = _slug(source.stem)
     return {
         "schema_version": "phase1.v1",

@@ -32,8 +32,8 @@ def test_a_lead_braking_hard_in_front_of_a_follower_is_brake():
     assert f["ego_vel_kmh"] == pytest.approx(90, abs=1)
     assert f["lead_vel_kmh"] == pytest.approx(90, abs=3)
     assert f["delta_vel_kmh"] == pytest.approx(-54, abs=6)
-    # the phase from the first to the last step braking at half its peak: as long as it lasts
-    assert f["duration_s"] == pytest.approx(3.0, abs=0.3)
+    # the phase spans the falling speed: the 3 s brake, blurred by at most the 1 s smoothing
+    assert 3.0 - 0.1 <= f["duration_s"] <= 3.0 + 1.0
     assert f["npc_distance_m"] == pytest.approx(30 - 4.5, abs=1)  # bumpers: centres - 4.5 m
     assert f["brake_intensity"] == pytest.approx(5 / 8, abs=0.08)
     assert brake.series["npc_speed_ms"][0] == pytest.approx(25, abs=1)

@@ -15,6 +15,8 @@ from scenweave.mining import Recording, Track
 from scenweave.mining.detect import detect
 from scenweave.mining.mine import mine_recordings
 from scenweave.mining.thresholds import load_thresholds
+from scenweave.player import Playback
+from scenweave.player.playback import Box
 from tests.mining.synthetic import DT, braking, car, recording, steady
 
 LIMITS = load_thresholds()
@@ -45,6 +47,11 @@ def changer(track_id: str, duration_s: float, s0: float, v: float, lane_at: Call
                     "lane": np.array([str(int(k)) for k in lanes], dtype=object)})
 
 
+def linear_step(y0: float, y1: float, start: float, duration: float) -> Callable:
+    """Sideways at a constant rate, as a scenario's lane change (linear dynamics) moves."""
+    return lambda t: y0 + (y1 - y0) * np.clip((t - start) / duration, 0.0, 1.0)
+
+
 def smooth_step(y0: float, y1: float, start: float, duration: float) -> Callable:
     def y(t: np.ndarray) -> np.ndarray:
         share = np.clip((t - start) / duration, 0.0, 1.0)
@@ -62,8 +69,9 @@ def test_a_short_sharp_brake_is_kept_with_its_best_second_as_intensity():
     # 3.1 m/s lost within its best second; the 1 s smoothing takes up to a fifth off a brake
     # this short (a longer one keeps its whole best second, below)
     assert 0.8 * 3.1 / 8 - 0.01 <= brake.fields["brake_intensity"] <= 3.1 / 8 + 0.01
-    assert -3.1 * 3.6 - 0.5 <= brake.fields["delta_vel_kmh"] <= -0.75 * 3.1 * 3.6
-    assert brake.fields["duration_s"] == pytest.approx(1.0, abs=0.3)
+    assert brake.fields["delta_vel_kmh"] == pytest.approx(-3.1 * 3.6, abs=1.0)
+    # the window holds the whole brake, blurred by at most the 1 s smoothing
+    assert brake.start_s <= 4.0 and brake.end_s >= 5.0 and brake.fields["duration_s"] <= 2.0
 
 
 def test_two_hard_stretches_of_one_braking_phase_are_one_record():
@@ -88,13 +96,12 @@ def test_a_flickering_lane_label_is_one_lane_change_timed_by_the_lateral_motion(
     flicker = profile((0, 2), (4.9, 2), (5.0, 1), (5.2, 1), (5.3, 2), (5.5, 2), (5.6, 1),
                       (12, 1))
     ego = changer("ego", 12, 30, 20, lambda t: np.round(flicker(t)),
-                  smooth_step(-7.0, -3.5, 4.0, 2.0))
+                  linear_step(-7.0, -3.5, 4.0, 2.0))
     found = events(ego, car("other", 12, 70, steady(20), 1), car("slow", 12, 0, steady(20), 2))
     (change,) = found["LCF"]
     assert change.fields["direction"] == "Left"
-    assert change.start_s == pytest.approx(4.0 + 0.4, abs=0.35)  # where 10 % of the way is done
-    assert change.fields["duration_s"] == pytest.approx(2.0 * 0.6, abs=0.4)  # 10 % to 90 %
-    assert change.fields["duration_s"] != 3.0
+    assert change.start_s == pytest.approx(4.0, abs=0.15)
+    assert change.fields["duration_s"] == pytest.approx(2.0, abs=0.15)  # not a fixed 3.0
     assert change.series["ego_lateral_m"][-1] - change.series["ego_lateral_m"][0] > 2.5
 
 
@@ -130,7 +137,8 @@ def test_no_following_pair_spans_a_vehicle_the_file_took_out():
 
 def test_an_event_in_two_overlapping_files_is_written_once(tmp_path):
     def snippet(shift_s: float, source: str) -> Recording:
-        tracks = [car("lead", 14, 60, braking(25, 4, 5, 10), 2), car("ego", 14, 30, steady(25), 2)]
+        tracks = [car("lead", 14, 60, braking(25, 4, 5, 10), 2),
+                  car("ego", 14, 30, braking(25, 4.5, 5, 10), 2)]
         cut = [Track(**{**tr.__dict__, **{k: getattr(tr, k)[int(shift_s / DT):] for k in (
             "t", "x", "y", "heading", "speed", "s", "lane", "lane_index")}}) for tr in tracks]
         moved = [Track(**{**tr.__dict__, "t": np.round(tr.t - shift_s, 3)}) for tr in cut]
@@ -142,3 +150,86 @@ def test_an_event_in_two_overlapping_files_is_written_once(tmp_path):
             if d["class"] == "BRAKE"] == [("b.xml", "BRAKE", "a.xml")]
     alone = mine_recordings([snippet(2.0, "b.xml")], tmp_path / "alone", LIMITS)
     assert alone.written["BRAKE"] == 1  # the second file alone still has it
+
+
+# -- the round trip -----------------------------------------------------------------------
+
+def _played_lane_change(start_s: float, duration_s: float) -> Playback:
+    """The ego alone on a curved road (radius 400 m), changing from lane -2 to -1 (left)
+    between ``start_s`` and ``start_s + duration_s``, as esmini reports it."""
+    t = np.round(np.arange(0.0, 12.0, 0.05), 3)
+    s = 20.0 * t
+    t_offset = linear_step(-5.25, -1.75, start_s, duration_s)(t)  # OpenDRIVE t, + left
+    radius = 400.0
+    angle = s / radius
+    x = (radius - t_offset) * np.sin(angle)
+    y = radius - (radius - t_offset) * np.cos(angle)
+    lane = np.where(t_offset > -3.5, -1, -2)
+    centre = np.where(lane == -1, -1.75, -5.25)
+    track = {"x": x.tolist(), "y": y.tolist(), "z": [0.0] * len(t), "h": angle.tolist(),
+             "speed": [20.0] * len(t), "road": [0] * len(t), "lane": lane.tolist(),
+             "s": s.tolist(), "lane_offset": (t_offset - centre).tolist(),
+             "junction": [0] * len(t)}
+    return Playback(times=t.tolist(), tracks={"hero": track},
+                    boxes={"hero": Box(4.8, 2.0, 1.4)})
+
+
+def test_an_lcb_scenario_played_alone_comes_back_as_the_same_lane_change():
+    from scenweave.mining.roundtrip import round_trip
+
+    record = {"maneuver_class": "LCB", "scenario_id": "LCB_x",
+              "provenance": {"tracks": {"ego": "e"}},
+              "params": {"ego_vel_begin_kmh": 72.0, "ego_vel_end_kmh": 72.0,
+                         "duration_s": 2.5, "direction": "Left"}}
+    trip = round_trip(record, _played_lane_change(3.0, 2.5), LIMITS)
+    assert trip.found and trip.holds, trip.misses
+    slower = round_trip(record, _played_lane_change(3.0, 4.0), LIMITS)
+    assert slower.found and "duration_s" in slower.misses  # the timing is compared
+
+
+# -- the cut-in direction convention --------------------------------------------------------
+
+def test_a_cut_in_direction_means_the_move_unless_the_layout_says_the_side(tmp_path):
+    import copy
+    import json
+
+    from scenweave.ingest import LayoutError, extract_params, ingest_directory, load_records
+    from scenweave.ingest.layouts import DEFAULT_LAYOUT_PATH, load_layouts
+    from tests.ingest.builders import write_npy
+
+    row = ["100.8", "-7.2", "3.6", "4.0", "20", "No", "Left", "Car"]
+
+    def direction(layout: dict | None, name: str) -> str:
+        path = None
+        if layout is not None:
+            path = tmp_path / f"{name}.json"
+            path.write_text(json.dumps(layout))
+        write_npy(tmp_path / name, "CINF", [row])
+        ingest_directory(tmp_path / name, tmp_path / f"{name}-out", layout_path=path)
+        (record,) = load_records(tmp_path / f"{name}-out")
+        return extract_params(record)["lane_change_direction"]
+
+    bundled = json.loads(DEFAULT_LAYOUT_PATH.read_text())
+    assert bundled["classes"]["CINF"]["direction_is"] == "move"
+    assert direction(None, "bundled") == "left"  # the cutter moves left
+    sides = copy.deepcopy(bundled)
+    sides["classes"]["CINF"]["direction_is"] = "from_side"
+    assert direction(sides, "sides") == "right"  # "Left": it comes from the ego's left
+    sides["classes"]["CINF"]["direction_is"] = "up"
+    (tmp_path / "bad.json").write_text(json.dumps(sides))
+    with pytest.raises(LayoutError, match="classes.CINF.direction_is"):
+        load_layouts(tmp_path / "bad.json")
+
+
+def test_a_mined_cut_in_says_which_convention_its_direction_follows():
+    from pathlib import Path
+
+    from scenweave.mining.records import highway_record
+
+    ego = car("ego", 12, 0, steady(25), 2)
+    cutter = changer("cutter", 12, 15, 26, lambda t: np.where(t < 6, 3, 2),
+                     smooth_step(-10.5, -7.0, 5.0, 2.0))
+    (cin,) = events(ego, cutter)["CINF"]
+    record = highway_record(cin, Path("road.xml"), "synthetic", 0)
+    assert cin.fields["direction"] == "Left"
+    assert record["conventions"]["direction_is"] == "move"

@@ -217,8 +217,9 @@ class _Facts:
 
     @property
     def recorded(self) -> dict:
-        """What a mined record recorded (``recorded.json``; empty for other records)."""
-        return _read_json(self.folder / RECORDED_NAME)
+        """What a mined record recorded (``recorded.json``, else params ``recorded_series``;
+        empty for other records)."""
+        return _read_json(self.folder / RECORDED_NAME) or self.params.get("recorded_series") or {}
 
     def recorded_curve(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
         """(scenario time, values) of a recorded series: the record's event starts when the
@@ -331,7 +332,7 @@ def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> bytes:
     lower_axes.set_xlabel("time (s)", fontsize=8)
     _map_panel(map_axes, playback, facts, colours, map_path)
     _title(figure, facts)
-    _caption(figure, facts)
+    _caption(figure, facts, playback.series_errors)
     return _png(figure)
 
 
@@ -342,7 +343,7 @@ def _colours(playback: Playback) -> dict[str, str]:
     return colours
 
 
-def _caption(figure: Any, facts: _Facts) -> None:
+def _caption(figure: Any, facts: _Facts, series_errors: dict | None = None) -> None:
     findings = facts.findings()
     if not findings:
         text = ("replay as recorded: no REPLAY_* finding" if facts.replay and
@@ -354,6 +355,9 @@ def _caption(figure: Any, facts: _Facts) -> None:
             shown[-1] = f"… and {len(findings) - MAX_CAPTION_LINES + 1} more findings " \
                         "(status.json)"
         text = "\n".join(shown)
+    if series_errors:  # the whole record, sample by sample (schemas.replay)
+        text += ("\n" if text else "") + "against the recorded series: " + "; ".join(
+            f"{name} max {e['max']:.2f} / RMS {e['rms']:.2f}" for name, e in series_errors.items())
     figure.text(0.01, 0.1, text, va="top", ha="left", fontsize=7.5,
                 color=FAIL_COLOUR if findings else PASS_COLOUR)
 

@@ -423,7 +423,22 @@ def _replay_overview(replayed: list[dict]) -> str:
              + (f"; esmini could not play {engine}" if engine else "") + ".</p>"]
     lines.append(table(["replay finding", "scenarios"], [[k, v] for k, v in sorted(codes.items())])
                  if codes else "<p>No replay finding.</p>")
-    return "\n".join(lines)
+    return "\n".join(lines + _series_table(replayed))
+
+
+def _series_table(replayed: list[dict]) -> list[str]:
+    """Against the recorded series (mined records): per quantity, the scenarios compared and
+    the largest max and RMS error over them (``series_errors``, docs/scenario-conventions.md)."""
+    errors: dict[str, list[dict]] = {}
+    for o in replayed:
+        for name, error in (o["replay"].get("series_errors") or {}).items():
+            errors.setdefault(name.split(" ", 1)[1], []).append(error)
+    if not errors:
+        return []
+    return ["<p>Against the records' series, at every recorded sample:</p>",
+            table(["quantity", "scenarios", "largest max error", "largest RMS error"],
+                  [[k, len(v), f"{max(e['max'] for e in v):.2f}",
+                    f"{max(e['rms'] for e in v):.2f}"] for k, v in sorted(errors.items())])]
 
 
 def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PASSING_PER_CLASS,

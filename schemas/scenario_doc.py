@@ -9,6 +9,7 @@ from pathlib import Path
 from lxml import etree
 
 from scenweave.corpus.kinematics import SpeedProfile
+from scenweave.corpus.phases import Phase, PhasedProfile
 
 EGO_NAMES = ("hero", "ego")
 
@@ -87,8 +88,10 @@ class ScenarioDoc:
         return _number(self.root.find(f"Entities/ScenarioObject[@name='{entity}']/Vehicle/"
                                       "BoundingBox/Dimensions"), "length")
 
-    def speed_profile(self, entity: str) -> SpeedProfile | None:
-        """The entity's start speed and its first storyboard speed change (time dynamics).
+    def speed_profile(self, entity: str) -> SpeedProfile | PhasedProfile | None:
+        """The entity's start speed and its storyboard speed changes (time dynamics): one
+        change as a ``SpeedProfile``, several (phases, a keep-distance after the record) as
+        a ``PhasedProfile`` playing each in turn.
 
         None when it has no start speed; a profile that holds the start speed when no
         SpeedAction with ``time`` (or ``rate``) dynamics changes it.
@@ -109,7 +112,9 @@ class ScenarioDoc:
                 if dimension == "rate" and value > 0 else None
             if duration is not None:
                 changes.append(SpeedProfile(v0, target, event.start_s, duration))
-        return min(changes, key=lambda c: c.start_s) if changes else SpeedProfile(v0, v0, 0, 0)
+        if len(changes) > 1:  # a phased profile (corpus.phases): every change in turn
+            return _chained(v0, sorted(changes, key=lambda c: c.start_s))
+        return changes[0] if changes else SpeedProfile(v0, v0, 0, 0)
 
     def lane_gap(self, entity: str) -> float | None:
         """Metres along ``entity``'s lane from beside the ego to ``entity`` at t = 0.
@@ -175,6 +180,18 @@ class ScenarioDoc:
 
     def all(self, tag: str) -> list[etree._Element]:
         return list(self.root.iter(tag))
+
+
+def _chained(v0: float, changes: list[SpeedProfile]) -> PhasedProfile:
+    """Speed changes in start order as phases; one cut short by the next ends there (the
+    next SpeedAction replaces it in the player)."""
+    phases = []
+    for change, following in zip(changes, [*changes[1:], None], strict=True):
+        duration = max(change.duration_s, 0.0)
+        if following is not None:
+            duration = min(duration, following.start_s - change.start_s)
+        phases.append(Phase(change.start_s, duration, change.end_speed))
+    return PhasedProfile(v0, tuple(phases))
 
 
 def _start_time(event: etree._Element) -> float | None:

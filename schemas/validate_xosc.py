@@ -76,7 +76,9 @@ def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._Element
     result.playback = playback
     result.replay = {"played": not playback.engine_error, "passed": not findings,
                      "codes": sorted({f.code for f in findings}),
-                     "timings_s": playback.timings_s}
+                     "timings_s": playback.timings_s,
+                     **({"series_errors": playback.series_errors}
+                        if playback.series_errors else {})}
 
 
 def validate_tree(tree: etree._ElementTree, params: dict | None = None,

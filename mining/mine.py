@@ -94,6 +94,8 @@ def _checked_record(event: Event, recording: Recording, number: int, report: Min
                     thresholds: dict[str, dict[str, float]]) -> dict | None:
     """The event's record if it is one ScenWeave can play back, else None and a reason."""
     try:
+        if event.refused:
+            raise RecordIssue(event.refused, field="event")
         _moving_at_start(event, thresholds["records"]["min_start_speed_ms"])
         record = record_of(event, Path(recording.source), recording.reader, number)
         admit(record)

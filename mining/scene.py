@@ -29,6 +29,8 @@ class Event:
     series: dict[str, list[float | None]] = field(default_factory=dict)
     #: urban events: the event as an ADScene object, MOOVE's urban file format
     adscene: dict | None = None
+    #: why no scenario can play it, where the detector knows (it is reported, not written)
+    refused: str | None = None
 
 
 @dataclass

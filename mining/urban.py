@@ -8,9 +8,9 @@ jumps where lanelets of other directions meet).
 | U4_3 | the front crosses its lane's stop line on green and the car goes straight on |
 | U4_4 | ... on green and turns right |
 | U4_2 | ... on yellow (orange), straight on or right |
-| U4_1 | the car, first in line and arriving faster than ``approach_from_ms``, comes to rest
-  with its front between ``stop_past_line_m`` past and ``stop_before_line_m`` before the
-  line while its light is red or yellow |
+| U4_1 | the car, arriving faster than ``approach_from_ms``, comes to rest with its front
+  between ``stop_past_line_m`` past and ``stop_before_line_m`` before the line while its
+  light is red or yellow; first in line, else refused (``Event.refused``) naming its place |
 | U1_1 | at least ``in_lane_min_s`` on lanes outside junctions and light approaches, moving,
   turning less than ``in_lane_max_turn_deg``, no lane change |
 
@@ -22,7 +22,7 @@ the record.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.signal import savgol_filter
@@ -191,8 +191,9 @@ class UrbanScene:
     def _stop(self, i: int, line: StopLine, ahead: np.ndarray, near: np.ndarray
               ) -> Event | None:
         limits, track, speed = self.limits, self.scene.tracks[i], self.speeds[i]
-        at_line = near & (ahead >= -limits["stop_past_line_m"]) \
-            & (ahead <= limits["stop_before_line_m"]) & (speed < limits["stopped_below_ms"])
+        reach = max(limits["stop_before_line_m"], limits["queue_within_m"])
+        at_line = near & (ahead >= -limits["stop_past_line_m"]) & (ahead <= reach) \
+            & (speed < limits["stopped_below_ms"])
         for k in np.flatnonzero(at_line)[:1].tolist():
             t = float(track.t[k])
             first = int(np.searchsorted(track.t, t - HISTORY_S))
@@ -200,25 +201,36 @@ class UrbanScene:
                                    else "straight")
             if light is None or state_at(light, t) not in ("red", "yellow"):
                 return None
-            if speed[first:k + 1].max() < limits["approach_from_ms"] \
-                    or not self.first_in_line(i, k, line, float(ahead[k])):
+            if speed[first:k + 1].max() < limits["approach_from_ms"]:
                 return None
             last = int(np.searchsorted(track.t, t + AFTER_STOP_S, side="right")) - 1
-            return self._event("U4_1", i, first, last, float(ahead[first]), "red")
+            event = self._event("U4_1", i, first, last, float(ahead[first]), "red")
+            queue = self.queue_ahead(i, k, line, float(ahead[k]))
+            if not queue and ahead[k] > limits["stop_before_line_m"]:
+                return None  # at rest far from the line with nobody ahead: not for the light
+            if queue:
+                return replace(event, refused=(
+                    f"stops {len(queue) + 1}. in line, behind {queue[-1]}, its front "
+                    f"{ahead[k]:.1f} m before the stop line: a U4_1 scenario stops the ego "
+                    "at the line, so only the first car's stop plays back"))
+            return event
         return None
 
-    def first_in_line(self, i: int, k: int, line: StopLine, ahead_m: float) -> bool:
-        """No other car's centre between this car's front and the stop line, in its lane."""
+    def queue_ahead(self, i: int, k: int, line: StopLine, ahead_m: float) -> list[str]:
+        """The cars between this car's front and the stop line in its lane (their centres),
+        the one directly ahead of it last: empty when it is first in line."""
         t = self.scene.tracks[i].t[k]
+        found = []
         for j, other in enumerate(self.scene.tracks):
             step = self.scene.step_at(j, float(t)) if j != i else None
             if step is None:
                 continue
             x, y = np.array([other.x[step]]), np.array([other.y[step]])
-            if 0 < float(line.ahead_m(x, y)[0]) < ahead_m + other.length_m / 2 \
+            to_line = float(line.ahead_m(x, y)[0])
+            if 0 < to_line < ahead_m + other.length_m / 2 \
                     and float(line.beside_m(x, y)[0]) <= line.half_m + LINE_SIDE_M:
-                return False
-        return True
+                found.append((to_line, other.id))
+        return [track_id for _, track_id in sorted(found)]
 
     # --- between junctions -----------------------------------------------------------------
 

@@ -15,6 +15,7 @@ from lxml import etree
 
 from scenweave.cli import cli
 from scenweave.mining.detect import detect
+from scenweave.mining.mine import mine_recordings
 from scenweave.mining.readers import commonroad
 from scenweave.mining.readers.commonroad import (
     across_lane,
@@ -142,15 +143,21 @@ def test_a_stop_past_the_tolerance_is_no_stop_at_the_line(junction, tmp_path):
     assert "U4_1" not in {e.code for e in detect(junction, thresholds)}
 
 
-def test_a_stop_behind_another_car_is_not_first_in_line(tmp_path):
-    path = tmp_path / "queue.xml"
-    write_junction(path, stop_past_m=-7.0, queue=True)
+def test_a_stop_behind_another_car_is_refused_with_its_place_in_the_queue(tmp_path):
     alone = tmp_path / "alone.xml"
     write_junction(alone, stop_past_m=-7.0)
-    assert ("U4_1", "3") in {(e.code, e.ego) for e in detect(commonroad.read(alone),
-                                                             load_thresholds())}
-    codes = {(e.code, e.ego) for e in detect(commonroad.read(path), load_thresholds())}
-    assert ("U4_1", "3") not in codes
+    stop = next(e for e in detect(commonroad.read(alone), load_thresholds())
+                if (e.code, e.ego) == ("U4_1", "3"))
+    assert stop.refused is None
+    queued = tmp_path / "queue.xml"
+    write_junction(queued, stop_past_m=-7.0, queue=True)
+    stop = next(e for e in detect(commonroad.read(queued), load_thresholds())
+                if (e.code, e.ego) == ("U4_1", "3"))
+    assert stop.refused is not None and "2. in line, behind 5" in stop.refused
+    report = mine_recordings([commonroad.read(queued)], tmp_path / "out", load_thresholds(),
+                             classes=("U4_1",))
+    assert report.written.get("U4_1", 0) == 0
+    assert [s["reason"] for s in report.skipped] == [stop.refused]
 
 
 def test_the_position_along_the_road_never_jumps_where_a_car_turns(junction):

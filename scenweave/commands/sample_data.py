@@ -17,9 +17,13 @@ from scenweave.ingest.samples import write_highway_samples, write_urban_samples
               help="Rows per highway class and files per urban class.")
 @click.option("--layout", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Highway column-layout JSON (default: schemas/highway_layouts.json).")
-def sample_data(out_dir: Path, seed: int, per_class: int, layout: Path | None) -> None:
+@click.option("--phased", default=0, show_default=True, type=click.IntRange(0),
+              help="More rows per car-following class that need a speed profile of two or "
+                   "more phases (after the --per-class rows, which stay the same).")
+def sample_data(out_dir: Path, seed: int, per_class: int, layout: Path | None, phased: int) -> None:
     """Write realistic sample data: 12 highway .npy files and 5 urban ADScene folders."""
-    highway = write_highway_samples(out_dir / "highway", seed, per_class, load_layouts(layout))
+    highway = write_highway_samples(out_dir / "highway", seed, per_class, load_layouts(layout),
+                                    phased=phased)
     urban = write_urban_samples(out_dir / "urban", seed, per_class)
     click.echo(f"sample data: {len(highway)} highway files ({per_class} rows each), "
                f"{len(urban)} urban files -> {out_dir}")

@@ -25,5 +25,5 @@ def _valid(events: Callable[[Scene], Iterator[Event | None]]) -> Callable[[Scene
 
 DETECTORS: tuple[Callable[[Scene], list[Event]], ...] = tuple(
     _valid(d) for d in (highway.braking_leads, highway.cuts, highway.own_lane_changes,
-                        highway.following, lights.light_events,
+                        highway.following, highway.free_rides, lights.light_events,
                         urban.urban_events))

@@ -1,5 +1,6 @@
 """The highway classes in a recording of a whole road: braking leads (BRAKE, BR_BK), cut-ins
-and cut-outs (CIN*, COUT*), the ego's own lane changes (LCF, LCB) and car following (FLF, FLB).
+and cut-outs (CIN*, COUT*), the ego's own lane changes (LCF, LCB), car following (FLF, FLB)
+and free rides with their surrounding cars (FRF, FRB).
 
 Each detector looks at every track as a possible ego (the recording car of a MOOVE record) and
 returns events with the fields a MOOVE file of that class gives (its layout's column names and
@@ -323,3 +324,137 @@ def _travelled(track: Track, start: float, end: float) -> float:
     inside = (track.t >= start - 1e-6) & (track.t <= end + 1e-6)
     s = track.s[inside]
     return float(s[-1] - s[0]) if len(s) else 0.0
+
+
+# -- free rides (FRF, FRB) -------------------------------------------------------------------
+
+#: the surrounding vehicles' slots of a free ride and the lane each is in, from the ego's
+#: lane (lane indexes grow to the right)
+SLOT_LANES = (("center", 0), ("right", 1), ("left", -1))
+ABSENT_POSITION, ABSENT_SPEED = -1.0, -3.6
+
+
+def free_rides(scene: Scene) -> Iterator[Event]:
+    """The ego drives on in its lane, changing none, with nobody to follow (no car ahead
+    within ``free_gap_m``, as far as the recording sees), at least ``min_duration_s``: FRF with
+    the nearest car ahead in its lane and each lane beside it (within ``slot_range_m``),
+    FRB with those behind; one record per stretch, or per piece of at most
+    ``max_duration_s``; none where no car surrounds it."""
+    limits = scene.thresholds["free_ride"]
+    seen_to = max((float(track.s.max()) for track in scene.tracks if len(track.s)), default=0.0)
+    changing = [(c.track, c.start_s, c.end_s) for c in lane_changes(scene)]
+    for i, track in enumerate(scene.tracks):
+        lanes = np.array([scene.traffic.lane_of(track, k) for k in range(len(track.t))])
+        free = np.array([_free(scene, i, k, limits, seen_to) for k in range(len(track.t))])
+        for _, start, end in (c for c in changing if c[0] == i):  # its own lane change
+            free &= (track.t < start - 1e-6) | (track.t > end + 1e-6)
+        for first, last in runs(free):
+            for a, b in runs_of_values(lanes[first:last + 1]):
+                yield from _free_pieces(scene, i, first + a, first + b, limits)
+
+
+def _free(scene: Scene, i: int, k: int, limits: dict[str, float], seen_to: float) -> bool:
+    track = scene.tracks[i]
+    if scene.motion[i].speed[k] < limits["min_speed_ms"] \
+            or track.s[k] + limits["free_gap_m"] > seen_to:
+        return False  # too slow, or the road it would see ahead is not recorded
+    lead = scene.traffic.leader(i, k)
+    if lead is not None:
+        return lead.gap_m > limits["free_gap_m"]
+    return not _removed_ahead(scene, i, k, limits["free_gap_m"])
+
+
+def _removed_ahead(scene: Scene, i: int, k: int, within_m: float) -> bool:
+    """A vehicle the file took out drives ahead of track ``i`` in its lane, within
+    ``within_m`` of its centre (the lead the file leaves out)."""
+    track = scene.tracks[i]
+    lane = scene.traffic.lane_of(track, k)
+    for other in scene.recording.removed:
+        step = np.flatnonzero(np.abs(other.t - track.t[k]) < 1e-6)
+        if len(step) and scene.traffic.lane_of(other, int(step[0])) == lane \
+                and 0 < other.s[step[0]] - track.s[k] <= within_m + track.length_m:
+            return True
+    return False
+
+
+def _free_pieces(scene: Scene, i: int, first: int, last: int,
+                 limits: dict[str, float]) -> Iterator[Event]:
+    track = scene.tracks[i]
+    start, end = float(track.t[first]), float(track.t[last])
+    length = end - start
+    if length < limits["min_duration_s"] - 1e-6:
+        return
+    pieces = max(1, int(np.ceil(length / limits["max_duration_s"] - 1e-9)))
+    bounds = np.linspace(start, end, pieces + 1)
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        for code, ahead in (("FRF", True), ("FRB", False)):
+            event = _free_ride(scene, code, i, float(a), float(b), ahead, limits)
+            if event is not None:
+                yield event
+
+
+def _free_ride(scene: Scene, code: str, ego: int, start: float, end: float, ahead: bool,
+               limits: dict[str, float]) -> Event | None:
+    track = scene.tracks[ego]
+    k0, k1 = scene.step_at(ego, start), scene.step_at(ego, end)
+    lane = scene.traffic.lane_of(track, k0)
+    slots = {name: _nearest(scene, ego, start, lane + shift, ahead, limits["slot_range_m"])
+             for name, shift in SLOT_LANES}
+    if all(j is None for j in slots.values()):
+        return None
+    v0, v1 = float(scene.motion[ego].speed[k0]), float(scene.motion[ego].speed[k1])
+    fields: dict[str, float | str] = {
+        "ego_vel_begin_kmh": v0 * KMH, "ego_vel_end_kmh": v1 * KMH,
+        "ego_dist_traveled_m": float(track.s[k1] - track.s[k0]),
+        "ego_acc_mean_ms2": (v1 - v0) / (end - start), "duration_s": end - start,
+        "ego_lane_index": lane, "lane_count": float(_lane_count(scene)),
+        "ego_lat_offset_m": 0.0, "speed_limit_kmh": 0.0,
+    }
+    fields |= ({"driving_side": "Right"} if ahead else {"other_dir_traffic": "No"})
+    for name, j in slots.items():
+        fields |= _slot_fields(scene, name, ego, j, start, end)
+    roles = {"ego": ego} | {name: j for name, j in slots.items() if j is not None}
+    return Event(code, track.id, None if slots["center"] is None
+                 else scene.tracks[slots["center"]].id, round(start, 3), round(end, 3),
+                 {k: round(v, 2) if isinstance(v, float) else v for k, v in fields.items()},
+                 scene.series(roles, ego, start, end))
+
+
+def _nearest(scene: Scene, ego: int, t: float, lane: float, ahead: bool,
+             within_m: float) -> int | None:
+    """The nearest car of ``lane`` ahead of (or behind) the ego at ``t`` within
+    ``within_m`` (bumper gap)."""
+    best, best_gap = None, within_m
+    for j, other in enumerate(scene.tracks):
+        k = scene.step_at(j, t)
+        if j == ego or k is None or scene.traffic.lane_of(other, k) != lane:
+            continue
+        gap = scene.gap(ego, j, t)
+        if gap is not None and (gap > 0 if ahead else gap < 0) and abs(gap) <= best_gap:
+            best, best_gap = j, abs(gap)
+    return best
+
+
+def _slot_fields(scene: Scene, name: str, ego: int, j: int | None, start: float,
+                 end: float) -> dict[str, float | str]:
+    """A slot's bumper gaps (unsigned, as MOOVE gives them) and speeds at both ends; the
+    layout's 'absent' values where no car is there (or, at the end, where it has left)."""
+    values: dict[str, float | str] = {
+        f"{name}_posx_begin_m": ABSENT_POSITION, f"{name}_posx_end_m": ABSENT_POSITION,
+        f"{name}_vel_begin_ms": ABSENT_SPEED, f"{name}_vel_end_ms": ABSENT_SPEED,
+        f"{name}_vehicle_type": "None"}
+    if j is None:
+        return values
+    values[f"{name}_vehicle_type"] = vehicle(scene.tracks[j])
+    for when, t in (("begin", start), ("end", end)):
+        gap, speed = scene.gap(ego, j, t), scene.speed(j, t)
+        if gap is not None and speed is not None:
+            values[f"{name}_posx_{when}_m"] = abs(gap)
+            values[f"{name}_vel_{when}_ms"] = speed
+    return values
+
+
+def _lane_count(scene: Scene) -> int:
+    lanes = {float(x) for track in scene.tracks for x in np.asarray(track.lane_index, float)
+             if np.isfinite(x)}
+    return len(lanes)

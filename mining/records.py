@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from scenweave import maneuvers
+from scenweave.ingest.layouts import default_layouts
 from scenweave.ingest.urban import canonicalize_scene
 from scenweave.mining.scene import Event
 
@@ -20,6 +21,8 @@ def highway_record(event: Event, source: Path, reader: str, number: int) -> dict
     conventions: dict = {"gaps_between": "bumpers"}
     if maneuver.relative_speed:
         conventions["relative_speed_sign"] = 1
+    if maneuver.surrounding_slots:  # a free ride's empty slots, as the bundled layout marks them
+        conventions["sentinels"] = default_layouts().classes[event.code].conventions["sentinels"]
     if maneuver.npc_ends_in_ego_lane:
         conventions["direction_is"] = "move"  # the cutter's own move (docs/highway-layouts.md)
     stem = _slug(source.stem)
@@ -65,6 +68,10 @@ def _provenance(event: Event, source: Path, reader: str) -> dict:
 
 
 def _npc(maneuver: maneuvers.Maneuver, event: Event) -> tuple[bool, str | None]:
+    if maneuver.surrounding_slots:  # a free ride: any surrounding vehicle
+        present = any(key.endswith("_speed_ms") and key != "ego_speed_ms"
+                      for key in event.series)
+        return present, maneuver.npc_position if present else None
     if event.npc is None:
         return False, None
     distance = event.fields.get("npc_distance_m")

@@ -233,3 +233,25 @@ def test_a_mined_cut_in_says_which_convention_its_direction_follows():
     record = highway_record(cin, Path("road.xml"), "synthetic", 0)
     assert cin.fields["direction"] == "Left"
     assert record["conventions"]["direction_is"] == "move"
+
+
+# -- free rides ---------------------------------------------------------------------------
+
+def test_a_free_ride_carries_its_surrounding_cars_and_a_following_is_none():
+    ego = car("ego", 8, 30, steady(20), 2)
+    ahead = car("ahead", 8, 100, steady(21), 2)  # 65.5 m ahead: nobody to follow
+    right = car("right", 8, 45, steady(20), 3)
+    behind_left = car("behind", 8, 10, steady(20), 1)
+    found = events(ego, ahead, right, behind_left)
+    (frf,) = [e for e in found["FRF"] if e.ego == "ego"]
+    assert frf.npc == "ahead" and frf.fields["duration_s"] == pytest.approx(8.0, abs=0.1)
+    assert frf.fields["center_posx_begin_m"] == pytest.approx(70 - 4.5, abs=0.5)
+    assert frf.fields["right_posx_begin_m"] == pytest.approx(15 - 4.5, abs=0.5)
+    assert frf.fields["left_posx_begin_m"] == -1.0 and frf.fields["left_vehicle_type"] == "None"
+    assert frf.series["center_speed_ms"][0] == pytest.approx(21, abs=0.2)
+    (frb,) = [e for e in found["FRB"] if e.ego == "ego"]
+    assert frb.npc is None and frb.fields["left_posx_begin_m"] == pytest.approx(15.5, abs=0.5)
+    # the same ego 30 m behind a lead follows it: no free ride
+    close = events(ego, car("lead", 8, 60, steady(20), 2), right, behind_left,
+                   car("far", 8, 160, steady(20), 1))
+    assert not [e for e in close.get("FRF", []) if e.ego == "ego"]

@@ -86,16 +86,39 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
         "pair ::= " + " | ".join(pairs),
         'val ::= num | pystr | bool | "None"',
         'bool ::= "True" | "False"',
+        *PHASE_RULES,
         'num ::= "-"? [0-9]+ ("." [0-9]+)? ([eE] [-+]? [0-9]+)?',
         f"pystr ::= {_gbnf_literal(QUOTE)} [a-zA-Z0-9_ ./:-]* {_gbnf_literal(QUOTE)}",
         'ws ::= [ \\t\\n]{0,4}',
     ]
     if new_keys:
-        keys = " | ".join(_gbnf_literal(key) for key in new_keys)
-        rules.append(f"added ::= {_gbnf_literal(_json_inner(chr(10) + '    ' + chr(34)))} "
-                     f"({keys}) {_gbnf_literal(_json_inner(chr(34) + ': '))} val "
-                     f"{_gbnf_literal(',')}")
+        options = [f"({' | '.join(_gbnf_literal(key) for key in keys)}) "
+                   f"{_gbnf_literal(_json_inner(chr(34) + ': '))} {value} {_gbnf_literal(',')}"
+                   for keys, value in ((_plain(new_keys), "val"),
+                                       (_phase_keys(new_keys), "phases")) if keys]
+        entry = _gbnf_literal(_json_inner(chr(10) + "    " + chr(34)))
+        rules.append(f"added ::= {entry} ({' | '.join(options)})")
     return "\n".join(rules) + "\n"
+
+
+#: a speed profile (``corpus.phases``) as the worked example writes it: a list of phases,
+#: each ``{'start_s': N, 'duration_s': N, 'target_ms': N, 'shape': S}``; any length
+PHASE_RULES = (
+    'phases ::= "[" (phase (", " phase)*)? "]"',
+    "phase ::= \"{'start_s': \" num \", 'duration_s': \" num \", 'target_ms': \" num "
+    "\", 'shape': \" shape \"}\"",
+    "shape ::= \"'linear'\" | \"'cubic'\" | \"'sinusoidal'\" | \"'step'\"",
+)
+#: a ``RECORD`` entry holding a speed profile: its phases may change in number, not only value
+PHASE_ENTRY = re.compile(r'^(\s+"\w+_phases": )\[.*\],$')
+
+
+def _phase_keys(keys: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(key for key in keys if key.endswith("_phases"))
+
+
+def _plain(keys: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(key for key in keys if not key.endswith("_phases"))
 
 
 #: a double quote as it stands inside a JSON string
@@ -105,7 +128,13 @@ DICT_ENTRY = re.compile(r'^\s+"\w+": .*,$')
 
 
 def _pair_rule(line: str, slots: list[tuple[int, int]], new_keys: tuple[str, ...]) -> str:
-    """``SEARCH "," ws "replace": REPLACE`` for one line: the line, then its template."""
+    """``SEARCH "," ws "replace": REPLACE`` for one line: the line, then its template (a
+    speed profile's line: its key, then any list of phases)."""
+    profile = PHASE_ENTRY.match(line)
+    if profile:
+        return (f'({_gbnf_literal(json.dumps(line))} "," ws "\\"replace\\":" ws '
+                f'"\\"" {_gbnf_literal(_json_inner(profile.group(1)))} phases '
+                f'{_gbnf_literal(",")} "\\"")')
     pieces, at = [], 0
     for start, end in slots:
         pieces.append(_gbnf_literal(_json_inner(line[at:start])) if start > at else "")

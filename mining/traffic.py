@@ -14,6 +14,8 @@ import numpy as np
 
 from scenweave.mining.tracks import Recording, Track
 
+#: lane keys of different roads lie this far apart (beyond every lane name's code)
+ROAD_STRIDE = 1e10
 #: the owner of the rows of a vehicle the file took out (``Recording.removed``)
 REMOVED = -1
 
@@ -35,6 +37,11 @@ class Traffic:
         self.recording = recording
         self.tracks = recording.tracks
         self.dt = recording.dt
+        everyone = [*self.tracks, *recording.removed]
+        named = {str(road) for track in everyone for road in track.road}
+        roads = sorted(named | {road.rpartition("/")[2] for road in named})
+        self._road_ids = {road: n for n, road in enumerate(roads, start=1)}
+        self._keys = {id(track): self._lane_and_road(track, own=False) for track in everyone}
         rows = [self._rows(i, track) for i, track in enumerate(self.tracks)]
         rows += [self._rows(REMOVED, track) for track in recording.removed]
         table = np.concatenate(rows, axis=1) if rows else np.empty((4, 0))
@@ -49,8 +56,21 @@ class Traffic:
         return int(round(track.t[step] / self.dt))
 
     def lane_of(self, track: Track, step: int) -> float:
-        """The lane's key at ``step`` (its road left out: a turn is no lane change)."""
-        return float(_lane_keys(track)[step])
+        """The lane's key at ``step``: equal for two cars in one lane of one road; a lane
+        beside it is one more or less. Where ``Track.road`` is given, the road adds
+        ``ROAD_STRIDE`` times its number (so the key changes where the car's road does, at a
+        turn, and ``Track.lateral`` tells a lane change); without, the key is the lane index."""
+        keys = self._keys.get(id(track))
+        return float((self._lane_and_road(track, own=False) if keys is None else keys)[step])
+
+    def _lane_and_road(self, track: Track, own: bool) -> np.ndarray:
+        """Lane keys with the road's number; ``own``: a road of the car's own (``"id/..."``,
+        where its ``s`` is comparable with nobody's) counts, else only its direction."""
+        keys = _lane_keys(track)
+        if len(track.road) == len(track.t):  # lanes of different roads are different lanes
+            roads = [str(r) if own else str(r).rpartition("/")[2] for r in track.road]
+            keys = keys + ROAD_STRIDE * np.array([self._road_ids.get(r, 0) for r in roads])
+        return keys
 
     def leader(self, i: int, step: int) -> Neighbour | None:
         return self._neighbour(i, step, +1)
@@ -65,7 +85,6 @@ class Traffic:
         frame = self.frame(track, step)
         lo = np.searchsorted(self._frame, frame - 0.5)
         hi = np.searchsorted(self._frame, frame + 0.5)
-        lane = lane + float(_road_keys(track)[step])
         here = np.arange(lo, hi)[self._lane[lo:hi] == lane]
         here = here[(self._owner[here] != i) & (self._owner[here] != REMOVED)]
         if not len(here):
@@ -94,8 +113,7 @@ class Traffic:
 
     def _rows(self, i: int, track: Track) -> np.ndarray:
         frames = np.round(track.t / self.dt)
-        # lanes of different roads are different lanes
-        lanes = _lane_keys(track) + _road_keys(track)
+        lanes = self._lane_and_road(track, own=True)  # a car off its road's frame: alone
         return np.vstack([frames, lanes, track.s, np.full(len(track.t), i)])
 
 
@@ -108,13 +126,6 @@ def _lane_keys(track: Track) -> np.ndarray:
     else:
         keys = np.array([_code(str(name)) for name in track.lane], dtype=float)
     return keys
-
-
-def _road_keys(track: Track) -> np.ndarray:
-    """A number per step naming the frame its ``s`` is in (0: the recording's one frame)."""
-    if len(track.road) != len(track.t):
-        return np.zeros(len(track.t))
-    return np.array([_code(str(road)) for road in track.road]) * 1e3
 
 
 def _code(name: str) -> float:

@@ -76,7 +76,7 @@ STILL_STEP_M = 0.05
 MIN_LANE_CHANGE_M = 1.5
 LANE_CHANGE_WINDOW_S = 3.0
 #: a car heading further than this off its lane is turning into or out of it
-ACROSS_LANE_DEG = 20.0
+ACROSS_LANE_DEG = 25.0
 COLOURS = {
     TrafficLightState.GREEN: "green", TrafficLightState.YELLOW: "yellow",
     TrafficLightState.RED: "red", TrafficLightState.RED_YELLOW: "red",

@@ -16,15 +16,23 @@ What the reader makes of it, and how far to trust it:
   grouped by the direction they run (within :data:`GROUP_ANGLE_DEG`), and each group's axis
   is the length-weighted mean direction of its centre lines, so it points along traffic. On a
   straight road (US-101) this is the road's axis, and gaps between cars of one road and
-  direction are differences in ``s``. Where a road bends, or a car turns onto a road of
-  another direction (the arterials), ``s`` is only comparable within one direction group and
-  jumps where the car changes group.
+  direction are differences in ``s``. ``s`` never jumps: a step into another group, or one
+  more than :data:`ALONG_AXIS_DEG` off its axis (inside a junction), advances it by the
+  distance driven (:func:`continuous_s`). Where that left it more than :data:`SAME_FRAME_M`
+  from the group's projection (after a turn), ``road`` gives the car a frame of its own, so
+  no gap is measured between it and another car; else ``road`` is the direction group.
 - ``lane_index`` counts same-direction ``adjacentLeft`` steps from the lanelet to the road's
   left edge (1 = leftmost); a lanelet without same-direction neighbours (an on-ramp, a turn
-  inside an intersection) takes its predecessor's index, else its successor's.
+  inside an intersection) takes its predecessor's index, else its successor's. On a town's
+  map (traffic lights or junctions) it changes only with :data:`MIN_LANE_CHANGE_M` of motion
+  across the lane within :data:`LANE_CHANGE_WINDOW_S`, never inside a junction or while the
+  car heads more than :data:`ACROSS_LANE_DEG` off its lane (:func:`held_lane_index`), and
+  ``lateral`` is the motion across the lane summed against the lanelet's centre line
+  (:func:`lane_lateral`).
 - Traffic lights: one per ``trafficLight``, its lanes the lanelets that reference it, its stop
-  line the ``s`` of those lanelets' stop lines (their ends where they have none), its phases
-  the cycle over the snippet's steps. ``redYellow`` counts as red (it still means stop);
+  line the ``s`` of those lanelets' stop lines (their ends where they have none) and, per lane,
+  the stop line as a segment in the file's frame, the movements it controls (``direction``),
+  its phases the cycle over the snippet's steps. ``redYellow`` counts as red (it still means stop);
   ``inactive`` (a turn arrow that is off) leaves a gap: that light says nothing then.
   Lights for different movements (``left``, ``straightRight``) can share an approach lanelet.
 """

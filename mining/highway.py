@@ -407,7 +407,8 @@ def _free_ride(scene: Scene, code: str, ego: int, start: float, end: float, ahea
         "ego_vel_begin_kmh": v0 * KMH, "ego_vel_end_kmh": v1 * KMH,
         "ego_dist_traveled_m": float(track.s[k1] - track.s[k0]),
         "ego_acc_mean_ms2": (v1 - v0) / (end - start), "duration_s": end - start,
-        "ego_lane_index": lane, "lane_count": float(_lane_count(scene)),
+        "ego_lane_index": float(track.lane_index[k0]) if len(track.lane_index) else lane,
+        "lane_count": float(_lane_count(scene)),
         "ego_lat_offset_m": 0.0, "speed_limit_kmh": 0.0,
     }
     fields |= ({"driving_side": "Right"} if ahead else {"other_dir_traffic": "No"})

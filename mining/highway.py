@@ -388,12 +388,12 @@ def _free_pieces(scene: Scene, i: int, first: int, last: int,
     bounds = np.linspace(start, end, pieces + 1)
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         for code, ahead in (("FRF", True), ("FRB", False)):
-            event = _free_ride(scene, code, i, float(a), float(b), ahead, limits)
+            event = free_ride_event(scene, code, i, float(a), float(b), ahead, limits)
             if event is not None:
                 yield event
 
 
-def _free_ride(scene: Scene, code: str, ego: int, start: float, end: float, ahead: bool,
+def free_ride_event(scene: Scene, code: str, ego: int, start: float, end: float, ahead: bool,
                limits: dict[str, float]) -> Event | None:
     track = scene.tracks[ego]
     k0, k1 = scene.step_at(ego, start), scene.step_at(ego, end)

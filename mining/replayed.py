@@ -18,8 +18,8 @@ from scenweave.player import Playback
 
 #: lanes are about this wide on the CARLA highways; it only scales the lateral positions
 LANE_WIDTH_M = 3.5
-#: the scenario's actors as the record's roles
-ROLE_OF_ENTITY = {"hero": "ego", "npc": "npc"}
+#: the scenario's actors as the record's roles (a free ride's NPC is the car in the ego's lane)
+ROLE_OF_ENTITY = {"hero": "ego", "npc": "npc", "npc_center": "npc"}  # a free ride's own lane
 
 
 def recording_from_playback(playback: Playback, source: str) -> Recording:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from scenweave import maneuvers
 from scenweave.ingest import extract_params
 from scenweave.mining.detect import KMH, Event, Scene, detect
-from scenweave.mining.highway import follow_event
+from scenweave.mining.highway import follow_event, free_ride_event
 from scenweave.mining.replayed import recording_from_playback
 from scenweave.mining.tracks import Recording
 from scenweave.player import Playback
@@ -55,7 +55,8 @@ def round_trip(record: dict, playback: Playback,
     candidates = [e for e in detect(recording, thresholds) if _shows(code, e.code, alone)
                   and e.ego == "ego" and (e.npc is None if alone else e.npc == "npc")]
     result = RoundTrip(code, record["scenario_id"], bool(candidates))
-    if candidates and maneuvers.get(code).gap_at_end:
+    maneuver = maneuvers.get(code)
+    if candidates and (maneuver.gap_at_end or maneuver.surrounding_slots):
         candidates = _same_window(recording, record, thresholds)
     if candidates:
         best = min(candidates, key=lambda e: len(_misses(record["params"], e)))
@@ -88,16 +89,25 @@ def _shows(code: str, found: str, alone: bool) -> bool:
 
 def _same_window(recording: Recording, record: dict,
                  thresholds: dict[str, dict[str, float]]) -> list[Event]:
-    """A following record is a window cut out of a longer episode: measure the replay over
-    the record's own window (the manoeuvre's start to its end in the scenario)."""
+    """A following record or a free ride is a window cut out of a longer episode (the
+    scenario plays on past it): measure the replay over the record's own window (the
+    manoeuvre's start to its end in the scenario)."""
     scene = Scene(recording, thresholds)
     ids = [track.id for track in recording.tracks]
-    if "ego" not in ids or "npc" not in ids:
-        return []
+    code = record["maneuver_class"]
     start = float(extract_params(record)["maneuver_start_s"])
     end = start + float(record["params"]["duration_s"])
-    event = follow_event(scene, record["maneuver_class"], ids.index("ego"), ids.index("npc"),
-                         start, end, thresholds["follow"])
+    if "ego" not in ids:
+        return []
+    if maneuvers.get(code).surrounding_slots:
+        event = free_ride_event(scene, code, ids.index("ego"), start, end,
+                                maneuvers.get(code).npc_position == "front",
+                                thresholds["free_ride"])
+    elif "npc" in ids:
+        event = follow_event(scene, code, ids.index("ego"), ids.index("npc"), start, end,
+                             thresholds["follow"])
+    else:
+        event = None
     return [] if event is None else [event]
 
 

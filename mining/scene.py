@@ -80,23 +80,44 @@ class Scene:
         """Each role's speed, position along the road, lateral position and lane, and the
         NPCs' gaps to the ego, every step of the ego (``t`` from ``start``)."""
         track = self.tracks[ego]
-        times = track.t[(track.t >= start - 1e-6) & (track.t <= end + 1e-6)]
+        inside = (track.t >= start - 1e-6) & (track.t <= end + 1e-6)
+        times = track.t[inside]
         found: dict[str, list[float | None]] = {"t": [round(float(t - start), 3) for t in times]}
         for role, i in roles.items():
-            steps = [self.step_at(i, t) for t in times]
-            found[f"{role}_speed_ms"] = [rounded(self.speed(i, t)) for t in times]
-            found[f"{role}_s_m"] = [self._at(self.tracks[i].s, k) for k in steps]
-            found[f"{role}_lateral_m"] = [self._at(self.lateral[i], k) for k in steps]
-            found[f"{role}_lane"] = [self._at(self.tracks[i].lane_index, k) for k in steps]
+            steps = self._steps_at(i, times)
+            other = self.tracks[i]
+            found[f"{role}_speed_ms"] = self._values(self.motion[i].speed, steps)
+            found[f"{role}_s_m"] = self._values(other.s, steps)
+            found[f"{role}_lateral_m"] = self._values(self.lateral[i], steps)
+            found[f"{role}_lane"] = self._values(other.lane_index, steps)
             if role != "ego":
-                found[f"{role}_gap_m"] = [rounded(self.gap(ego, i, t)) for t in times]
+                room = (track.length_m + other.length_m) / 2
+                centre = np.where(steps >= 0, other.s[np.maximum(steps, 0)] - track.s[inside],
+                                  np.nan)
+                gaps = np.copysign(np.maximum(np.abs(centre) - room, 0.0), centre)
+                found[f"{role}_gap_m"] = self._values(gaps, np.arange(len(times)))
         return found
 
+    def _steps_at(self, i: int, times: np.ndarray) -> np.ndarray:
+        """Track ``i``'s step nearest each of ``times`` (-1 where it was not seen then)."""
+        t = self.tracks[i].t
+        if not len(t):
+            return np.full(len(times), -1)
+        k = np.clip(np.searchsorted(t, times), 1, max(len(t) - 1, 1))
+        k = np.where(np.abs(t[k - 1] - times) <= np.abs(t[np.minimum(k, len(t) - 1)] - times),
+                     k - 1, np.minimum(k, len(t) - 1))
+        seen = (times >= t[0] - 1e-6) & (times <= t[-1] + 1e-6)
+        return np.where(seen, k, -1)
+
     @staticmethod
-    def _at(values: np.ndarray, step: int | None) -> float | None:
-        if step is None or step >= len(values) or not np.isfinite(values[step]):
-            return None
-        return rounded(float(values[step]))
+    def _values(values: np.ndarray, steps: np.ndarray) -> list[float | None]:
+        """``values`` at ``steps``, rounded; None where a step is -1 or a value unknown."""
+        values = np.asarray(values, dtype=float)
+        if not len(values):
+            return [None] * len(steps)
+        picked = values[np.clip(steps, 0, len(values) - 1)]
+        return [None if k < 0 or k >= len(values) or not np.isfinite(v) else round(float(v), 3)
+                for k, v in zip(steps.tolist(), picked.tolist(), strict=True)]
 
 
 def make_event(scene: Scene, code: str, ego: int, npc: int | None, start: float, end: float,

@@ -12,6 +12,8 @@ import re
 import unicodedata
 from dataclasses import dataclass, field
 
+from scenweave.errors import ScenarioError
+
 SPECIAL_TOKENS = re.compile(
     r"<\|(?:im_start|im_end|endoftext|assistant|user|system|begin_of_text|end_of_text|eot_id)\|>"
     r"|</?s>|<bos>|<eos>")
@@ -231,7 +233,7 @@ EDIT_BLOCK = re.compile(
 NO_CHANGES = re.compile(r"^\W*NO[ _]CHANGES?\W*$", re.I | re.M)
 
 
-class PatchError(ValueError):
+class PatchError(ScenarioError, ValueError):
     """An edit reply that cannot be applied; the message says which block and why."""
 
 

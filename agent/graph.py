@@ -22,8 +22,7 @@ from scenweave.agent.state import AgentState
 
 def after_generation(state: AgentState) -> Literal["execute", "fallback"]:
     """The LLM could not be asked (and the settings say fall back): go straight to fallback."""
-    error = state["attempts"][-1].get("error") or {}
-    return "fallback" if error.get("type", "").startswith("LLM") else "execute"
+    return "fallback" if state["attempts"][-1].get("llm_failed") else "execute"
 
 
 def after_execute(state: AgentState, runtime: Runtime[AgentContext]) -> Literal[

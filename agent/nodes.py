@@ -158,6 +158,7 @@ def _new_attempt(state: AgentState, ctx: AgentContext, node_name: str,
             raise
         candidate = Candidate("", error={"type": type(err).__name__, "message": str(err)})
         attempt["taxonomy"] = "timeout" if isinstance(err, LLMTimeout) else "llm_unavailable"
+        attempt["llm_failed"] = True
     attempt.update(_describe(candidate, state["reference"]))
     if candidate.error is not None:
         _fail(attempt, candidate.error, attempt.get("taxonomy"))

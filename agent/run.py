@@ -119,13 +119,19 @@ def _key(kind: str, settings: AgentSettings) -> str:
 
 def shared_llm(settings: AgentSettings) -> LLM:
     """The LLM of ``settings``, made and checked once per process."""
-    return _shared_instance(_key("llm", settings), lambda: _checked(get_llm(settings)))
+    return _shared_instance(_key("llm", settings), lambda: _checked(_for_run(get_llm(settings),
+                                                                             settings)))
 
 
 def shared_sandbox(settings: AgentSettings) -> Sandbox:
     """The sandbox of ``settings.sandbox``, started once per process."""
     key = "sandbox" + json.dumps(asdict(settings.sandbox), sort_keys=True, default=str)
     return _shared_instance(key, lambda: get_sandbox(settings.sandbox))
+
+
+def _for_run(llm: LLM, settings: AgentSettings) -> LLM:
+    llm.run_id = settings.run_id
+    return llm
 
 
 def _checked(llm: LLM) -> LLM:

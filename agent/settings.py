@@ -61,6 +61,8 @@ class AgentSettings:
     sandbox: SandboxSettings = field(default_factory=batch_sandbox)
     replay: Any = None
     """``player.ReplaySettings``: validation plays each attempt in esmini (None: no replay)."""
+    run_id: str | None = None
+    """The run the calls belong to, logged with each (``scenweave logs --run``)."""
 
     def __post_init__(self) -> None:
         if self.llm not in LLM_CHOICES:

@@ -48,6 +48,9 @@ class Attempt(TypedDict, total=False):
     """validate_xosc's verdict on the produced file."""
     error: dict | None
     """Why the attempt failed: type, message, traceback (None while it has not failed)."""
+    llm_failed: bool
+    """The LLM could not be asked (an ``LLMUnavailable`` caught, with ``on_llm_error``
+    ``fallback``): the graph goes straight to the fallback."""
     taxonomy: str | None
     """One word for the failure (agent.taxonomy.CATEGORIES)."""
 

@@ -52,6 +52,7 @@ from scenweave.agent.settings import AgentSettings
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, XOSC_NAME, Trace
 from scenweave.corpus.corpus_utils import known_type
 from scenweave.corpus.worked_example import provenance, worked_example
+from scenweave.errors import ScenarioError
 from scenweave.ingest.extract import with_vehicle_type
 from scenweave.player import REPLAY_NAME
 from scenweave.schemas.variation import ASPECTS, compare
@@ -69,7 +70,7 @@ EDIT_STRATEGY = "patch"
 VEHICLE_TYPES = ("car", "van", "truck")
 
 
-class NotAsked(Exception):
+class NotAsked(ScenarioError):
     """A variant of this aspect cannot be made of the record; ``code`` says why."""
 
     def __init__(self, code: str, message: str):

@@ -5,7 +5,8 @@
 ``list_scripts()`` lists them. Scenario layout: ``docs/scenario-conventions.md``.
 
 The names below load on first use: inside the sandbox only this folder exists, and a script
-importing ``scenweave.corpus.corpus_utils`` must not pull in retrieval (and the registry).
+importing ``scenweave.corpus.corpus_utils`` must not pull in retrieval (and the registry) nor
+the error root (``scenweave.errors``, which ``corpus.errors`` derives from).
 """
 
 from __future__ import annotations
@@ -13,14 +14,14 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from scenweave.corpus.errors import CorpusError, ParamsError
+#: name -> the module that defines it, imported when the name is first used
+_LAZY = {"Retrieval": "retrieval", "generate": "retrieval", "list_scripts": "retrieval",
+         "retrieve": "retrieval", "CorpusError": "errors", "ParamsError": "errors"}
 
-_RETRIEVAL = ("Retrieval", "generate", "list_scripts", "retrieve")
-
-__all__ = ["CorpusError", "ParamsError", *_RETRIEVAL]
+__all__ = sorted(_LAZY)
 
 
 def __getattr__(name: str) -> Any:
-    if name not in _RETRIEVAL:
+    if name not in _LAZY:
         raise AttributeError(f"module 'scenweave.corpus' has no attribute {name!r}")
-    return getattr(importlib.import_module("scenweave.corpus.retrieval"), name)
+    return getattr(importlib.import_module(f"scenweave.corpus.{_LAZY[name]}"), name)

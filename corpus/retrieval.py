@@ -139,6 +139,11 @@ def _source(path: Path) -> str:
 
 
 def _by_keyword(code: str) -> Retrieval | None:
+    """The class's own script when the registry knows the code (a plugin class coded ``STOP``
+    gets its script, not ``gen_ur_stop_at_tfl_red.py``); else a script whose name holds it."""
+    maneuver = maneuvers.find(code) if code else None
+    if maneuver is not None:
+        return _read(script_path(maneuver), "keyword", 1.0)
     key = code.lower()
     if not key or " " in key:
         return None

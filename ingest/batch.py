@@ -15,6 +15,7 @@ from scenweave.files.atomic import write_json_atomic
 from scenweave.ingest.admission import admit
 from scenweave.ingest.highway import (
     DEFAULT_BINNING,
+    FILE_PATTERN,
     HighwayFileResult,
     canonicalize_highway_file,
     iter_highway_files,
@@ -39,14 +40,19 @@ class RawRecord:
 
 def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayouts | None = None,
                      binning: str = DEFAULT_BINNING,
-                     on_file: Callable[[Path], None] | None = None) -> Iterator[RawRecord]:
-    """Canonical records of every raw file that ``admit`` takes; problems go into ``report``."""
+                     on_file: Callable[[Path], None] | None = None,
+                     classes: tuple[str, ...] = ()) -> Iterator[RawRecord]:
+    """Canonical records of every raw file that ``admit`` takes; problems go into ``report``.
+    With ``classes``, only the files of those classes are read (others' problems are not
+    the batch's)."""
     raw_dir = Path(raw_dir)
     if not raw_dir.is_dir():
         raise IngestError(f"input folder not found: {raw_dir}")
     layouts = layouts or load_layouts()
     read_before = report.files_read
     for path in iter_highway_files(raw_dir):
+        if classes and _file_class(path) not in classes:
+            continue
         try:
             result = canonicalize_highway_file(path, layouts, binning)
         except Exception as err:  # noqa: BLE001 - last line of defence: one file, not the batch
@@ -57,6 +63,8 @@ def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayout
         if on_file:
             on_file(path)
     for path in iter_urban_files(raw_dir):
+        if classes and path.parent.name not in classes:
+            continue
         record, issues = canonicalize_urban_file(path)
         report.files_read += 1
         report.add(issues)
@@ -65,6 +73,11 @@ def iter_raw_records(raw_dir: Path, report: IngestReport, layouts: HighwayLayout
             on_file(path)
     if report.files_read == read_before:
         report.add([Issue(file=str(raw_dir), severity="warning", message=NO_DATA_MESSAGE)])
+
+
+def _file_class(path: Path) -> str | None:
+    match = FILE_PATTERN.match(path.name)
+    return match.group("code") if match else None
 
 
 def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[RawRecord]:
@@ -81,7 +94,11 @@ def _checked(records: list[dict], file: str, report: IngestReport) -> Iterator[R
 def ingest_directory(raw_dir: Path, out_dir: Path, layout_path: Path | None = None,
                      binning: str = DEFAULT_BINNING,
                      on_file: Callable[[Path], None] | None = None) -> IngestReport:
-    """Canonicalise every raw file under ``raw_dir`` into ``out_dir``; return the report."""
+    """Canonicalise every raw file under ``raw_dir`` into ``out_dir``; return the report.
+
+    The records ``out_dir`` held before are replaced: a class file this ingest did not write
+    (its rows now refused, or its file gone) is removed, so a later ``run`` makes scenarios of
+    exactly what this ingest admitted."""
     report = IngestReport()
     layouts = load_layouts(layout_path)
     pending: dict[tuple[str, str], list[dict]] = {}
@@ -94,8 +111,16 @@ def ingest_directory(raw_dir: Path, out_dir: Path, layout_path: Path | None = No
         pending.setdefault(key, []).append(item.record)
     for key in sorted(pending):
         _write_group(out_dir, key, pending[key], report)
+    _remove_stale_records(out_dir, report.records_by_class)
     write_json_atomic(out_dir / REPORT_NAME, report.to_dict())
     return report
+
+
+def _remove_stale_records(out_dir: Path, written: dict[str, int]) -> None:
+    for folder in ("highway", "urban"):
+        for old in Path(out_dir, folder).glob("*.json"):
+            if old.stem not in written:
+                old.unlink()
 
 
 def _folder(record: dict) -> str:

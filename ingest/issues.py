@@ -8,10 +8,12 @@ from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Literal
 
+from scenweave.errors import InputError
+
 Severity = Literal["error", "warning"]
 
 
-class IngestError(Exception):
+class IngestError(InputError):
     """Root of the exceptions ``ingest`` raises (bad layout file, unreadable input folder)."""
 
 
@@ -47,7 +49,7 @@ class Issue:
         return found
 
 
-class RecordIssue(Exception):
+class RecordIssue(InputError):
     """Raised inside one record's conversion; the batch catches it and records an Issue."""
 
     def __init__(self, message: str, field: str | None = None, row: int | None = None):
@@ -75,8 +77,8 @@ class IngestReport:
     records_by_class: dict[str, int] = field(default_factory=dict)
     issues: list[Issue] = field(default_factory=list)
 
-    #: where each warning of ``issues`` stands, to fold repeats into it
-    _warning_at: dict[tuple, int] = field(default_factory=dict, repr=False)
+    #: where each warning of ``issues`` stands and what it first said, to fold repeats into it
+    _warning_at: dict[tuple, tuple[int, str]] = field(default_factory=dict, repr=False)
 
     @property
     def errors(self) -> list[Issue]:
@@ -87,19 +89,19 @@ class IngestReport:
         return [i for i in self.issues if i.severity == "warning"]
 
     def add(self, issues: Iterable[Issue]) -> None:
-        """Add issues; a warning repeated for one file and field (a label read in every frame)
-        is kept once, with a count of the frames or rows it stands for."""
+        """Add issues; warnings of one file and field (a label read in every frame) are kept
+        once, with a count of the frames or rows they stand for."""
         for issue in issues:
             if issue.severity != "warning":
                 self.issues.append(issue)
                 continue
-            key = (issue.file, _field_pattern(issue.field), issue.message)
-            at = self._warning_at.get(key)
-            if at is None:
-                self._warning_at[key] = len(self.issues)
+            key = (issue.file, _field_pattern(issue.field))
+            if key not in self._warning_at:
+                self._warning_at[key] = (len(self.issues), issue.message)
                 self.issues.append(issue)
             else:
-                self.issues[at] = _folded(self.issues[at], issue)
+                at, first = self._warning_at[key]
+                self.issues[at] = _folded(self.issues[at], issue, first)
 
     def count(self, maneuver_class: str, n: int = 1) -> None:
         self.records_by_class[maneuver_class] = self.records_by_class.get(maneuver_class, 0) + n
@@ -118,14 +120,20 @@ class IngestReport:
 
 def _field_pattern(field_name: str | None) -> str | None:
     """``key_times[12].temporal_climatic.day_period`` -> ``key_times[*]...``: the same field
-    of every frame."""
-    return None if field_name is None else re.sub(r"\[\d+\]", "[*]", field_name)
+    of every frame (other positions, such as a way point's, stay apart)."""
+    return None if field_name is None else re.sub(r"^key_times\[\d+\]", "key_times[*]",
+                                                  field_name)
 
 
-def _folded(first: Issue, again: Issue) -> Issue:
-    """One warning standing for both: the field as a pattern, the frames or rows counted."""
-    count = first.count + again.count
-    unit = "frames" if (first.field or "").startswith("key_times[") else "rows"
-    message = re.sub(r" in \d+ (frames|rows)$", "", first.message)
-    return dataclasses.replace(first, field=_field_pattern(first.field), row=None, count=count,
-                               message=f"{message} in {count} {unit}")
+def _folded(folded: Issue, again: Issue, first: str) -> Issue:
+    """One warning standing for both: the field as a pattern, the frames or rows counted
+    ("'Day' read as code 1 in 596 frames"; "..., and alike in 595 more frames" when what was
+    read differs from frame to frame)."""
+    count = folded.count + again.count
+    unit = "frames" if (folded.field or "").startswith("key_times[") else "rows"
+    uniform = (again.message == first
+               and folded.message in (first, f"{first} in {folded.count} {unit}"))
+    message = (f"{first} in {count} {unit}" if uniform
+               else f"{first}, and alike in {count - 1} more {unit}")
+    return dataclasses.replace(folded, field=_field_pattern(folded.field), row=None, count=count,
+                               message=message)

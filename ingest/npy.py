@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 from numpy.lib import format as npy_format
 
+from scenweave.errors import InputError
+
 _ALLOWED_GLOBALS = {
     ("numpy.core.multiarray", "_reconstruct"),
     ("numpy._core.multiarray", "_reconstruct"),
@@ -27,7 +29,7 @@ _ALLOWED_GLOBALS = {
 }
 
 
-class UnsafeNpyError(ValueError):
+class UnsafeNpyError(InputError, ValueError):
     """The file's pickle asks for something an array of strings never needs."""
 
 

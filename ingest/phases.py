@@ -39,6 +39,8 @@ CORNER_SHIFTS_MS = (0.0, -0.1, 0.1, -0.2, 0.2)
 #: a straight segment spans at most this many samples (a longer ramp is two phases): keeps
 #: the search quadratic in this, not in the record's length
 MAX_SEGMENT_SAMPLES = 60
+#: how many of the furthest-reaching states of each phase count the search goes on from
+BEAM = 4
 #: where a two-phase profile may put its corner, as shares of the duration
 CORNERS = tuple(k / 100 for k in range(5, 96))
 
@@ -93,21 +95,22 @@ def _fewest_segments(t: list[float], v: list[float], targets: Targets,
                      knot: float) -> list[tuple[int, int, float]]:
     """``(from sample, to sample, corner speed)`` of the straight segments that cover the
     samples with the fewest speed changes (a segment that keeps its speed costs none),
-    closest to the record's distance among equals: a shortest path over the samples."""
+    closest to the recorded speeds among equals (least squares: the curve's shape, where a
+    brake begins and ends, as well as its tolerance): a shortest path over the samples."""
     times, speeds = np.asarray(t), np.asarray(v)
     wanted = [(np.array([np.nan if w is None else w for w in values]), tolerance)
               for values, tolerance in targets]
-    # best[j]: (phases, distance error, corner speed, fitted distance, previous sample)
+    # best[j]: (phases, squared speed error so far, corner speed, fitted distance, previous)
     best: dict[int, tuple[int, float, float, float, int]] = {0: (0, 0.0, knot, 0.0, -1)}
     for i in range(len(t) - 1):
-        if i not in best:
+        if i not in best or _outrun(best, i):
             continue
-        count, _, start, fitted, _ = best[i]
+        count, so_far, start, fitted, _ = best[i]
         for j, corner, reached, error in _segments_from(times, speeds, wanted, i, start,
                                                        fitted):
             cost = count + (abs(corner - start) > NO_CHANGE_MS)
-            if j not in best or (cost, error) < best[j][:2]:
-                best[j] = (cost, error, corner, reached, i)
+            if j not in best or (cost, so_far + error) < best[j][:2]:
+                best[j] = (cost, so_far + error, corner, reached, i)
         if i + 1 not in best:  # nothing keeps the tolerances: the next sample, as it is
             corner = _ms(v[i + 1])
             best[i + 1] = (count + 1, math.inf, corner,
@@ -120,14 +123,31 @@ def _fewest_segments(t: list[float], v: list[float], targets: Targets,
     return segments[::-1]
 
 
+def _outrun(best: dict[int, tuple[int, float, float, float, int]], i: int) -> bool:
+    """Whether ``BEAM`` states at least as cheap as sample ``i``'s already reach past it
+    (expanding it would not find fewer phases, only cost time)."""
+    cost = best[i][0]
+    return sum(1 for j, state in best.items() if j > i and state[0] <= cost) >= BEAM
+
+
 def _segments_from(times: np.ndarray, speeds: np.ndarray,
                    wanted: list[tuple[np.ndarray, float]], i: int, knot: float,
                    fitted: float) -> list[tuple[int, float, float, float]]:
     """Every straight segment from ``(times[i], knot)`` to ``(times[j], speeds[j] + shift)``
     (each of ``CORNER_SHIFTS_MS``) that keeps the tolerances at each sample between:
-    ``(j, corner, fitted distance at j, distance error at j)``. One matrix: a row per
-    segment (end and shift), a column per sample after ``i``."""
+    ``(j, corner, fitted distance at j, squared speed error over the segment)``. One matrix:
+    a row per segment (end and shift), a column per sample after ``i``."""
     after = np.arange(i + 1, min(len(times), i + 1 + MAX_SEGMENT_SAMPLES))
+    # no line from the knot reaches past where the slopes that keep every sample's speed
+    # within the tolerance run out (a cone narrowing sample by sample)
+    since = times[after] - times[i]
+    lowest = np.maximum.accumulate((speeds[after] - SPEED_TOL_MS - knot) / since)
+    highest = np.minimum.accumulate((speeds[after] + SPEED_TOL_MS - knot) / since)
+    closed = lowest > highest + 1e-12
+    if closed.any():
+        after = after[:int(np.argmax(closed))]
+    if not len(after):
+        return []
     shifts = len(CORNER_SHIFTS_MS)
     ends = np.tile(np.arange(len(after)), shifts)  # row -> column where its segment ends
     corners = np.round(np.tile(speeds[after], shifts)
@@ -135,18 +155,17 @@ def _segments_from(times: np.ndarray, speeds: np.ndarray,
     since = times[after] - times[i]
     line = knot + ((corners - knot) / since[ends])[:, None] * since[None, :]
     inside = np.arange(len(after))[None, :] <= ends[:, None]
-    ok = (corners >= 0) & ~np.any(inside & (np.abs(line - speeds[after][None, :])
-                                            > SPEED_TOL_MS + 1e-9), axis=1)
+    off = np.where(inside, line - speeds[after][None, :], 0.0)
+    ok = (corners >= 0) & ~np.any(np.abs(off) > SPEED_TOL_MS + 1e-9, axis=1)
+    error = np.sum(off * off, axis=1)
     steps = np.diff(np.concatenate([[times[i]], times[after]]))
     before = np.concatenate([np.full((len(ends), 1), knot), line[:, :-1]], axis=1)
     reached = fitted + np.cumsum((before + line) / 2 * steps[None, :], axis=1)
     at_end = reached[np.arange(len(ends)), ends]
-    error = np.zeros(len(ends))
     for values, tolerance in wanted:
         target = values[after]
         known = inside & ~np.isnan(target)[None, :]
         ok &= ~np.any(known & (np.abs(reached - target[None, :]) > tolerance), axis=1)
-        error += np.nan_to_num(np.abs(at_end - target[ends]))
     return [(int(after[ends[r]]), float(corners[r]), float(at_end[r]), float(error[r]))
             for r in np.flatnonzero(ok)]
 

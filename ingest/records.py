@@ -23,10 +23,13 @@ CLASS_GROUPS: dict[str, Callable[[maneuvers.Maneuver], bool]] = {
 
 
 def record_schema(domain: Domain) -> dict:
-    """The JSON Schema of a domain's records, its ``maneuver_class`` limited to the classes
-    registered for that domain."""
+    """The JSON Schema of a domain's records, its ``maneuver_class`` (and, where the schema
+    lists them, ``maneuver_tag``) limited to the classes registered for that domain."""
     schema = load_json_schema(SCHEMA_OF_DOMAIN[domain])
     schema["properties"]["maneuver_class"]["enum"] = maneuvers.codes(domain)
+    if "enum" in schema["properties"]["maneuver_tag"]:
+        schema["properties"]["maneuver_tag"]["enum"] = list(dict.fromkeys(
+            m.tag for m in maneuvers.maneuvers(domain)))
     for condition in schema.get("allOf", ()):
         which = condition["if"]["properties"].get("maneuver_class", {})
         if which.get("$comment") in CLASS_GROUPS:

@@ -49,7 +49,7 @@ def sample(rng: np.random.Generator, n: int, code: str) -> Columns:
 def _brake_class(code: str, name: str) -> Maneuver:
     return Maneuver(
         code=code, tag="brake", domain="highway", name=name, script="gen_hw_brake.py",
-        family="BRAKE", layout_fields=LAYOUT_FIELDS, extract=extract, sample=sample,
+        layout_fields=LAYOUT_FIELDS, extract=extract, sample=sample,
         ego_end_speed_factor=1.0, npc_position="front",
         same_lane=SameLane("npc", "npc_distance_m", "at_start"),
         npc_speed_change=True, lead_brakes=True, ego_reacts="from_start")

@@ -91,7 +91,7 @@ def sample_phased(rng: np.random.Generator, n: int, code: str) -> Columns:
 
 MANEUVERS = tuple(
     Maneuver(code=code, tag=tag, domain="highway", name=name,
-             script=f"gen_hw_{code.lower()}.py", family="FL", layout_fields=LAYOUT_FIELDS,
+             script=f"gen_hw_{code.lower()}.py", layout_fields=LAYOUT_FIELDS,
              extract=extract, sample=sample, sample_phased=sample_phased,
              npc_position=position,
              same_lane=SameLane("npc", "npc_distance_begin_m", "all_along"),

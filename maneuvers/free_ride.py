@@ -138,7 +138,7 @@ def present_sides(params: Mapping) -> list[str]:
 
 MANEUVERS = tuple(
     Maneuver(code=code, tag=tag, domain="highway", name=name,
-             script=f"gen_hw_{code.lower()}.py", family="FR", layout_fields=LAYOUT_FIELDS,
+             script=f"gen_hw_{code.lower()}.py", layout_fields=LAYOUT_FIELDS,
              extract=extract, sample=sample, npc_position=position, lane_sides=present_sides,
              surrounding_slots=True,
              same_lane=SameLane("center", "center_posx_begin_m", "all_along"))

@@ -40,7 +40,7 @@ def target_side(params) -> list[str]:
 
 MANEUVERS = tuple(
     Maneuver(code=code, tag=tag, domain="highway", name=name,
-             script=f"gen_hw_{code.lower()}.py", family="LC", layout_fields=LAYOUT_FIELDS,
+             script=f"gen_hw_{code.lower()}.py", layout_fields=LAYOUT_FIELDS,
              extract=extract, sample=sample, lane_sides=target_side, lane_change="hero")
     for code, tag, name in (("LCF", "lane_change_front", "Ego changes lane (front view)"),
                             ("LCB", "lane_change_behind", "Ego changes lane (rear view)")))

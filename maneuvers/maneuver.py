@@ -15,6 +15,8 @@ from typing import Any, Literal
 
 import numpy as np
 
+from scenweave.errors import InputError
+
 Domain = Literal["highway", "urban"]
 #: a highway file's row (field -> value), the class code, the layout's conventions -> params
 Extractor = Callable[[Mapping[str, Any], str, Mapping[str, Any]], dict]
@@ -22,7 +24,7 @@ Extractor = Callable[[Mapping[str, Any], str, Mapping[str, Any]], dict]
 Sampler = Callable[[np.random.Generator, int, str], dict[str, np.ndarray]]
 
 
-class RecordFieldError(ValueError):
+class RecordFieldError(InputError, ValueError):
     """A record a class cannot read: the message and the field at fault (ingest turns it into
     an input issue naming file and row)."""
 
@@ -62,8 +64,6 @@ class Maneuver:
     script: str
 
     # -- highway records: the file layout and extraction --------------------------------------
-    #: classes sharing layout fields and extraction (``CINF`` and ``COUTB`` are ``CUT``)
-    family: str | None = None
     #: the layout fields extraction reads; a custom layout must keep these names
     layout_fields: tuple[str, ...] = ()
     #: the params its reference script's worked example shows the LLM (``corpus.
@@ -124,6 +124,5 @@ class Maneuver:
     lead_allowed: bool = False
 
     def __post_init__(self) -> None:
-        if self.domain == "highway" and (self.extract is None or self.family is None):
-            raise ValueError(f"highway class {self.code}: a family and an extract function "
-                             "are required")
+        if self.domain == "highway" and self.extract is None:
+            raise ValueError(f"highway class {self.code}: an extract function is required")

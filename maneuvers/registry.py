@@ -16,6 +16,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from types import ModuleType
 
+from scenweave.errors import InputError
 from scenweave.maneuvers.maneuver import Domain, Maneuver
 
 PLUGINS_ENV = "SCENWEAVE_MANEUVERS"
@@ -27,7 +28,7 @@ _builtin: set[str] = set()
 _loaded_plugins: dict[str, set[str]] = {}
 
 
-class UnknownManeuver(KeyError):
+class UnknownManeuver(InputError, KeyError):
     """A class code no definition registers; the message lists the known ones."""
 
     def __str__(self) -> str:

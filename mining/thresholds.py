@@ -10,10 +10,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+from scenweave.errors import InputError
+
 DEFAULT_THRESHOLDS = Path(__file__).with_name("thresholds.json")
 
 
-class ThresholdsError(ValueError):
+class ThresholdsError(InputError, ValueError):
     """A thresholds file ScenWeave cannot use; the message names the file and the key."""
 
 

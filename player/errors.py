@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from scenweave.errors import InfrastructureError
 
-class PlayerError(Exception):
+
+class PlayerError(InfrastructureError):
     """Root of every failure of the player itself (not of a scenario it plays)."""
 
 

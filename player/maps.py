@@ -55,7 +55,9 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
+from scenweave.errors import ScenarioError
 from scenweave.player.scratch import scratch_folder
+from scenweave.spawn_db.opendrive import DRIVABLE_LANE_TYPES
 
 #: a WorldPosition starts an entity on every road passing this close (m)
 SEED_NEAR_M = 20.0
@@ -84,9 +86,6 @@ CLOSED_END_M = 1.0
 ROUTE_SLACK = 1.5
 ROUTE_MARGIN_M = 50.0
 
-#: lane types a car is expected to drive on
-DRIVING_LANE_TYPES = {"driving", "entry", "exit", "onRamp", "offRamp", "connectingRamp",
-                      "bidirectional", "slipLane"}
 #: actions that move entities in ways the reach does not bound
 UNBOUNDED_ACTIONS = {"FollowTrajectoryAction", "SynchronizeAction", "LongitudinalDistanceAction",
                      "LateralDistanceAction", "ControllerAction", "AssignControllerAction",
@@ -283,7 +282,7 @@ def _drive_directions(road: etree._Element) -> tuple[bool, bool]:
     for side, lanes in (("right", True), ("left", False)):
         for lane in road.iterfind(f"lanes/laneSection/{side}/lane"):
             kind = lane.get("type")
-            if kind in DRIVING_LANE_TYPES:
+            if kind in DRIVABLE_LANE_TYPES:
                 if kind == "bidirectional":
                     along = against = True
                 elif lanes:
@@ -301,7 +300,7 @@ def _lanes_toward(road: etree._Element, end: int) -> set[int]:
     section = sections[-1] if end == 1 else sections[0]
     side = "right" if end == 1 else "left"
     return {int(lane.get("id")) for lane in section.iterfind(f"{side}/lane")
-            if lane.get("type") in DRIVING_LANE_TYPES}
+            if lane.get("type") in DRIVABLE_LANE_TYPES}
 
 
 def _s_rate(road, s: np.ndarray, curvature: np.ndarray) -> float:
@@ -316,7 +315,7 @@ def _s_rate(road, s: np.ndarray, curvature: np.ndarray) -> float:
         at = s[inside]
         for side in (1, -1):
             ids = sorted((i for i, lane in section.lanes.items()
-                          if i * side > 0 and lane.type in DRIVING_LANE_TYPES), key=abs)
+                          if i * side > 0 and lane.type in DRIVABLE_LANE_TYPES), key=abs)
             if not ids:
                 continue
             border = road.lane_offset.value(at).astype(float)
@@ -419,7 +418,7 @@ class _Entity:
     targets: list[etree._Element] = field(default_factory=list)
 
 
-class _Unbounded(Exception):
+class _Unbounded(ScenarioError):
     """The scenario's reach cannot be bounded (names the construct)."""
 
 

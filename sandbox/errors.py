@@ -5,8 +5,10 @@ A failing *script* is never an exception: it is an :class:`sandbox.ExecResult` v
 
 from __future__ import annotations
 
+from scenweave.errors import InfrastructureError
 
-class SandboxError(Exception):
+
+class SandboxError(InfrastructureError):
     """Root of every sandbox infrastructure failure (engine down, image missing, ...)."""
 
 

@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, field
 from itertools import pairwise
 from pathlib import Path
 
+from scenweave.errors import ScenarioError
 from scenweave.files import write_bytes_atomic
 
 MAX_MESSAGE_CHARS = 4000
@@ -90,7 +91,7 @@ class Report:
     marks: dict[str, float] = field(default_factory=dict)
 
 
-class ReportInvalid(ValueError):
+class ReportInvalid(ScenarioError, ValueError):
     """The harness report is missing or malformed (the script tampered with it or died)."""
 
 

@@ -12,6 +12,7 @@ a baseline for latency and a way to run the whole benchmark machinery without a 
 
 from __future__ import annotations
 
+import json
 import re
 import tempfile
 from collections.abc import Callable
@@ -20,6 +21,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from scenweave.errors import InputError
 from scenweave.files.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
@@ -40,6 +42,7 @@ from scenweave.report import (
     projected_curve,
     table,
 )
+from scenweave.run_folder import SUMMARY_FILE
 from scenweave.runner import run_batch
 
 #: the 11 highway classes of the thesis benchmark (BR_BK shares BRAKE's script)
@@ -52,7 +55,7 @@ BENCH_HTML = "bench.html"
 BOXPLOT_PREFIX = "fig6_3_latency_boxplot_"
 
 
-class BenchError(Exception):
+class BenchError(InputError):
     """The benchmark cannot run as configured; the message names the option to change."""
 
 
@@ -82,6 +85,17 @@ class BenchResult:
     aggregate: dict
     run_dirs: dict[str, Path] = field(default_factory=dict)
 
+    @property
+    def problems(self) -> bool:
+        """A record was refused or a scenario failed in some model's run (exit code 1)."""
+        for run_dir in self.run_dirs.values():
+            summary = json.loads((Path(run_dir) / SUMMARY_FILE).read_text(encoding="utf-8"))
+            refused = any(i.get("severity", "error") == "error"
+                          for i in summary.get("input_issues", []))
+            if refused or summary["counts"].get("failed") or not summary["total"]:
+                return True
+        return False
+
     def line(self) -> str:
         """The one-line summary printed at the end of ``scenweave bench``."""
         parts = []
@@ -104,12 +118,12 @@ def agent_settings_for(llm: str, replay: Any = None,
     """Pipeline settings per model name: the agent with that model on backend ``llm``;
     ``agent`` holds further AgentSettings fields (repair, replay_file, ...); ``replay`` plays
     every scenario (the reference's too) in esmini."""
-    if llm not in LLM_BACKENDS:
-        raise BenchError(f"--llm {llm!r}: choose one of {', '.join(LLM_BACKENDS)}")
-
     def settings(model: str) -> PipelineSettings:
         if model == REFERENCE:
             return PipelineSettings(no_llm=True, replay=replay)
+        if llm not in LLM_BACKENDS:
+            raise BenchError(f"--llm {llm!r}: model {model!r} needs one of "
+                             f"{', '.join(LLM_BACKENDS)}")
         try:
             from scenweave.agent import AgentSettings
         except ImportError as err:

@@ -11,7 +11,8 @@ import sys
 
 import click
 
-from scenweave import __version__
+from scenweave import __version__, exit_codes
+from scenweave.run_folder import RunInterrupted
 
 #: subcommand name -> "module:attribute" of its click command
 COMMANDS: dict[str, str] = {
@@ -59,25 +60,39 @@ def cli(ctx: click.Context, verbose: bool) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Console entry point: user errors become one line; ``--verbose`` shows the traceback."""
-    args = sys.argv[1:] if argv is None else argv
-    verbose = "--verbose" in args or "-v" in args
+    """Console entry point: user errors become one line; ``--verbose`` (before or after the
+    subcommand) shows the traceback. Exit codes: ``scenweave.exit_codes``."""
+    args = _verbose_first(sys.argv[1:] if argv is None else argv)
+    verbose = args[:1] == ["--verbose"] or "-v" in args[:1]
     try:
-        cli.main(args=args, prog_name="scenweave", standalone_mode=False)
+        # without standalone mode click returns an Exit's code instead of exiting with it
+        code = cli.main(args=args, prog_name="scenweave", standalone_mode=False)
+        sys.exit(code if isinstance(code, int) else exit_codes.DELIVERED)
     except click.exceptions.Exit as exit_:
         sys.exit(exit_.exit_code)
     except click.ClickException as err:
         err.show()
         sys.exit(err.exit_code)
-    except click.Abort:
-        click.echo("Aborted.", err=True)
-        sys.exit(130)
+    except (click.Abort, KeyboardInterrupt) as err:
+        # click turns Ctrl-C into Abort; a run's own interruption says how to resume
+        cause = err.__cause__ if isinstance(err, click.Abort) else err
+        click.echo(str(cause) if isinstance(cause, RunInterrupted) else "interrupted", err=True)
+        sys.exit(exit_codes.INTERRUPTED)
     except Exception as err:  # noqa: BLE001 - the one place that turns crashes into a line
         if verbose:
             raise
         click.echo(f"error: {type(err).__name__}: {err} (run with --verbose for the traceback)",
                    err=True)
-        sys.exit(1)
+        sys.exit(exit_codes.PROBLEMS)
+
+
+def _verbose_first(args: list[str]) -> list[str]:
+    """``scenweave run DATA --verbose`` as ``scenweave --verbose run DATA``: the flag is the
+    group's, but users type it anywhere (not after ``--``)."""
+    end = args.index("--") if "--" in args else len(args)
+    if "--verbose" not in args[:end]:
+        return args
+    return ["--verbose", *(a for i, a in enumerate(args) if a != "--verbose" or i >= end)]
 
 
 if __name__ == "__main__":

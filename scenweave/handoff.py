@@ -17,10 +17,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
+from scenweave.errors import InfrastructureError
+
 MIB = 1024 * 1024
 
 
-class ParcelError(Exception):
+class ParcelError(InfrastructureError):
     """A parcel that cannot be unpacked (corrupt, or a member that is not a plain file)."""
 
 

@@ -87,7 +87,7 @@ def _records(data: Path, loaded: LoadedInput,
         if data.is_file():
             raise IngestError(f"{data}: give the folder that holds the .npy files")
         layouts = load_layouts(selection.layout)
-        for item in iter_raw_records(data, loaded.report, layouts):
+        for item in iter_raw_records(data, loaded.report, layouts, classes=selection.classes):
             yield item.record, item.file
     else:
         for record in load_records(data):

@@ -10,7 +10,6 @@ may succeed, and the queue worker retries exactly these.
 from __future__ import annotations
 
 import json
-import sys
 import time
 import traceback
 from collections.abc import Callable
@@ -19,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
+from scenweave.errors import InfrastructureError
 
 __all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
            "process_scenario"]
@@ -69,26 +69,10 @@ def process_scenario(params: dict, index: int, out_dir: Path, settings: Pipeline
 
 
 def is_infrastructure_error(err: BaseException) -> bool:
-    """True when ``err`` is a failure of the machine or a service, not of the scenario.
-
-    OS errors (disk full, connection refused — the ollama client raises ConnectionError when
-    the LLM server cannot be reached), memory, the sandbox's, the player's (no esmini) and
-    Redis's own errors, and an
-    HTTP transport error of the LLM client. Modules are looked up only if already imported,
-    so this never pulls a heavy package in.
-    """
-    return isinstance(err, (OSError, MemoryError, *_loaded_infrastructure_types()))
-
-
-def _loaded_infrastructure_types() -> tuple[type[BaseException], ...]:
-    found = []
-    for module, name in (("scenweave.sandbox", "SandboxError"), ("scenweave.player", "PlayerError"),
-                         ("redis.exceptions", "RedisError"),
-                         ("httpx", "TransportError"), ("scenweave.agent", "LLMUnavailable")):
-        err_type = getattr(sys.modules.get(module), name, None)
-        if isinstance(err_type, type) and issubclass(err_type, BaseException):
-            found.append(err_type)
-    return tuple(found)
+    """True when ``err`` is a failure of the machine or a service, not of the scenario: an
+    :class:`InfrastructureError` (engine, sandbox, LLM server, queue), an OS error (disk full,
+    connection refused) or memory."""
+    return isinstance(err, (OSError, MemoryError, InfrastructureError))
 
 
 def base_outcome(params: dict) -> dict:
@@ -165,9 +149,13 @@ def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:
 
 
 def _taxonomy_of(err: Exception) -> str:
-    name = type(err).__name__
-    if "Spawn" in name:
+    # imported here: only a failed scenario needs them (and its stages loaded them already)
+    from scenweave.corpus.errors import ParamsError as ScriptParamsError
+    from scenweave.spawn_db.errors import NoSpawnFits
+    from scenweave.spawn_db.errors import ParamsError as SpawnParamsError
+
+    if isinstance(err, NoSpawnFits):
         return "spawn"
-    if name in ("ParamsError", "KeyError"):
+    if isinstance(err, SpawnParamsError | ScriptParamsError | KeyError):
         return "params"
     return "other"  # infrastructure errors are raised, never get here

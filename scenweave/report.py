@@ -344,7 +344,8 @@ def render_run_report(run_dir: Path) -> str:
         _per_class_table(grouped, m, outcomes),
         "<h2>Error taxonomy</h2>",
         table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()])
-        if m["error_taxonomy"] else "<p>No errors.</p>",
+        if m["error_taxonomy"] else "<p>No errors.</p>" if outcomes else
+        "<p>No scenario was made: nothing to count (see the refused records below).</p>",
     ]
     replayed = [o for o in outcomes if o.get("replay")]
     if replayed:
@@ -358,11 +359,15 @@ def render_run_report(run_dir: Path) -> str:
         parts += ["<h2>Variants</h2>", _variant_table(varied)]
     parts += ["<h2>Scenarios</h2>", _scenario_table(run_dir, outcomes)]
     issues = summary.get("input_issues") or []
-    if issues:
-        parts += ["<h2>Input issues</h2>",
-                  table(["file", "row", "field", "message"],
-                        [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
-                         for i in issues], text_columns=4)]
+    errors = [i for i in issues if i.get("severity", "error") == "error"]
+    warnings = [i for i in issues if i.get("severity") == "warning"]
+    for title, listed in (("Refused records (input errors)", errors),
+                          ("Input warnings (read, in a form not expected)", warnings)):
+        if listed:
+            parts += [f"<h2>{title}</h2>",
+                      table(["file", "row", "field", "message"],
+                            [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
+                             for i in listed], text_columns=4)]
     return page(f"ScenWeave run {summary.get('run_id', run_dir.name)}", "\n".join(parts))
 
 

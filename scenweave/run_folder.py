@@ -10,6 +10,9 @@ import json
 import re
 import shutil
 import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -34,18 +37,56 @@ def safe_name(scenario_id: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", scenario_id)
 
 
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a run: the scenarios finished so far are kept; the message says how to
+    resume."""
+
+    def __init__(self, run_id: str, committed: int):
+        super().__init__(f"interrupted after {committed} new scenarios of run {run_id}; they "
+                         f"are kept: run the same command with --run-id {run_id} to resume")
+
+
+@dataclass
+class Started:
+    """How far a run got in this process: scenario folders committed."""
+
+    committed: int = 0
+
+
 class RunFolder:
     """The files of one run."""
 
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, created: bool = False):
         self.root = Path(root)
+        #: this process made the folder (a resumed run's folder is not removed on failure)
+        self.created = created
 
     @classmethod
     def open(cls, out_root: Path, run_id: str | None = None) -> RunFolder:
         """The run folder ``out_root/run_id`` (a new id when none is given), created if needed."""
-        folder = cls(Path(out_root) / (run_id or new_run_id()))
+        root = Path(out_root) / (run_id or new_run_id())
+        folder = cls(root, created=not root.exists())
         folder.root.mkdir(parents=True, exist_ok=True)
         return folder
+
+    @contextmanager
+    def started(self) -> Iterator[Started]:
+        """A run in this folder: if it stops before its first scenario, a folder it made is
+        removed (no half-made run is left behind); staging leftovers go either way; Ctrl-C
+        becomes :class:`RunInterrupted`, which says how to resume."""
+        progress = Started()
+        try:
+            yield progress
+        except BaseException as err:
+            if self.created and progress.committed == 0 and not self.outcomes():
+                _remove_tree(self.root)
+            else:
+                _remove_tree(self.root / ".staging")
+            if isinstance(err, KeyboardInterrupt) and not isinstance(err, RunInterrupted) \
+                    and self.root.exists():
+                raise RunInterrupted(self.run_id, progress.committed) from err
+            raise
+        _remove_tree(self.root / ".staging")
 
     @property
     def run_id(self) -> str:

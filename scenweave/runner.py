@@ -13,17 +13,25 @@ import time
 from collections import Counter
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
 from functools import partial
 from pathlib import Path
 from typing import Any
 
+from scenweave.console import refused_records
 from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.progress import progress
 from scenweave.report import write_run_report
-from scenweave.run_folder import RECORDED_NAME, RUN_FILE, STATUSES, SUMMARY_FILE, RunFolder
+from scenweave.run_folder import (
+    RECORDED_NAME,
+    RUN_FILE,
+    STATUSES,
+    SUMMARY_FILE,
+    RunFolder,
+    Started,
+)
 
 
 @dataclass
@@ -38,7 +46,7 @@ class RunResult:
     @property
     def refused(self) -> int:
         """Records no scenario was made of: input errors (warnings are read records)."""
-        return sum(i.get("severity", "error") == "error" for i in self.input_issues)
+        return refused_records(self.input_issues)
 
     @property
     def problems(self) -> bool:
@@ -96,12 +104,14 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     if jobs == 1:  # with jobs, each worker loads the default matcher itself, in parallel
         matcher = matcher or default_matcher(settings.map)
     folder = RunFolder.open(out_root, run_id)
+    if settings.agent is not None:  # the LLM calls are logged under the run
+        settings = replace(settings, agent=replace(settings.agent, run_id=folder.run_id))
     with folder.started() as started:
         folder.write(RUN_FILE, run_description(data, loaded, selection, settings, folder))
         return _run_into(folder, started, loaded, settings, matcher, retry_failed, jobs)
 
 
-def _run_into(folder: RunFolder, started: Any, loaded: LoadedInput,
+def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
               settings: PipelineSettings, matcher: Any, retry_failed: bool,
               jobs: int) -> RunResult:
     todo = []

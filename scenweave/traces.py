@@ -12,12 +12,13 @@ from contextlib import closing
 from pathlib import Path
 
 from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME
+from scenweave.errors import InputError
 from scenweave.run_folder import STATUS_FILE, safe_name
 
 PREVIEW_LINES = 12
 
 
-class TraceNotFound(LookupError):
+class TraceNotFound(InputError, LookupError):
     """No run folder holds a trace for the scenario."""
 
 

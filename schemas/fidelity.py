@@ -32,6 +32,7 @@ from scenweave.corpus.phases import (
     profile_of,
 )
 from scenweave.maneuvers import Maneuver
+from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.schemas.findings import Finding
 from scenweave.schemas.params import number as number_of
 from scenweave.schemas.scenario_doc import ScenarioDoc, number
@@ -43,7 +44,6 @@ HEADING_TOL_RAD = 1e-3
 #: how far the right-turn target may lie from the spawn stage's exit point (m, rad)
 TURN_EXIT_TOL_M = 0.5
 TURN_EXIT_HEADING_TOL_RAD = 0.05
-SLOTS = ("center", "right", "left")
 #: a Fog visual range below this is fog (m)
 FOG_BELOW_M = 1000.0
 #: what an unknown class must show: nothing beyond what every scenario shows

@@ -22,6 +22,8 @@ from typing import Any, Literal, TypedDict
 import fastjsonschema
 
 from scenweave.corpus.phases import PhaseRecord
+from scenweave.errors import InputError
+from scenweave.maneuvers.free_ride import SLOTS
 
 SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
 
@@ -30,8 +32,6 @@ Side = Literal["left", "right"]
 #: the actors the spawn stage places, each with a world pose and a lane position at t = 0
 PLACED_ACTORS = ("ego", "npc", "center", "right", "left", "lead", "oncoming", "turn_exit",
                  "background")
-#: the free-ride slots (FRF, FRB)
-SLOTS = ("center", "right", "left")
 
 
 class Params(TypedDict, total=False):
@@ -135,7 +135,7 @@ POSE_KEYS: dict[str, Any] = {
     "road_id": int | None, "lane_id": int | None, "s": float | None}
 
 
-class ParamsInvalid(ValueError):
+class ParamsInvalid(InputError, ValueError):
     """Params that break the contract: the message names the key."""
 
     def __init__(self, message: str, key: str | None = None) -> None:

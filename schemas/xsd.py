@@ -8,10 +8,11 @@ from pathlib import Path
 
 from lxml import etree
 
+from scenweave.errors import InfrastructureError
 from scenweave.schemas.findings import Finding
 
 
-class SchemaUnavailable(RuntimeError):
+class SchemaUnavailable(InfrastructureError, RuntimeError):
     """The XSD cannot be found: the package ``asam-qc-openscenarioxml`` is missing."""
 
 

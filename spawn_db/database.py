@@ -216,7 +216,7 @@ def _entry(network: RoadNetwork, context: str, key: LaneKey, s: float,
         },
         "annotations": {"suitable_for": [], "priority": 1, "manually_reviewed": False},
     }
-    entry["annotations"]["suitable_for"] = _suitable_for(entry, approach)
+    entry["annotations"]["suitable_for"] = _suitable_for(entry)
     entry["annotations"]["priority"] = _priority(entry)
     return entry
 
@@ -296,17 +296,26 @@ def _traffic_lights(network: RoadNetwork, approach: JunctionApproach | None, x: 
     return sorted(lights, key=lambda light: (light["distance_m"], str(light["signal_id"])))
 
 
-def _suitable_for(entry: dict[str, Any], approach: JunctionApproach | None) -> list[str]:
-    if entry["context"] != "urban":
-        return []
-    long_enough = entry["drivable"]["ahead_m"] >= URBAN_MIN_DRIVABLE_M
-    controlled = {m.movement for m in approach.movements if m.signal is not None}
+def _suitable_for(entry: dict[str, Any]) -> list[str]:
+    """The urban tags the entry suits when the database is built (the thesis format's
+    ``suitable_for``, for a person to review); the matcher asks :func:`suits_urban` anew, so a
+    class registered later spawns too."""
     tags: list[str] = []
-    for maneuver in maneuvers.maneuvers("urban"):  # a light class needs its movement's light
-        fits = long_enough if maneuver.light is None else maneuver.turn in controlled
-        if fits and maneuver.tag not in tags:
+    for maneuver in maneuvers.maneuvers("urban"):
+        if suits_urban(entry, maneuver) and maneuver.tag not in tags:
             tags.append(maneuver.tag)
     return tags
+
+
+def suits_urban(entry: dict[str, Any], maneuver: maneuvers.Maneuver) -> bool:
+    """Whether an urban class can start at ``entry``: a light class needs a light over its
+    movement (straight on, right turn), any other class enough drivable road ahead."""
+    if entry["context"] != "urban":
+        return False
+    if maneuver.light is None:
+        return bool(entry["drivable"]["ahead_m"] >= URBAN_MIN_DRIVABLE_M)
+    return any(maneuver.turn in light["movements"]
+               for light in entry["surroundings"]["traffic_lights"])
 
 
 def _priority(entry: dict[str, Any]) -> int:

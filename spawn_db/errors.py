@@ -2,26 +2,28 @@
 
 from __future__ import annotations
 
+from scenweave.errors import InfrastructureError, InputError, ScenarioError, ScenWeaveError
 
-class SpawnDbError(Exception):
+
+class SpawnDbError(ScenWeaveError):
     """Root of every error raised by ``spawn_db``."""
 
 
-class OpenDriveError(SpawnDbError):
+class OpenDriveError(SpawnDbError, InputError):
     """The OpenDRIVE file is missing, malformed or uses a feature this reader does not support."""
 
 
-class LaneEndsError(SpawnDbError):
+class LaneEndsError(SpawnDbError, ScenarioError):
     """A walk along a lane ran into the end of the drivable network."""
 
 
-class SpawnDatabaseError(SpawnDbError):
+class SpawnDatabaseError(SpawnDbError, InfrastructureError):
     """The spawn database file is missing or does not match its JSON Schema."""
 
 
-class NoSpawnFits(SpawnDbError):
+class NoSpawnFits(SpawnDbError, ScenarioError):
     """No spawn point of the database satisfies the scenario's constraints."""
 
 
-class ParamsError(SpawnDbError, ValueError):
+class ParamsError(SpawnDbError, ScenarioError, ValueError):
     """A params dict lacks a key the matcher needs, or holds a value of the wrong kind."""

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from functools import cache, cached_property
 from pathlib import Path
 
+from scenweave.errors import InputError
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, PACKAGE_DIR
 from scenweave.spawn_db.errors import SpawnDbError
 
@@ -29,7 +30,7 @@ DEFAULT_MAP = "Town04"
 MAP_SUFFIX = ".xodr"
 
 
-class UnknownMapError(SpawnDbError, ValueError):
+class UnknownMapError(SpawnDbError, InputError, ValueError):
     """A map name that is not bundled, or a map file that does not exist."""
 
 

@@ -32,7 +32,7 @@ from typing import Any
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
 from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
-from scenweave.spawn_db.database import load_database
+from scenweave.spawn_db.database import load_database, suits_urban
 from scenweave.spawn_db.errors import (
     LaneEndsError,
     NoSpawnFits,
@@ -666,8 +666,10 @@ def _urban_filters(entry: dict[str, Any], needs: Requirements):
         yield Rejection("traffic_light", "no traffic light ahead of the spawn")
     elif movement is not None and _light_for(entry, movement) is None:
         yield Rejection("traffic_light", f"no light controls the {movement} movement")
-    if needs.tag not in entry["annotations"]["suitable_for"]:
-        yield Rejection("suitable_for", f"{needs.tag!r} is not in suitable_for")
+    maneuver = maneuvers.by_tag(needs.tag)
+    if maneuver is None or not suits_urban(entry, maneuver):  # asked now: plugins spawn too
+        yield Rejection("suitable_for", f"{needs.tag!r} does not suit it (a light class needs "
+                                        "a light over its movement, others road ahead)")
 
 
 def _score(entry: dict[str, Any], needs: Requirements) -> float:

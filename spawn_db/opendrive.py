@@ -18,9 +18,10 @@ import numpy as np
 from scenweave.spawn_db.errors import OpenDriveError
 from scenweave.spawn_db.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
 
-#: lane types a car may drive on
+#: lane types a car may drive on (the one set: the player's map cutter asks it too)
 DRIVABLE_LANE_TYPES = frozenset(
-    {"driving", "entry", "exit", "onRamp", "offRamp", "connectingRamp", "bidirectional"})
+    {"driving", "entry", "exit", "onRamp", "offRamp", "connectingRamp", "bidirectional",
+     "slipLane"})
 
 #: factors from the speed units OpenDRIVE allows to km/h
 SPEED_TO_KMH = {"km/h": 1.0, "m/s": 3.6, "mph": 1.609344}

@@ -10,7 +10,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
-BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers", "files")
+BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers", "files",
+          "errors")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 
@@ -130,15 +131,23 @@ def test_the_packages_import_each_other_without_a_cycle():
     assert _cycles(packages) == []
 
 
-@pytest.mark.parametrize("package", ["maneuvers", "files"])
-def test_the_bottom_layer_imports_nothing_of_ours(package):
+@pytest.mark.parametrize("package, below", [("maneuvers", {"errors"}), ("files", set()),
+                                            ("errors", set())])
+def test_the_bottom_layer_imports_nothing_of_ours_but_the_error_root(package, below):
     assert {layer(target) for name, targets in GRAPH.items() if layer(name) == package
-            for target in targets} <= {package}
+            for target in targets} <= {package, *below}
 
 
 def test_the_scenario_library_imports_only_what_the_sandbox_mounts():
-    """LLM-written scripts run ``corpus_utils`` in the sandbox, where only ``corpus`` exists."""
-    assert {layer(target) for target in GRAPH["scenweave.corpus.corpus_utils"]} <= {"corpus"}
+    """LLM-written scripts import ``corpus_utils`` (and so the ``corpus`` package) in the
+    sandbox, where only the ``corpus`` folder exists: nothing they load may leave it."""
+    reached, todo = set(), ["scenweave.corpus", "scenweave.corpus.corpus_utils"]
+    while todo:
+        name = todo.pop()
+        if name not in reached:
+            reached.add(name)
+            todo += GRAPH[name]
+    assert {layer(name) for name in reached} == {"corpus"}, sorted(reached)
 
 
 def test_no_package_imports_another_packages_private_names():

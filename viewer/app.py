@@ -17,6 +17,7 @@ from starlette.responses import FileResponse, PlainTextResponse, Response
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
+from scenweave.errors import InfrastructureError
 from scenweave.viewer import catalog
 
 STATIC_DIR = Path(__file__).parent / "static"
@@ -26,7 +27,7 @@ VENDOR_SCRIPT = STATIC_DIR / "vendor" / "uPlot.iife.min.js"
 HOST = "127.0.0.1"
 
 
-class AssetsMissing(RuntimeError):
+class AssetsMissing(InfrastructureError, RuntimeError):
     """The vendored front-end libraries are not there (setup was not run)."""
 
 

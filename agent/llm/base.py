@@ -8,11 +8,12 @@ from abc import ABC, abstractmethod
 
 from scenweave.agent.llm.log import log_call
 from scenweave.agent.llm.messages import LLMReply, Prompt
+from scenweave.errors import InfrastructureError
 
 __all__ = ["LLM", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt"]
 
 
-class LLMUnavailable(Exception):
+class LLMUnavailable(InfrastructureError):
     """The LLM cannot answer (server unreachable, timed out, model missing, not installed).
 
     An infrastructure failure, not the scenario's fault: the message names the setting to
@@ -33,6 +34,8 @@ class LLM(ABC):
 
     def __init__(self, model: str) -> None:
         self.model = model
+        #: the run its calls are logged under (``AgentSettings.run_id``)
+        self.run_id: str | None = None
 
     def complete(self, prompt: Prompt) -> LLMReply:
         """Ask once; the reply is timed and logged (``$SCENWEAVE_HOME/llm-calls.sqlite``)."""
@@ -40,7 +43,7 @@ class LLM(ABC):
         reply = self._complete(prompt)
         reply.latency_s = round(time.perf_counter() - started, 4)
         reply.backend, reply.model = self.backend, reply.model or self.model
-        log_call(prompt, reply)
+        log_call(prompt, reply, self.run_id)
         return reply
 
     def check(self) -> None:  # noqa: B027 - most backends have nothing to check

@@ -77,3 +77,12 @@ class OllamaLLM(LLM):
     def _missing_model(self) -> str:
         return (f"model '{self.model}' not found on Ollama at {self.host}: run "
                 f"`ollama pull {self.model}` or choose --model")
+
+
+def server_answers(host: str, timeout_s: float = 2.0) -> bool:
+    """Whether an Ollama server answers at ``host`` (``--llm auto`` asks before a batch)."""
+    url = host if "://" in host else f"http://{host}"
+    try:
+        return httpx.get(f"{url.rstrip('/')}/api/tags", timeout=timeout_s).is_success
+    except httpx.HTTPError:
+        return False

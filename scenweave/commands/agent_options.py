@@ -1,5 +1,6 @@
-"""The agent's command-line options, shared by ``run``, ``submit`` and ``demo``, and the
-``--map`` option of every command that makes, serves or plays scenarios.
+"""Options shared by the commands: the agent's (``run``, ``submit``, ``demo``, ``bench``),
+``--map`` of every command that makes, serves or plays scenarios, ``--classes`` and
+``--json`` (one meaning everywhere: machine-readable output instead of the human lines).
 
 Choices are spelled out here (not imported from ``agent``) so ``scenweave --help`` does not
 load LangGraph; ``pipeline_settings`` turns the options into settings and checks them.
@@ -15,7 +16,8 @@ import click
 
 from scenweave.pipeline import PipelineSettings
 
-LLM_CHOICES = ("embedded", "ollama", "replay", "none")
+#: the ``--llm`` choices of every command that runs the agent (run, submit, demo, bench)
+LLM_CHOICES = ("auto", "embedded", "ollama", "replay", "none")
 SANDBOX_CHOICES = ("auto", "docker", "bwrap")
 #: names of the options below, for commands that forward them
 AGENT_OPTION_NAMES = ("llm", "model", "repair", "max_attempts", "sandbox", "ollama_host",
@@ -27,10 +29,10 @@ def _option(decls: list[str], **attrs: Any) -> tuple[list[str], dict]:
 
 
 AGENT_OPTIONS = [
-    _option(["--llm"], type=click.Choice(LLM_CHOICES), default="embedded",
-                 show_default=True,
-                 help="LLM backend: embedded GGUF model in-process, an Ollama server, recorded "
-                      "replies, or none (the reference scripts, same as --no-llm)."),
+    _option(["--llm"], type=click.Choice(LLM_CHOICES), default="auto", show_default=True,
+            help="LLM backend: auto (the Ollama server when one answers, else the reference "
+                 "scripts), embedded (SmolLM2-135M in-process: weak, slow, for trying the "
+                 "agent), ollama, replay (recorded replies) or none (= --no-llm)."),
     _option(["--model"], help="Model: an Ollama tag (default qwen2.5-coder:7b) or a GGUF "
                                    "file for --llm embedded (default SmolLM2-135M-Instruct)."),
     _option(["--repair"], default="error-feedback", show_default=True,
@@ -46,7 +48,7 @@ AGENT_OPTIONS = [
     _option(["--num-ctx"], default=8192, show_default=True, type=click.IntRange(512),
                  help="Context window asked of the model."),
     _option(["--max-tokens"], type=click.IntRange(16),
-                 help="Output tokens per call [default: 4096 Ollama, 512 embedded]."),
+            help="Output tokens per call [default: 4096 Ollama, 1024 embedded]."),
     _option(["--replay-file"], type=click.Path(exists=True, dir_okay=False, path_type=Path),
                  help="For --llm replay: a replies JSON or a scenario's trace.jsonl."),
     _option(["--replay/--no-replay"], default=None,
@@ -81,6 +83,26 @@ def map_option(optional: bool = False, help: str = MAP_HELP
                         help=help)
 
 
+def json_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """``--json`` (passed as ``as_json``): print ``what`` as JSON instead of the human lines."""
+    return click.option("--json", "as_json", is_flag=True,
+                        help=f"Print {what} as JSON instead of the human lines.")
+
+
+def class_codes(ctx: click.Context, param: click.Parameter, value: str | None
+                ) -> tuple[str, ...]:
+    """``--classes BRAKE,CINF`` as codes, each a registered class: a typo is a usage error
+    before anything is written (an unknown class would silently select nothing)."""
+    from scenweave import maneuvers
+
+    codes = tuple(c.strip().upper() for c in (value or "").split(",") if c.strip())
+    unknown = [c for c in codes if maneuvers.find(c) is None]
+    if unknown:
+        raise click.BadParameter(f"unknown class {', '.join(unknown)} (known: "
+                                 f"{', '.join(maneuvers.codes())})", ctx=ctx, param=param)
+    return codes
+
+
 def agent_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """Add every agent option to a click command function."""
     for decls, attrs in reversed(AGENT_OPTIONS):
@@ -99,18 +121,16 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
     ``map_ref`` (``--map``) is the map scenarios are made for (None: Town04)."""
     replay_settings = replay_settings_for(replay)
     map_name = None if map_ref is None else map_ref.logic_file
+    _check_repair(repair)  # a bad option is a usage error whichever LLM runs
+    if llm == "replay" and replay_file is None:
+        raise click.UsageError("--llm replay needs --replay-file")
+    if llm == "auto" and not no_llm:
+        llm = auto_llm(ollama_host)
     if no_llm or llm == "none":
         return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings, map=map_name)
     from scenweave.agent import AgentSettings
-    from scenweave.agent.repair import get_strategy
     from scenweave.agent.settings import batch_sandbox
 
-    try:
-        get_strategy(repair)
-    except ValueError as err:
-        raise click.BadParameter(str(err), param_hint="--repair") from err
-    if llm == "replay" and replay_file is None:
-        raise click.UsageError("--llm replay needs --replay-file")
     agent = AgentSettings(llm=llm, model=model, repair=repair.replace("-", "_"),
                           max_attempts=max_attempts, timeout_s=llm_timeout, num_ctx=num_ctx,
                           max_tokens=max_tokens, ollama_host=ollama_host,
@@ -118,6 +138,15 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           sandbox=batch_sandbox(sandbox), replay=replay_settings)
     return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings,
                             map=map_name)
+
+
+def _check_repair(repair: str) -> None:
+    from scenweave.agent.repair import checked_repair
+
+    try:
+        checked_repair(repair)
+    except ValueError as err:
+        raise click.BadParameter(str(err), param_hint="--repair") from err
 
 
 def replay_settings_for(wanted: bool | None) -> Any:
@@ -134,3 +163,18 @@ def replay_settings_for(wanted: bool | None) -> Any:
             raise click.UsageError(f"--replay: {err}") from err
         return None
     return ReplaySettings()
+
+
+def auto_llm(ollama_host: str | None) -> str:
+    """``--llm auto``: ``ollama`` when its server answers (the production path), else ``none``
+    with one line saying so and how to get an LLM."""
+    from scenweave.agent.llm.ollama import server_answers
+    from scenweave.agent.settings import DEFAULT_OLLAMA_HOST
+
+    host = ollama_host or DEFAULT_OLLAMA_HOST
+    if server_answers(host):
+        return "ollama"
+    click.echo(f"llm: no Ollama server answers at {host}: running the reference scripts "
+               "(start one or set OLLAMA_HOST; --llm embedded tries the built-in SmolLM2)",
+               err=True)
+    return "none"

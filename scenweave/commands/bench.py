@@ -8,8 +8,15 @@ from typing import Any
 
 import click
 
-from scenweave.bench import LLM_BACKENDS, THESIS_CLASSES, BenchError, BenchSettings, run_bench
-from scenweave.commands.agent_options import map_option, replay_settings_for
+from scenweave import exit_codes
+from scenweave.bench import REFERENCE, THESIS_CLASSES, BenchError, BenchSettings, run_bench
+from scenweave.commands.agent_options import (
+    LLM_CHOICES,
+    auto_llm,
+    json_option,
+    map_option,
+    replay_settings_for,
+)
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -24,8 +31,9 @@ def _names(text: str) -> tuple[str, ...]:
               help="Comma-separated class codes.")
 @click.option("--per-class", default=5, show_default=True, type=click.IntRange(1),
               help="Records per class (the thesis used 5).")
-@click.option("--llm", type=click.Choice(LLM_BACKENDS), default="ollama", show_default=True,
-              help="LLM backend the agent uses.")
+@click.option("--llm", type=click.Choice(LLM_CHOICES), default="ollama", show_default=True,
+              help="LLM backend the agent uses (auto: Ollama when it answers; none: only "
+                   "--models reference makes sense).")
 @click.option("--repair", default="error-feedback", show_default=True,
               help="Repair strategy of the agent.")
 @click.option("--replay-file", type=click.Path(exists=True, dir_okay=False, path_type=Path),
@@ -38,7 +46,7 @@ def _names(text: str) -> tuple[str, ...]:
 @click.option("--bench-id", help="Name of the benchmark folder; an existing one is resumed.")
 @click.option("--replay/--no-replay", default=None,
               help="Play every scenario in esmini and judge it [default: on when found].")
-@click.option("--json", "as_json", is_flag=True, help="Print bench.json instead of a line.")
+@json_option("bench.json's aggregate")
 @map_option()
 def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
           replay_file: Path | None, data: Path | None, seed: int, out_root: Path,
@@ -46,6 +54,11 @@ def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
     """Benchmark models on the same records: SR, first-attempt rate, latency, tokens, errors."""
     if not _names(models):
         raise click.BadParameter("give at least one model", param_hint="--models")
+    if llm == "auto":
+        llm = auto_llm(None)
+    if llm == "none" and set(_names(models)) != {REFERENCE}:
+        raise click.BadParameter("without an LLM only --models reference can run",
+                                 param_hint="--llm")
     settings = BenchSettings(models=_names(models), classes=_names(classes),
                              per_class=per_class, llm=llm, seed=seed,
                              repair=repair.replace("-", "_"), replay_file=replay_file,
@@ -55,3 +68,4 @@ def bench(models: str, classes: str, per_class: int, llm: str, repair: str,
     except BenchError as err:
         raise click.ClickException(str(err)) from err
     click.echo(json.dumps(result.aggregate, indent=1) if as_json else result.line())
+    exit_codes.finish(result.problems)

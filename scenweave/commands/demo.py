@@ -11,7 +11,12 @@ from pathlib import Path
 
 import click
 
-from scenweave.commands.agent_options import pipeline_settings, replay_settings_for
+from scenweave.commands.agent_options import (
+    LLM_CHOICES,
+    auto_llm,
+    pipeline_settings,
+    replay_settings_for,
+)
 from scenweave.ingest import ingest_directory
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 from scenweave.inputs import InputSelection
@@ -29,8 +34,9 @@ PHASED_ROWS = 1
 @click.option("--seed", default=7, show_default=True, help="Seed of the sample data.")
 @click.option("--per-class", default=3, show_default=True, type=click.IntRange(1),
               help="Sample records per class.")
-@click.option("--llm", type=click.Choice(["embedded", "ollama", "none"]), default="embedded",
-              show_default=True, help="LLM of the agent part; none skips it.")
+@click.option("--llm", type=click.Choice(LLM_CHOICES), default="embedded", show_default=True,
+              help="LLM of the agent part (the demo shows the agent with the built-in model); "
+                   "none skips it, auto uses Ollama when it answers.")
 @click.option("--agent-classes", default="BRAKE,U4_1", show_default=True,
               help="Classes whose first record goes through the agent.")
 @click.option("--repair", default="error-feedback", show_default=True,
@@ -50,6 +56,8 @@ def demo(out_dir: Path, seed: int, per_class: int, llm: str, agent_classes: str,
                        PipelineSettings(no_llm=True, replay=replay_settings_for(None)),
                        run_id="no-llm")
     click.echo(result.line())
+    if llm == "auto":
+        llm = auto_llm(None)
     if llm == "none":
         return
     classes = tuple(c.strip() for c in agent_classes.split(",") if c.strip())
@@ -57,6 +65,18 @@ def demo(out_dir: Path, seed: int, per_class: int, llm: str, agent_classes: str,
                       pipeline_settings(False, 5, llm=llm, repair=repair),
                       run_id=f"agent-{llm}")
     click.echo(agent.line())
+    click.echo(attempts_line(agent.summary))
     click.echo(f"demo: inspect a scenario with: scenweave trace "
                f"{agent.summary['scenarios'][0]['scenario_id']} --runs {out_dir / 'runs'}"
                if agent.summary["scenarios"] else "demo: the agent had no records to run")
+
+
+def attempts_line(summary: dict) -> str:
+    """What the LLM's attempts came to: how many, how many failed and of which kind (the
+    scenarios' counts alone hide that a fallback followed three failed attempts)."""
+    kinds = summary["error_taxonomy"]
+    failed = sum(kinds.values())
+    detail = " (" + ", ".join(f"{n} {kind}" for kind, n in sorted(
+        kinds.items(), key=lambda item: -item[1])) + ")" if failed else ""
+    return (f"agent: {summary['attempts']} LLM attempts, {failed} failed{detail}; "
+            f"{summary['first_attempt_success']} right the first time")

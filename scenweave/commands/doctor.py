@@ -6,9 +6,11 @@ import json
 
 import click
 
+from scenweave.commands.agent_options import json_option
+
 
 @click.command("doctor")
-@click.option("--json", "as_json", is_flag=True, help="Print the findings as a JSON dict.")
+@json_option("the findings")
 def doctor(as_json: bool) -> None:
     """Report the player (esmini), sandbox backends, embedded LLM, Ollama and Redis.
 

@@ -7,11 +7,12 @@ from pathlib import Path
 
 import click
 
+from scenweave import exit_codes
+from scenweave.commands.agent_options import json_option
+from scenweave.console import problem_lines
 from scenweave.ingest import ingest_directory
 from scenweave.ingest.batch import REPORT_NAME
 from scenweave.ingest.highway import DEFAULT_BINNING
-
-SHOWN_ISSUES = 20
 
 
 @click.command("ingest")
@@ -22,20 +23,21 @@ SHOWN_ISSUES = 20
               help="Highway column-layout JSON (default: schemas/highway_layouts.json).")
 @click.option("--binning", default=DEFAULT_BINNING, show_default=True,
               help="Binning version written into highway scenario ids.")
-@click.option("--strict", is_flag=True, help="Exit with status 1 if any input had an error.")
-@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@click.option("--strict", is_flag=True, hidden=True,
+              help="Kept for old scripts: exit status 1 on input errors is the default now.")
+@json_option("the ingest report")
 def ingest(raw_dir: Path, out_dir: Path, layout: Path | None, binning: str, strict: bool,
            as_json: bool) -> None:
-    """Canonicalise highway .npy and urban ADScene files; bad rows are reported, not fatal."""
+    """Canonicalise highway .npy and urban ADScene files into OUT (its old records are
+    replaced); bad rows are reported, not fatal. Exit status 1 when a record was refused or
+    none was written."""
     report = ingest_directory(raw_dir, out_dir, layout, binning)
     if as_json:
         click.echo(json.dumps(report.to_dict(), indent=1))
     else:
-        for issue in report.issues[:SHOWN_ISSUES]:
-            click.echo(f"{issue.severity}: {issue.line()}", err=True)
-        if len(report.issues) > SHOWN_ISSUES:
-            click.echo(f"... {len(report.issues) - SHOWN_ISSUES} more in {REPORT_NAME}", err=True)
         click.echo(f"ingest: {report.records_written} records from {report.files_read} files, "
-                   f"{len(report.errors)} errors -> {out_dir} (report: {out_dir / REPORT_NAME})")
-    if strict and report.errors:
-        raise SystemExit(1)
+                   f"{len(report.errors)} refused -> {out_dir} (report: {out_dir / REPORT_NAME})")
+        issues = [issue.to_dict() for issue in report.issues]
+        for line in problem_lines(issues, where=str(out_dir / REPORT_NAME)):
+            click.echo(line, err=True)
+    exit_codes.finish(bool(report.errors) or report.records_written == 0)

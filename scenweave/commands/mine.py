@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import click
 
+from scenweave import exit_codes
+from scenweave.commands.agent_options import class_codes, json_option
+from scenweave.console import counted_lines
 from scenweave.progress import progress
-
-SHOWN_SKIPS = 10
 
 
 @click.command("mine")
@@ -18,12 +20,13 @@ SHOWN_SKIPS = 10
               help="Folder for highway/<CLASS>.json, mining_report.json and .html.")
 @click.option("--thresholds", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Detection thresholds JSON (default: mining/thresholds.json).")
-@click.option("--classes", default="", help="Only these classes, e.g. BRAKE,CINF.")
-@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: str,
+@click.option("--classes", callback=class_codes, help="Only these classes, e.g. BRAKE,CINF.")
+@json_option("the mining report")
+def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str, ...],
          as_json: bool) -> None:
     """Read CommonRoad XML, NGSIM CSV or highD files (a file or a folder), find the
-    manoeuvres of the MOOVE classes in them and write each as a canonical record."""
+    manoeuvres of the MOOVE classes in them and write each as a canonical record. Exit status
+    1 when an event found was refused or no record was written."""
     from scenweave.mining.mine import REPORT_NAME, mine_recordings
     from scenweave.mining.readers import read_recordings
     from scenweave.mining.thresholds import ThresholdsError, load_thresholds
@@ -34,24 +37,37 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: str,
         limits = load_thresholds(thresholds, warnings)
     except ThresholdsError as err:
         raise click.BadParameter(str(err), param_hint="--thresholds") from err
-    wanted = tuple(c.strip().upper() for c in classes.split(",") if c.strip())
     report = mine_recordings(progress(read_recordings(data), desc="mining"), out_dir, limits,
-                             wanted)
+                             classes)
     report.warnings[:0] = warnings
     html = write_mining_report(out_dir / REPORT_NAME)
     if as_json:
         click.echo(json.dumps(report.to_dict(), indent=1))
-        return
-    for line in report.warnings:
-        click.echo(f"warning: {line}", err=True)
-    for skip in report.skipped[:SHOWN_SKIPS]:
-        click.echo(f"skipped: {skip['scenario_id']}: {skip['reason']}", err=True)
-    if len(report.skipped) > SHOWN_SKIPS:
-        click.echo(f"... {len(report.skipped) - SHOWN_SKIPS} more skipped in {REPORT_NAME}",
-                   err=True)
+    else:
+        _tell(report, out_dir, html)
+    # an event found but refused counts as a problem, as does an input nothing was read from
+    exit_codes.finish(not sum(report.written.values()) or bool(report.skipped))
+
+
+def _tell(report: Any, out_dir: Path, html: Path) -> None:
+    """The summary line, then what was refused and the warnings, a few of each."""
+    from scenweave.mining.mine import REPORT_NAME
+
     by_class = ", ".join(f"{c} {n}" for c, n in sorted(report.written.items())) or "none"
     rate = report.vehicle_hours / report.seconds if report.seconds else 0.0
     click.echo(f"mine: {sum(report.written.values())} records ({by_class}) from "
                f"{len(report.files)} files, {report.vehicle_hours:.2f} vehicle-hours in "
                f"{report.seconds:.1f} s ({rate:.2f} vehicle-hours/s), "
-               f"{len(report.skipped)} skipped -> {out_dir} (open {html})")
+               f"{len(report.skipped)} refused -> {out_dir} (open {html})")
+    where = str(out_dir / REPORT_NAME)
+    lines = []
+    if report.skipped:
+        lines += counted_lines(
+            f"refused: {len(report.skipped)} events no scenario can play back",
+            [f"{skip['file']}: {skip['scenario_id']}"
+             + (f", field '{skip['field']}'" if skip.get("field") else "")
+             + f": {skip['reason']}" for skip in report.skipped], where)
+    if report.warnings:
+        lines += counted_lines(f"warnings: {len(report.warnings)}", report.warnings, where)
+    for line in lines:
+        click.echo(line, err=True)

@@ -13,7 +13,8 @@ from typing import Any
 
 import click
 
-from scenweave.commands.agent_options import map_option
+from scenweave import exit_codes
+from scenweave.commands.agent_options import json_option, map_option
 from scenweave.progress import progress
 
 
@@ -25,7 +26,7 @@ from scenweave.progress import progress
 @click.option("--wall-time", default=30.0, show_default=True, type=click.FloatRange(1),
               help="Seconds one replay may take before its player is killed.")
 @click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object per scenario.")
+@json_option("one result per scenario")
 @click.option("--force", is_flag=True, help="Play a file that fails the parameter checks too "
               "(a hand-edited scenario), and say which checks it fails.")
 @map_option(optional=True, help="Map to play on instead of the one each scenario names (its "
@@ -34,7 +35,7 @@ from scenweave.progress import progress
 def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures: bool,
            as_json: bool, force: bool, map_ref: Any) -> None:
     """Play each scenario (a run folder's, or .xosc files) and say whether it replays as
-    recorded."""
+    recorded; exit status 1 when one does not."""
     from scenweave.player import ReplaySettings, find_esmini
 
     find_esmini()  # PlayerUnavailable is one line naming ESMINI_HOME
@@ -49,13 +50,14 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
         if result.get("forced") and not as_json:
             click.echo(f"FORCED {result['scenario']}: fails the parameter checks ("
                        + ", ".join(result["forced"]) + "); played anyway")
-        if as_json:
-            click.echo(json.dumps(result))
-        elif not result["passed"]:
+        if not as_json and not result["passed"]:
             click.echo(f"FAIL {result['scenario']}: " + "; ".join(result["errors"][:3]))
     passed = sum(r["passed"] for r in results)
-    if not as_json:
+    if as_json:
+        click.echo(json.dumps(results, indent=1))
+    else:
         click.echo(f"replay: {passed}/{len(results)} played as recorded")
+    exit_codes.finish(passed < len(results))
 
 
 def scenario_files(paths: tuple[Path, ...]) -> list[Path]:

@@ -6,6 +6,7 @@ import json
 
 import click
 
+from scenweave.commands.agent_options import json_option
 from scenweave.sandbox import SandboxSettings, check_backends
 
 
@@ -21,7 +22,7 @@ def sandbox() -> None:
               help="Sandbox image for the docker backend.")
 @click.option("--python", "python", default=SandboxSettings.python, show_default=True,
               help="Interpreter the bwrap backend runs.")
-@click.option("--json", "as_json", is_flag=True, help="Print the findings as JSON.")
+@json_option("the findings")
 def check(docker_host: str | None, image: str, python: str, as_json: bool) -> None:
     """Probe every backend with a trivial sandboxed run; exit 1 when none works."""
     settings = SandboxSettings(docker_host=docker_host, image=image, python=python)

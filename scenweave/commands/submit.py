@@ -42,9 +42,7 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
     settings = pipeline_settings(no_llm, top_n, map_ref=selection_and_run.pop("map_ref"), **agent)
     data, out_root = selection_and_run.pop("data"), selection_and_run.pop("out_root")
     run_id, retry_failed = selection_and_run.pop("run_id"), selection_and_run.pop("retry_failed")
-    classes = selection_and_run.pop("classes")
-    selection = InputSelection(classes=tuple(c.strip() for c in classes.split(",")) if classes
-                               else (), **selection_and_run)
+    selection = InputSelection(**selection_and_run)  # --classes: codes checked by run's option
     options = JobOptions(retries=retries, retry_delays_s=_delays(retry_delays),
                          timeout_s=job_timeout, matcher=matcher,
                          limits=Limits(file_bytes=int(max_artefact_mb * MIB),

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from scenweave.commands.agent_options import json_option
 from scenweave.traces import TraceNotFound, find_scenario, format_trace, read_events
 
 
@@ -16,7 +17,7 @@ from scenweave.traces import TraceNotFound, find_scenario, format_trace, read_ev
               type=click.Path(file_okay=False, path_type=Path), help="Folder of run folders.")
 @click.option("--run", "run_id", help="Run id; default: the newest run with this scenario.")
 @click.option("--full", is_flag=True, help="Show prompts, replies, code and diffs whole.")
-@click.option("--json", "as_json", is_flag=True, help="Print the events as a JSON list.")
+@json_option("the events")
 def trace(scenario_id: str, runs_root: Path, run_id: str | None, full: bool,
           as_json: bool) -> None:
     """Show each node in order: prompt, raw reply, extracted code, diff to the reference,

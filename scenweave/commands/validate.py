@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from scenweave import exit_codes
+from scenweave.commands.agent_options import json_option
 from scenweave.schemas import validate_xosc
 
 
@@ -17,7 +19,7 @@ from scenweave.schemas import validate_xosc
                                                           path_type=Path),
               help="params.json the scenario was made from: also checks parameter fidelity.")
 @click.option("--no-fix", is_flag=True, help="Report instead of applying the auto-fix rules.")
-@click.option("--json", "as_json", is_flag=True, help="One JSON result per file.")
+@json_option("one result per file")
 def validate(files: tuple[Path, ...], params_file: Path | None, no_fix: bool,
              as_json: bool) -> None:
     """Validate .xosc files; exit status 1 if any is invalid."""
@@ -36,5 +38,4 @@ def validate(files: tuple[Path, ...], params_file: Path | None, no_fix: bool,
                 click.echo(f"  {finding.severity} {finding.code}: {where}{finding.message}")
         invalid = sum(not r.valid for r in results.values())
         click.echo(f"validate: {len(results) - invalid} valid, {invalid} invalid")
-    if any(not r.valid for r in results.values()):
-        raise SystemExit(1)
+    exit_codes.finish(any(not r.valid for r in results.values()))

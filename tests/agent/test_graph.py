@@ -78,7 +78,9 @@ FAILED = {"error": {"type": "NameError", "message": "name 'hero' is not defined"
 
 def test_routers_repair_while_attempts_are_left_then_fall_back():
     assert routed(after_generation, [{"error": None}]) == "execute"
-    assert routed(after_generation, [{"error": {"type": "LLMTimeout"}}]) == "fallback"
+    assert routed(after_generation, [{"error": {"type": "LLMTimeout"}, "llm_failed": True}]) == \
+        "fallback"
+    assert routed(after_generation, [{"error": {"type": "LLMish"}}]) == "execute"  # no name games
     assert routed(after_execute, [{"error": None}]) == "validate"
     assert routed(after_execute, [FAILED, FAILED]) == "repair"
     assert routed(after_execute, [FAILED] * 3) == "fallback"

@@ -104,8 +104,9 @@ def test_cli_prints_one_line_per_benchmark(tmp_path):
 
 
 def test_an_unknown_backend_is_refused_by_name():
+    assert agent_settings_for("gpt")("reference").no_llm  # the reference needs no LLM
     with pytest.raises(BenchError, match="--llm 'gpt'"):
-        agent_settings_for("gpt")
+        agent_settings_for("gpt")("qwen2.5-coder:7b")
 
 
 def replayed_bench(tmp_path, models: str, repair: str, classes: str, out, bench_id: str):

@@ -130,16 +130,16 @@ def test_non_increasing_times_are_rejected(tmp_path):
     assert issue.field == "key_times[2].time" and "does not increase" in issue.message
 
 
-def test_strict_turns_errors_into_a_failing_exit_and_output_is_never_half_written(tmp_path):
+def test_a_refused_row_makes_a_failing_exit_and_output_is_never_half_written(tmp_path):
     raw = tmp_path / "raw"
     write_npy(raw, "BRAKE", [GOOD_BRAKE, ["x"] * 8])
     write_npy(raw, "LCF", GOOD_LC)
     runner = CliRunner()
-    lenient = runner.invoke(cli, ["ingest", str(raw), "--out", str(tmp_path / "a")])
+    refused = runner.invoke(cli, ["ingest", str(raw), "--out", str(tmp_path / "a")])
     strict = runner.invoke(cli, ["ingest", str(raw), "--out", str(tmp_path / "b"), "--strict"])
-    assert lenient.exit_code == 0, lenient.output
-    assert strict.exit_code == 1
-    assert "BRAKE_BINS_VALUES.npy, row 1, field 'ego_vel_kmh'" in lenient.output
+    assert refused.exit_code == strict.exit_code == 1  # --strict is the default now
+    assert "refused: 1 records (8 input errors)" in refused.stderr
+    assert "BRAKE_BINS_VALUES.npy, row 1, field 'ego_vel_kmh'" in refused.stderr
     report = json.loads((tmp_path / "a" / "ingest_report.json").read_text())
     assert report["errors"] == 8 and report["records_by_class"] == {"BRAKE": 1, "LCF": 2}
     leftovers = [p for p in (tmp_path / "a").rglob("*") if p.name.startswith(".")]

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from scenweave import maneuvers
 from scenweave.ingest import ingest_directory, load_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 
@@ -88,8 +89,9 @@ def test_urban_files_cover_what_the_pipeline_must_handle(sample):
 def test_all_sample_data_ingests_cleanly(sample, tmp_path):
     report = ingest_directory(sample, tmp_path)
     assert report.issues == []
-    assert len(report.records_by_class) == 17
-    assert report.records_written == 12 * 200 + 5 * 8
+    assert sorted(report.records_by_class) == maneuvers.codes()
+    assert report.records_written == (len(maneuvers.codes("highway")) * 200
+                                      + len(maneuvers.codes("urban")) * 8)
     assert sum(1 for _ in load_records(tmp_path)) == report.records_written
 
 

@@ -74,3 +74,37 @@ def test_a_plugin_class_ships_the_example_its_worked_example_shows(toy_class, tm
     assert repr(example["npc_end_speed_ms"]) in shown  # the example's values, written in
     assert repr(record["npc_end_speed_ms"]) not in shown
     assert values["npc_end_speed_ms"] == record["npc_end_speed_ms"]  # the record's, by key
+
+
+def test_retrieval_asks_the_registry_before_script_names(toy_class):
+    """A plugin class coded STOP gets its own script, not gen_ur_stop_at_tfl_red.py whose
+    name holds its code."""
+    import dataclasses
+
+    from scenweave.corpus import retrieve
+
+    maneuvers.register(dataclasses.replace(toy_class, code="STOP", tag="lead_speeds_off"))
+    try:
+        found = retrieve({"maneuver_class": "STOP", "maneuver_tag": "lead_speeds_off"})
+    finally:
+        maneuvers.unregister("STOP")
+    assert (found.script_path.name, found.method) == ("gen_hw_accel.py", "keyword")
+
+
+def test_a_plugin_urban_class_spawns_and_replays_ok(monkeypatch, esmini, tmp_path):
+    """Which urban classes suit a spawn point is decided when a scenario is matched, not when
+    the (shipped, cached) spawn database was built: a class added later spawns too."""
+    monkeypatch.setenv(maneuvers.PLUGINS_ENV, str(TOY.with_name("creep.py")))
+    try:
+        runner = CliRunner()
+        made = runner.invoke(cli, ["sample-data", str(tmp_path / "raw"), "--seed", "3",
+                                   "--per-class", "2"])
+        assert made.exit_code == 0, made.output
+        ran = runner.invoke(cli, ["run", str(tmp_path / "raw"), "--no-llm", "--classes", "U9_1",
+                                  "--out", str(tmp_path / "runs"), "--run-id", "creep"])
+    finally:
+        maneuvers.unregister("U9_1")
+    assert ran.exit_code == 0, ran.output
+    summary = json.loads((tmp_path / "runs" / "creep" / "summary.json").read_text())
+    assert [o["status"] for o in summary["scenarios"]] == ["ok", "ok"]
+    assert summary["replay"]["passed"] == 2

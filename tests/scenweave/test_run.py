@@ -78,7 +78,7 @@ def test_each_scenario_folder_is_complete_and_nothing_is_left_half_written(first
         assert {p.name for p in folder.iterdir()} >= SCENARIO_FILES, folder.name
         params = json.loads((folder / "params.json").read_text())
         assert params["spawn_id"] is not None and params["ego_x"] is not None
-    assert not any((root / ".staging").iterdir())
+    assert not (root / ".staging").exists()  # no staging leftovers, not even its folder
     summary = json.loads((root / "summary.json").read_text())
     assert summary["total"] == result.summary["total"]
 
@@ -96,10 +96,11 @@ def test_rerun_resumes_and_redoes_only_what_is_missing(first_run, sample_raw, ma
     kept = next(p for p in sorted(root.iterdir()) if p.is_dir() and p.name.startswith("FLF"))
     kept_mtime = (kept / "scenario.xosc").stat().st_mtime_ns
     shutil.rmtree(victim)
-    (root / ".staging" / "half_written").mkdir()
+    (root / ".staging" / "half_written").mkdir(parents=True)  # a crash's leftover
     again = run_batch(sample_raw, out, InputSelection(), PipelineSettings(no_llm=True),
                       run_id="r1", matcher=matcher)
     assert again.skipped == result.summary["total"] - 1
+    assert not (root / ".staging").exists()
     assert (victim / "scenario.xosc").exists()
     assert (kept / "scenario.xosc").stat().st_mtime_ns == kept_mtime
     assert again.summary["counts"]["ok"] == result.summary["total"]

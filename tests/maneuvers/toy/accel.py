@@ -48,7 +48,7 @@ MANEUVERS = (
     Maneuver(code="ACCEL", tag="lead_accelerates", domain="highway",
              name="Lead vehicle speeds away",
              script=str(Path(__file__).with_name("gen_hw_accel.py")),
-             family="ACCEL", layout_fields=tuple(c["name"] for c in LAYOUT["columns"]),
+             layout_fields=tuple(c["name"] for c in LAYOUT["columns"]),
              layout=LAYOUT, extract=extract, sample=sample, ego_end_speed_factor=1.0,
              npc_position="front", same_lane=SameLane("npc", "npc_distance_m", "at_start"),
              npc_speed_change=True),

@@ -40,7 +40,6 @@ AFTER_STOP_S = 3.0
 HISTORY_S = 15.0
 #: a stop line is found within this of a car's front sideways (beyond its half length)
 LINE_SIDE_M = 1.0
-MOVES = {"right": "right", "straight": "straight", "left": "left"}
 
 
 @dataclass(frozen=True)
@@ -108,6 +107,8 @@ def path_speed(scene: Scene, i: int, path: np.ndarray) -> np.ndarray:
 
 @dataclass
 class UrbanScene:
+    """A scene with its stop lines and each track's path length and speed along it."""
+
     scene: Scene
     lines: list[StopLine]
     paths: list[np.ndarray]
@@ -123,8 +124,11 @@ class UrbanScene:
         return track.x + half * np.cos(track.heading), track.y + half * np.sin(track.heading)
 
     def lines_of(self, i: int) -> list[StopLine]:
+        """The stop line of each lane the car drove in, once (several lights, for different
+        movements, may share a lane: :meth:`light_for` picks the one that counts)."""
         lanes = set(self.scene.tracks[i].lane.astype(str))
-        return [line for line in self.lines if line.lane in lanes]
+        return list({line.lane: line for line in reversed(self.lines)
+                     if line.lane in lanes}.values())
 
     # --- at the light ----------------------------------------------------------------------
 

@@ -32,7 +32,8 @@ DT = 0.1
 CYCLE = [("green", 80), ("yellow", 30), ("red", 200)]
 
 
-def _lane(root, lid, left, right, successor=None, light=True, stop_x=None, beside=None):
+def _lane(root, lid, left, right, successor=None, light=True, stop_x=None, beside=None,
+          arrow=False):
     """A lanelet between ``left`` and ``right`` bounds, under light 200 unless ``light`` is
     False, with a stop line across its end at ``stop_x``; ``beside``: ("Left"|"Right", id)."""
     lanelet = _sub(root, "lanelet", id=str(lid))
@@ -52,6 +53,8 @@ def _lane(root, lid, left, right, successor=None, light=True, stop_x=None, besid
     _sub(lanelet, "laneletType", "urban")
     if light:
         _sub(lanelet, "trafficLightRef", ref="200")
+    if arrow:
+        _sub(lanelet, "trafficLightRef", ref="201")
 
 
 def _car(root, oid, points):
@@ -88,7 +91,9 @@ def _turning(x0: float, v: float, steps: int) -> list[tuple[float, float]]:
     return list(zip(np.interp(at, arc, line[:, 0]), np.interp(at, arc, line[:, 1]), strict=True))
 
 
-def write_junction(path, stop_past_m: float = 1.2, queue: bool = False) -> None:
+def write_junction(path, stop_past_m: float = 1.2, queue: bool = False,
+                   arrow: bool = False) -> None:
+    """The junction; ``arrow``: lane 10 also has a left-turn arrow, red all along."""
     root = etree.Element("commonRoad", commonRoadVersion="2020a",
                          benchmarkID="ZAM_Junction-1_1_T-1", timeStepSize=str(DT),
                          author="ScenWeave tests", affiliation="ScenWeave", source="synthetic",
@@ -98,7 +103,7 @@ def write_junction(path, stop_past_m: float = 1.2, queue: bool = False) -> None:
         _sub(location, tag, value)
     _sub(_sub(root, "scenarioTags"), "urban")
     _lane(root, 10, [(0, 3.5), (100, 3.5)], [(0, 0.0), (100, 0.0)], 11, stop_x=100.0,
-          beside=("Right", 13))
+          beside=("Right", 13), arrow=arrow)
     _lane(root, 13, [(0, 0.0), (100, 0.0)], [(0, -3.5), (100, -3.5)], [12, 14], stop_x=100.0,
           beside=("Left", 10))
     _lane(root, 11, [(100, 3.5), (160, 3.5)], [(100, 0.0), (160, 0.0)], light=False,
@@ -108,6 +113,9 @@ def write_junction(path, stop_past_m: float = 1.2, queue: bool = False) -> None:
     _lane(root, 12, [(100, 0.0), (102.5, -0.5), (105, -3.0), (105, -40.0)],
           [(100, -3.5), (100.8, -3.6), (101.5, -4.0), (101.5, -40.0)], light=False)
     _light(root, 200, CYCLE, 0)
+    if arrow:
+        _light(root, 201, [("red", 400)], 0)
+        _sub(root.findall("trafficLight")[-1], "direction", "left")
     straight = _along(40.0, np.full(84, 10.0))  # front at the line at 5.8 s, on green
     _car(root, 1, [(x, 1.75) for x in straight])
     _car(root, 2, _turning(55.0, 8.0, 110))  # at the line at 5.3 s, then right
@@ -135,6 +143,17 @@ def test_each_car_is_the_urban_event_it_drove(junction):
              if e.code.startswith("U")}
     assert found == {("U4_3", "1"), ("U4_4", "2"), ("U4_1", "3"), ("U1_1", "4"),
                      ("U4_2", "6")}
+
+
+def test_a_left_arrow_on_the_lane_changes_nothing_for_straight_on_and_stops_once(tmp_path):
+    path = tmp_path / "arrow.xml"
+    write_junction(path, arrow=True)
+    recording = commonroad.read(path)
+    assert {light.direction for light in recording.lights} == {"all", "left"}
+    found = sorted((e.code, e.ego) for e in detect(recording, load_thresholds())
+                   if e.code.startswith("U"))
+    assert found == [("U1_1", "4"), ("U4_1", "3"), ("U4_2", "6"), ("U4_3", "1"),
+                     ("U4_4", "2")]
 
 
 def test_a_stop_past_the_tolerance_is_no_stop_at_the_line(junction, tmp_path):

@@ -208,3 +208,19 @@ def test_every_highway_params_dict_has_the_contract_keys(tmp_path):
             assert common <= params.keys(), code
             assert params["weather_key"] == "Day_Clear"
             assert params["ego_x"] is None and params["spawn_id"] is None
+
+
+@pytest.mark.parametrize("code", ["FLF", "FLB"])
+def test_one_bumper_clearance_ahead_and_behind(tmp_path, code):
+    """Issue 22: a 2 m bumper gap at 10 km/h is playable ahead of the ego and behind it alike
+    (behind it used to be refused); 0.3 m, less than MIN_BUMPER_GAP_M, is refused on both
+    sides, naming the gap's field."""
+    row = ["10", "10", "10", "10", "2", "2", "11.1", "4", "No", "B3", "Car"]
+    write_npy(tmp_path / "ok", code, [row])
+    report = IngestReport()
+    assert len(list(iter_raw_records(tmp_path / "ok", report))) == 1, report.issues
+    write_npy(tmp_path / "close", code, [[*row[:4], "0.3", "0.3", *row[6:]]])
+    report = IngestReport()
+    assert list(iter_raw_records(tmp_path / "close", report)) == []
+    [issue] = report.issues
+    assert issue.field == "npc_distance_begin_m" and "overlap" in issue.message

@@ -7,6 +7,7 @@ no pair across a vehicle the file took out, and no event twice across overlappin
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -255,3 +256,32 @@ def test_a_free_ride_carries_its_surrounding_cars_and_a_following_is_none():
     close = events(ego, car("lead", 8, 60, steady(20), 2), right, behind_left,
                    car("far", 8, 160, steady(20), 1))
     assert not [e for e in close.get("FRF", []) if e.ego == "ego"]
+
+
+def test_the_car_commonroad_took_out_is_put_back_and_nobody_follows_across_it(tmp_path):
+    from lxml import etree
+
+    from scenweave.mining.readers import commonroad
+    from scenweave.mining.traffic import Traffic
+
+    fixture = Path(__file__).parent / "data" / "commonroad_small.xml"
+    plain = commonroad.read(fixture)
+    ids = [t.id for t in plain.tracks]
+    assert Traffic(plain).leader(ids.index("1"), 0).track == ids.index("2")  # 1 follows 2
+    root = etree.parse(str(fixture)).getroot()
+    root.append(etree.fromstring(
+        '<planningProblem id="77"><initialState><position><point><x>80</x><y>1.75</y>'
+        '</point></position><velocity><exact>9</exact></velocity><orientation>'
+        '<exact>3.14159</exact></orientation><time><exact>0</exact></time></initialState>'
+        '<goalState><position><rectangle><length>4</length><width>2</width><orientation>'
+        '3.14159</orientation><center><x>52</x><y>1.75</y></center></rectangle></position>'
+        '<time><intervalStart>26</intervalStart><intervalEnd>30</intervalEnd></time>'
+        '</goalState></planningProblem>'))
+    path = tmp_path / "with_problem.xml"
+    etree.ElementTree(root).write(str(path))
+    recording = commonroad.read(path)
+    (planned,) = recording.removed
+    assert [t.id for t in recording.tracks] == ids  # never a track of its own
+    assert planned.id == "77" and set(planned.lane_index) == {2.0}
+    assert planned.s[0] == pytest.approx(-80.0) and planned.s[28] == pytest.approx(-52.0, abs=0.5)
+    assert Traffic(recording).leader(ids.index("1"), 0) is None  # it drives between 1 and 2

@@ -57,7 +57,7 @@ def main() -> None:
               f"mined there ({sum(1 for e in events if e['skipped'])} of them skipped as "
               f"unplayable)")
         print_scores(judged, events)
-        print_duplicates(events, report, files)
+        print_duplicates(events, report, files, domain)
 
 
 def read_labels(folder: Path) -> list[dict]:
@@ -144,13 +144,13 @@ def _describe(item: dict) -> str:
             f"{item['start_s']:.1f}-{item['end_s']:.1f} s")
 
 
-def print_duplicates(found: list[dict], report: dict, files: set[str]) -> None:
+def print_duplicates(found: list[dict], report: dict, files: set[str], domain: str) -> None:
     keys = Counter((e["file"], e["class"], e["ego"], e["npc"],
                     json.dumps(e["params"], sort_keys=True)) for e in found if not e["skipped"])
     identical = sum(n - 1 for n in keys.values())
     print(f"identical duplicate records: {identical}")
     repeats = [d for d in report.get("duplicates", []) if Path(d["file"]).stem in files
-               and _domain(d["class"]) == _domain(found[0]["class"] if found else "BRAKE")]
+               and _domain(d["class"]) == domain]
     print(f"events dropped as repeats (same vehicles, same absolute time): {len(repeats)}")
 
 

@@ -70,11 +70,14 @@ def timed_queue(raw: Path, out: Path, url: str, count: int, scratch: Path) -> di
     from redis import Redis
 
     Redis.from_url(url).flushall()
+    log = scratch.with_suffix(".log")
     workers = subprocess.Popen([*CLI, "worker", "--queue", url, "--workers", str(count),
                                 "--scratch", str(scratch)], env=ENV, cwd=ROOT,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                               stdout=log.open("w"), stderr=subprocess.STDOUT)
     try:
         while _idle_workers(url) < count:
+            if workers.poll() is not None:
+                raise RuntimeError(f"the workers stopped: {log.read_text()[-2000:]}")
             time.sleep(0.2)
         started = time.perf_counter()
         subprocess.run([*CLI, "submit", str(raw), "--no-llm", "--out", str(out), "--queue", url,

@@ -12,23 +12,18 @@ are gone (a flushed Redis, a cancelled job): those are named, to be submitted ag
 
 from __future__ import annotations
 
-import fcntl
 import json
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from scenweave.handoff import ParcelError, unpack
 from scenweave.pipeline import base_outcome
-from scenweave.report import write_run_report
-from scenweave.run_folder import RUN_FILE, STATUS_FILE, SUMMARY_FILE, RunFolder
-from scenweave.runner import summarize
-from scenweave.worker import QueueError, RunKeys, job_id
+from scenweave.run_folder import RUN_FILE, STATUS_FILE, RunFolder
+from scenweave.worker import QueueError, RunKeys, expected_scenarios, job_id, refresh_run, run_lock
 
-LOCK_FILE = ".collect.lock"
 #: RQ job states from which a job without a hand-back will never hand one back
 GONE_STATES = ("failed", "stopped", "canceled")
 
@@ -45,13 +40,15 @@ class CollectResult:
     notes: list[str] = field(default_factory=list)
     summary: dict = field(default_factory=dict)
 
+    expected: int = 0
+
     @property
     def complete(self) -> bool:
-        return self.summary.get("total", 0) >= int(self.summary.get("expected") or 0)
+        return self.summary.get("total", 0) >= self.expected
 
     def line(self) -> str:
         """The one-line summary printed at the end of ``collect`` and ``submit --wait``."""
-        total, expected = self.summary.get("total", 0), self.summary.get("expected", "?")
+        total, expected = self.summary.get("total", 0), self.expected
         counts = self.summary.get("counts") or {}
         statuses = ", ".join(f"{n} {s}" for s, n in counts.items())
         waiting = f", {self.pending} still queued" if self.pending else ""
@@ -99,6 +96,7 @@ def collect(run_dir: Path, connection: Any, wait: bool = False, timeout_s: float
         raise QueueError(f"the job queue failed while collecting run {folder.run_id}: {err}; "
                          "check the Redis server, then run scenweave collect again") from err
     result.summary = refresh_run(folder.root)
+    result.expected = expected_scenarios(folder.root)
     return result
 
 
@@ -106,7 +104,7 @@ def _collect_once(folder: RunFolder, connection: Any, keys: RunKeys,
                   result: CollectResult) -> int:
     """Commit every parcel waiting now; return how many scenario folders were written."""
     committed = 0
-    with _run_lock(folder.root):
+    with run_lock(folder.root):
         for raw in connection.hkeys(keys.parcels):
             scenario_id = raw.decode()
             data = connection.hget(keys.parcels, scenario_id)
@@ -171,37 +169,3 @@ def _gone(connection: Any, folder: RunFolder, pending: set[str]) -> set[str]:
         if status is None or status in GONE_STATES:
             gone.add(scenario_id)
     return gone
-
-
-@contextmanager
-def _run_lock(run_dir: Path) -> Iterator[None]:
-    with open(run_dir / LOCK_FILE, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-def refresh_run(run_dir: Path) -> dict:
-    """Rewrite the run's ``summary.json``; write ``report.html`` once every scenario is in.
-
-    Returns the summary with ``expected``: how many scenarios the run has.
-    """
-    folder = RunFolder(Path(run_dir))
-    with _run_lock(folder.root):
-        run = _read_json(folder.root / RUN_FILE)
-        issues = run.get("input_issues", _read_json(folder.root / SUMMARY_FILE).get("input_issues"))
-        summary = summarize(folder, issues or [])
-        folder.write(SUMMARY_FILE, summary)
-        expected = int(run.get("scenarios") or 0)
-        if summary["total"] >= expected:
-            write_run_report(folder.root)
-    return {**summary, "expected": expected}
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return {}

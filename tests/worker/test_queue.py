@@ -193,14 +193,12 @@ def test_infrastructure_errors_are_told_from_scenario_errors(error, infrastructu
     assert is_infrastructure_error(error) is infrastructure
 
 
-def test_sandbox_and_redis_errors_are_infrastructure_spawn_errors_are_not():
-    from redis.exceptions import ConnectionError as RedisConnectionError
-
+def test_sandbox_and_queue_errors_are_infrastructure_spawn_errors_are_not():
     from scenweave.sandbox import SandboxUnavailable
     from scenweave.spawn_db.errors import NoSpawnFits
 
     assert is_infrastructure_error(SandboxUnavailable("no engine"))
-    assert is_infrastructure_error(RedisConnectionError("gone"))
+    assert is_infrastructure_error(QueueError("the queue is gone"))
     assert not is_infrastructure_error(NoSpawnFits("no spawn fits"))
 
 

@@ -3,7 +3,8 @@
 Within a file the detectors already give one event per braking phase, lane change and
 following episode. Across files, overlapping snippets of one road (NGSIM cut into CommonRoad
 scenarios) hold the same vehicles at the same moments: :class:`Clock` finds how far apart
-two recordings' time axes are from the vehicles they share (same id, same position), and
+two recordings' time axes are from the vehicles they share (same id, the same recorded
+speeds step by step, standing as far apart), and
 :class:`SeenEvents` drops an event whose class and vehicles match one already kept at an
 overlapping absolute time.
 """
@@ -17,23 +18,42 @@ import numpy as np
 from scenweave.mining.scene import Event
 from scenweave.mining.tracks import Recording
 
-#: a vehicle is the same one in two files when it stands this close at matched times (m)
-SAME_PLACE_M = 0.5
+#: two files' clocks agree when a shared vehicle's recorded speeds match this well (m/s) over
+#: at least :data:`MIN_MATCHED_STEPS` steps, at one time shift only
+SAME_SPEED_MS = 0.01
+MIN_MATCHED_STEPS = 10
+#: ... and two shared vehicles stand as far apart in both files, within this (m)
+SAME_SPACING_M = 0.5
+#: windows overlapping by more than this are one event (s)
+OVERLAP_S = 0.05
 #: the vehicles a recording shares with another must agree on the time shift this well (s)
 SAME_SHIFT_S = 0.15
+
+
+@dataclass(frozen=True)
+class _Seen:
+    """What a recording's clock is matched by: per vehicle id its steps (frame numbers),
+    recorded speeds and positions."""
+
+    dt: float
+    vehicles: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
 @dataclass
 class Clock:
     """Absolute time across recordings: each recording's road (the first recording it shares
-    vehicles with) and the offset of its time axis on that road's."""
+    vehicles with) and the offset of its time axis on that road's. Files cut from one
+    recording may each have their own origin and orientation (CommonRoad puts each
+    planning problem's start at 0, 0), so vehicles are matched by what no frame changes:
+    their recorded speeds step by step, and the distance between two of them."""
 
-    _seen: list[tuple[int, float, dict[str, tuple[np.ndarray, np.ndarray]]]] = \
-        field(default_factory=list)
+    _seen: list[tuple[int, float, _Seen]] = field(default_factory=list)
 
     def place(self, recording: Recording) -> tuple[int, float]:
         """``(road, offset_s)`` of ``recording``; a recording sharing nothing opens a road."""
-        mine = {t.id: (t.t, np.column_stack([t.x, t.y])) for t in recording.tracks}
+        dt = recording.dt or 0.1
+        mine = _Seen(dt, {t.id: (np.round(t.t / dt).astype(int), np.asarray(t.speed, float),
+                                 np.column_stack([t.x, t.y])) for t in recording.tracks})
         placed = None
         for road, offset, theirs in self._seen:
             shift = _shift(mine, theirs)
@@ -46,23 +66,56 @@ class Clock:
         return placed
 
 
-def _shift(mine: dict, theirs: dict) -> float | None:
-    """How much later ``theirs``'s clock reads when the vehicles both hold stand where they
-    stand (None: no vehicle in common)."""
-    shifts = []
-    for track_id, (t, xy) in mine.items():
-        if track_id not in theirs:
-            continue
-        their_t, their_xy = theirs[track_id]
-        distance = np.hypot(*(their_xy - xy[0]).T)
-        k = int(np.argmin(distance))
-        if distance[k] <= SAME_PLACE_M:
-            shifts.append(float(their_t[k] - t[0]))
+def _shift(mine: _Seen, theirs: _Seen) -> float | None:
+    """How much later ``theirs``'s clock reads at the same moment (None: no vehicle in
+    common, or the ones in common disagree)."""
+    if abs(mine.dt - theirs.dt) > 1e-9:
+        return None
+    shifts = {}
+    for vehicle in mine.vehicles.keys() & theirs.vehicles.keys():
+        steps = _step_shift(mine.vehicles[vehicle][:2], theirs.vehicles[vehicle][:2])
+        if steps is not None:
+            shifts[vehicle] = steps
     if not shifts:
         return None
-    middle = float(np.median(shifts))
-    agreeing = [s for s in shifts if abs(s - middle) <= SAME_SHIFT_S]
-    return middle if len(agreeing) * 2 > len(shifts) else None
+    middle = int(np.median(list(shifts.values())))
+    agreeing = [v for v, d in shifts.items() if abs(d - middle) * mine.dt <= SAME_SHIFT_S]
+    if len(agreeing) * 2 <= len(shifts) or not _same_spacing(mine, theirs, agreeing, middle):
+        return None
+    return middle * mine.dt
+
+
+def _step_shift(mine: tuple[np.ndarray, np.ndarray],
+                theirs: tuple[np.ndarray, np.ndarray]) -> int | None:
+    """The one step shift ``d`` at which the vehicle's speeds in both files agree (``theirs``
+    at frame ``f + d`` = ``mine`` at ``f``) over at least :data:`MIN_MATCHED_STEPS` steps."""
+    (f1, v1), (f2, v2) = mine, theirs
+    found = []
+    for d in range(int(f2[0] - f1[-1]), int(f2[-1] - f1[0]) + 1):
+        common = np.intersect1d(f1 + d, f2)
+        if len(common) < MIN_MATCHED_STEPS:
+            continue
+        a = v1[np.searchsorted(f1, common - d)]
+        b = v2[np.searchsorted(f2, common)]
+        if np.max(np.abs(a - b)) <= SAME_SPEED_MS:
+            found.append(d)
+    return found[0] if len(found) == 1 else None  # a steady speed matches anywhere: unsure
+
+
+def _same_spacing(mine: _Seen, theirs: _Seen, vehicles: list[str], steps: int) -> bool:
+    """Two of the shared vehicles stand as far apart in both files at matched moments (the
+    only check where one vehicle is shared: its speeds)."""
+    if len(vehicles) < 2:
+        return True
+    (fa, _, xa), (fb, _, xb) = (mine.vehicles[v] for v in vehicles[:2])
+    (ga, _, ya), (gb, _, yb) = (theirs.vehicles[v] for v in vehicles[:2])
+    both = np.intersect1d(np.intersect1d(fa, fb), np.intersect1d(ga - steps, gb - steps))
+    if not len(both):
+        return True
+    f = both[0]
+    here = np.hypot(*(xa[np.searchsorted(fa, f)] - xb[np.searchsorted(fb, f)]))
+    there = np.hypot(*(ya[np.searchsorted(ga, f + steps)] - yb[np.searchsorted(gb, f + steps)]))
+    return abs(here - there) <= SAME_SPACING_M
 
 
 @dataclass
@@ -76,7 +129,7 @@ class SeenEvents:
         key = (road, event.code, event.ego, event.npc)
         start, end = event.start_s + offset_s, event.end_s + offset_s
         for first, last, where in self._kept.get(key, []):
-            if start <= last + 1e-6 and first <= end + 1e-6:
+            if min(end, last) - max(start, first) > OVERLAP_S:  # consecutive pieces only touch
                 return where
         self._kept.setdefault(key, []).append((start, end, source))
         return None

@@ -136,21 +136,41 @@ def test_no_following_pair_spans_a_vehicle_the_file_took_out():
     assert "FLF" not in found and "FLB" not in found
 
 
-def test_an_event_in_two_overlapping_files_is_written_once(tmp_path):
-    def snippet(shift_s: float, source: str) -> Recording:
-        tracks = [car("lead", 14, 60, braking(25, 4, 5, 10), 2),
-                  car("ego", 14, 30, braking(25, 4.5, 5, 10), 2)]
-        cut = [Track(**{**tr.__dict__, **{k: getattr(tr, k)[int(shift_s / DT):] for k in (
-            "t", "x", "y", "heading", "speed", "s", "lane", "lane_index")}}) for tr in tracks]
-        moved = [Track(**{**tr.__dict__, "t": np.round(tr.t - shift_s, 3)}) for tr in cut]
-        return Recording(source=source, dt=DT, tracks=moved, reader="synthetic")
+def _snippet(shift_s: float, source: str, turn_rad: float = 0.0,
+             lead_decel: float = 5.0) -> Recording:
+    """Steps from ``shift_s`` on of one recording (its clock restarted at 0), in a frame of
+    its own: turned by ``turn_rad`` and moved (as CommonRoad puts each file's origin at its
+    planning problem's start)."""
+    tracks = [car("lead", 14, 60, braking(25, 4, lead_decel, 10), 2),
+              car("ego", 14, 30, braking(25, 4.5, lead_decel, 10), 2)]
+    first = int(round(shift_s / DT))
+    cos, sin = np.cos(turn_rad), np.sin(turn_rad)
+    cut = []
+    for tr in tracks:
+        part = {k: getattr(tr, k)[first:] for k in ("t", "x", "y", "heading", "speed", "s",
+                                                     "lane", "lane_index")}
+        x, y = part["x"] - 40.0, part["y"] + 7.0
+        part |= {"t": np.round(part["t"] - shift_s, 3), "x": cos * x - sin * y,
+                 "y": sin * x + cos * y}
+        cut.append(Track(**{**tr.__dict__, **part}))
+    return Recording(source=source, dt=DT, tracks=cut, reader="synthetic")
 
-    report = mine_recordings([snippet(0.0, "a.xml"), snippet(2.0, "b.xml")], tmp_path, LIMITS)
+
+def test_an_event_in_two_overlapping_files_is_written_once(tmp_path):
+    first, second = _snippet(0.0, "a.xml"), _snippet(2.0, "b.xml", turn_rad=0.5)
+    report = mine_recordings([first, second], tmp_path, LIMITS)
     assert report.written["BRAKE"] == 1
     assert [(d["file"], d["class"], d["same_as_in"]) for d in report.duplicates
             if d["class"] == "BRAKE"] == [("b.xml", "BRAKE", "a.xml")]
-    alone = mine_recordings([snippet(2.0, "b.xml")], tmp_path / "alone", LIMITS)
+    alone = mine_recordings([_snippet(2.0, "b.xml")], tmp_path / "alone", LIMITS)
     assert alone.written["BRAKE"] == 1  # the second file alone still has it
+
+
+def test_reused_vehicle_ids_in_another_recording_are_other_events(tmp_path):
+    # NGSIM reuses ids across its periods: same ids, other motion, no repeat
+    other = _snippet(2.0, "b.xml", lead_decel=4.0)
+    report = mine_recordings([_snippet(0.0, "a.xml"), other], tmp_path, LIMITS)
+    assert report.written["BRAKE"] == 2 and not report.duplicates
 
 
 # -- the round trip -----------------------------------------------------------------------

@@ -21,7 +21,10 @@ from scenweave.mining.tracks import Recording
 #: two files' clocks agree when a shared vehicle's recorded speeds match this well (m/s) over
 #: at least :data:`MIN_MATCHED_STEPS` steps, at one time shift only
 SAME_SPEED_MS = 0.01
-MIN_MATCHED_STEPS = 10
+MIN_MATCHED_STEPS = 20
+#: ... and the matched speeds vary by at least this much (a near-steady speed, NGSIM's
+#: 15.24 m/s plateaus, matches by chance), m/s
+MIN_SPEED_RANGE_MS = 0.5
 #: ... and two shared vehicles stand as far apart in both files, within this (m)
 SAME_SPACING_M = 0.5
 #: windows overlapping by more than this are one event (s)
@@ -88,7 +91,8 @@ def _shift(mine: _Seen, theirs: _Seen) -> float | None:
 def _step_shift(mine: tuple[np.ndarray, np.ndarray],
                 theirs: tuple[np.ndarray, np.ndarray]) -> int | None:
     """The one step shift ``d`` at which the vehicle's speeds in both files agree (``theirs``
-    at frame ``f + d`` = ``mine`` at ``f``) over at least :data:`MIN_MATCHED_STEPS` steps."""
+    at frame ``f + d`` = ``mine`` at ``f``) over at least :data:`MIN_MATCHED_STEPS` steps in
+    which they vary by :data:`MIN_SPEED_RANGE_MS` or more."""
     (f1, v1), (f2, v2) = mine, theirs
     found = []
     for d in range(int(f2[0] - f1[-1]), int(f2[-1] - f1[0]) + 1):
@@ -97,7 +101,7 @@ def _step_shift(mine: tuple[np.ndarray, np.ndarray],
             continue
         a = v1[np.searchsorted(f1, common - d)]
         b = v2[np.searchsorted(f2, common)]
-        if np.max(np.abs(a - b)) <= SAME_SPEED_MS:
+        if np.max(np.abs(a - b)) <= SAME_SPEED_MS and np.ptp(a) >= MIN_SPEED_RANGE_MS:
             found.append(d)
     return found[0] if len(found) == 1 else None  # a steady speed matches anywhere: unsure
 

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver, SameLane
+from scenweave.maneuvers.maneuver import (
+    Conventions,
+    Maneuver,
+    ParamsPart,
+    Row,
+    SameLane,
+)
 from scenweave.maneuvers.sampling import (
     KMH,
     Columns,
@@ -17,7 +23,7 @@ LAYOUT_FIELDS = ("ego_vel_kmh", "lead_vel_kmh", "duration_s", "delta_vel_kmh", "
                  "brake_intensity", "other_dir_traffic", "lead_vehicle_type")
 
 
-def extract(raw: dict, code: str, conventions: dict) -> dict:
+def extract(raw: Row, code: str, conventions: Conventions) -> ParamsPart:
     return {
         "ego_speed_ms": raw["ego_vel_kmh"] / KMH,
         "npc_speed_ms": raw["lead_vel_kmh"] / KMH,

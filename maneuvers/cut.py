@@ -3,9 +3,19 @@ ego's lane, in front of it or behind it."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver, RecordFieldError, SameLane
+from scenweave.maneuvers.maneuver import (
+    Conventions,
+    Maneuver,
+    ParamsPart,
+    RecordFieldError,
+    Row,
+    SameLane,
+)
 from scenweave.maneuvers.sampling import (
     KMH,
     Columns,
@@ -19,7 +29,7 @@ LAYOUT_FIELDS = ("ego_vel_kmh", "cutter_vel_kmh", "delta_vel_kmh", "duration_s",
                  "other_dir_traffic", "direction", "lead_vehicle_type")
 
 
-def extract(raw: dict, code: str, conventions: dict) -> dict:
+def extract(raw: Row, code: str, conventions: Conventions) -> ParamsPart:
     try:
         sign = float(conventions["relative_speed_sign"])
     except KeyError as err:
@@ -35,7 +45,7 @@ def extract(raw: dict, code: str, conventions: dict) -> dict:
     }
 
 
-def _move(direction: str, conventions: dict) -> str:
+def _move(direction: str, conventions: Conventions) -> str:
     """The way the cutter moves: a layout whose cut-in ``direction`` names the side the
     cutter comes from (``direction_is: from_side``) means the other way."""
     if conventions.get("direction_is") == "from_side":
@@ -70,14 +80,14 @@ def sample(rng: np.random.Generator, n: int, code: str) -> Columns:
             "lead_vehicle_type": vehicle_types(rng, n)}
 
 
-def cut_in_sides(params) -> list[str]:
+def cut_in_sides(params: Mapping[str, Any]) -> list[str]:
     """The cutter starts in the lane on the other side of the one it moves towards."""
     return ["right" if params.get("lane_change_direction") == "left" else "left"]
 
 
-def cut_out_sides(params) -> list[str]:
+def cut_out_sides(params: Mapping[str, Any]) -> list[str]:
     """The NPC leaves towards ``lane_change_direction``: that lane must exist."""
-    return [params.get("lane_change_direction")]
+    return [params["lane_change_direction"]]
 
 
 def _cut_class(code: str, name: str, tag: str, cut_in: bool, behind: bool) -> Maneuver:

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver, SameLane
+from scenweave.maneuvers.maneuver import (
+    Conventions,
+    Maneuver,
+    NpcPosition,
+    ParamsPart,
+    Row,
+    SameLane,
+)
 from scenweave.maneuvers.sampling import (
     KMH,
     Columns,
@@ -18,7 +25,7 @@ LAYOUT_FIELDS = ("ego_vel_begin_kmh", "ego_vel_end_kmh", "lead_vel_begin_kmh", "
                  "duration_s", "other_dir_traffic", "behavior_type", "lead_vehicle_type")
 
 
-def extract(raw: dict, code: str, conventions: dict) -> dict:
+def extract(raw: Row, code: str, conventions: Conventions) -> ParamsPart:
     sign = -1.0 if code == "FLB" else 1.0
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
@@ -89,6 +96,10 @@ def sample_phased(rng: np.random.Generator, n: int, code: str) -> Columns:
             "lead_dist_traveled_m": np.round(rows["lead_dist_traveled_m"] - loss, 1)}
 
 
+_CLASSES: tuple[tuple[str, str, str, NpcPosition], ...] = (
+    ("FLF", "follow_front", "Ego follows a lead vehicle", "front"),
+    ("FLB", "follow_behind", "A vehicle follows the ego", "behind"))
+
 MANEUVERS = tuple(
     Maneuver(code=code, tag=tag, domain="highway", name=name,
              script=f"gen_hw_{code.lower()}.py", layout_fields=LAYOUT_FIELDS,
@@ -96,6 +107,4 @@ MANEUVERS = tuple(
              npc_position=position,
              same_lane=SameLane("npc", "npc_distance_begin_m", "all_along"),
              npc_speed_change=True, gap_at_end=True)
-    for code, tag, name, position in (
-        ("FLF", "follow_front", "Ego follows a lead vehicle", "front"),
-        ("FLB", "follow_behind", "A vehicle follows the ego", "behind")))
+    for code, tag, name, position in _CLASSES)

@@ -9,10 +9,18 @@ extraction (the ``slot_*`` params) decide presence with one function and the sam
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver, SameLane
+from scenweave.maneuvers.maneuver import (
+    Conventions,
+    Maneuver,
+    NpcPosition,
+    ParamsPart,
+    Row,
+    SameLane,
+)
 from scenweave.maneuvers.sampling import KMH, Columns, speeds_kmh, vehicle_types, yes_no
 
 SLOTS = ("center", "right", "left")
@@ -23,12 +31,12 @@ LAYOUT_FIELDS = ("ego_vel_begin_kmh", "ego_vel_end_kmh", "ego_dist_traveled_m", 
 Sentinels = Mapping[str, Sequence[float]]
 
 
-def is_sentinel(params: Mapping, field: str, sentinels: Sentinels) -> bool:
+def is_sentinel(params: Mapping[str, Any], field: str, sentinels: Sentinels) -> bool:
     """The value of ``field`` is one of the layout's 'absent' markers for that column."""
     return params[field] in sentinels.get(field, ())
 
 
-def slot_present(params: Mapping, slot: str, sentinels: Sentinels) -> bool:
+def slot_present(params: Mapping[str, Any], slot: str, sentinels: Sentinels) -> bool:
     """A slot holds a vehicle unless its start position or start speed is a sentinel
     (or its vehicle type says ``None``)."""
     if is_sentinel(params, f"{slot}_posx_begin_m", sentinels):
@@ -38,7 +46,8 @@ def slot_present(params: Mapping, slot: str, sentinels: Sentinels) -> bool:
     return params.get(f"{slot}_vehicle_type") != "None"
 
 
-def slot_params(params: Mapping, slot: str, sign: float, sentinels: Sentinels) -> dict:
+def slot_params(params: Mapping[str, Any], slot: str, sign: float,
+                sentinels: Sentinels) -> ParamsPart:
     """The ``<slot>_*`` params of one slot: SI values, distances signed ``sign`` (+1 ahead,
     -1 behind); an absent slot gives present false, 0.0 and None. A present vehicle whose end
     value is a sentinel (it left the sensor's range) keeps its start value."""
@@ -50,7 +59,8 @@ def slot_params(params: Mapping, slot: str, sign: float, sentinels: Sentinels) -
     def end_or_start(what: str) -> float:
         end = f"{slot}_{what}_end_{'m' if what == 'posx' else 'ms'}"
         start = end.replace("_end_", "_begin_")
-        return params[start] if is_sentinel(params, end, sentinels) else params[end]
+        value: float = params[start] if is_sentinel(params, end, sentinels) else params[end]
+        return value
 
     return {
         f"{slot}_present": True,
@@ -62,8 +72,8 @@ def slot_params(params: Mapping, slot: str, sign: float, sentinels: Sentinels) -
     }
 
 
-def extract(raw: dict, code: str, conventions: dict) -> dict:
-    params: dict = {
+def extract(raw: Row, code: str, conventions: Conventions) -> ParamsPart:
+    params: ParamsPart = {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
         "ego_dist_traveled_m": raw["ego_dist_traveled_m"],
@@ -131,7 +141,12 @@ def _slot(rng: np.random.Generator, n: int, slot: str, p_present: float, ego0_km
     }
 
 
-def present_sides(params: Mapping) -> list[str]:
+_CLASSES: tuple[tuple[str, str, str, NpcPosition], ...] = (
+    ("FRF", "free_ride_front", "Free ride, traffic in front", "front"),
+    ("FRB", "free_ride_behind", "Free ride, traffic behind", "behind"))
+
+
+def present_sides(params: Mapping[str, Any]) -> list[str]:
     """The neighbour lanes that hold a surrounding vehicle."""
     return [side for side in ("left", "right") if params.get(f"{side}_present")]
 
@@ -142,6 +157,4 @@ MANEUVERS = tuple(
              extract=extract, sample=sample, npc_position=position, lane_sides=present_sides,
              surrounding_slots=True,
              same_lane=SameLane("center", "center_posx_begin_m", "all_along"))
-    for code, tag, name, position in (
-        ("FRF", "free_ride_front", "Free ride, traffic in front", "front"),
-        ("FRB", "free_ride_behind", "Free ride, traffic behind", "behind")))
+    for code, tag, name, position in _CLASSES)

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
-from scenweave.maneuvers.maneuver import Maneuver
+from scenweave.maneuvers.maneuver import Conventions, Maneuver, ParamsPart, Row
 from scenweave.maneuvers.sampling import (
     KMH,
     Columns,
@@ -17,7 +20,7 @@ LAYOUT_FIELDS = ("ego_vel_begin_kmh", "ego_vel_end_kmh", "duration_s", "other_di
                  "direction")
 
 
-def extract(raw: dict, code: str, conventions: dict) -> dict:
+def extract(raw: Row, code: str, conventions: Conventions) -> ParamsPart:
     return {
         "ego_speed_ms": raw["ego_vel_begin_kmh"] / KMH,
         "ego_end_speed_ms": raw["ego_vel_end_kmh"] / KMH,
@@ -33,9 +36,9 @@ def sample(rng: np.random.Generator, n: int, code: str) -> Columns:
             "other_dir_traffic": yes_no(rng, n, 0.3), "direction": left_right(rng, n)}
 
 
-def target_side(params) -> list[str]:
+def target_side(params: Mapping[str, Any]) -> list[str]:
     """The ego moves towards ``lane_change_direction``: that lane must exist."""
-    return [params.get("lane_change_direction")]
+    return [params["lane_change_direction"]]
 
 
 MANEUVERS = tuple(

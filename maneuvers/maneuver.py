@@ -18,8 +18,16 @@ import numpy as np
 from scenweave.errors import InputError
 
 Domain = Literal["highway", "urban"]
-#: a highway file's row (field -> value), the class code, the layout's conventions -> params
-Extractor = Callable[[Mapping[str, Any], str, Mapping[str, Any]], dict]
+#: where a class's principal NPC starts
+NpcPosition = Literal["front", "behind"]
+#: a highway file's row: layout field -> value
+Row = Mapping[str, Any]
+#: the layout's conventions for a class (``relative_speed_sign``, ``direction_is``...)
+Conventions = Mapping[str, Any]
+#: a class's part of the params (the ``Params`` contract lives above, in ``schemas.params``)
+ParamsPart = dict[str, Any]
+#: a highway file's row, the class code, the layout's conventions -> the class's params
+Extractor = Callable[[Row, str, Conventions], ParamsPart]
 #: random generator, number of rows, class code -> one column of values per layout field
 Sampler = Callable[[np.random.Generator, int, str], dict[str, np.ndarray]]
 
@@ -85,7 +93,7 @@ class Maneuver:
 
     # -- the spawn stage ----------------------------------------------------------------------
     #: where the principal NPC starts: "front", "behind" or None (no single NPC)
-    npc_position: Literal["front", "behind"] | None = None
+    npc_position: NpcPosition | None = None
     #: the neighbour lanes the scenario needs ("left", "right") for given params
     lane_sides: Callable[[Mapping[str, Any]], list[str]] = no_lane_sides
     #: the NPC starts in the neighbour lane and cuts in

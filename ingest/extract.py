@@ -260,30 +260,69 @@ def fit_phases(params: dict) -> None:
         for prefix in PHASED_ACTORS:  # the ego first: the others keep their gap to it
             speeds = series.get(f"{prefix}_speed_ms")
             if speeds and isinstance(params.get(f"{prefix}_speed_ms"), int | float):
-                _keep(params, prefix, fit_series(series["t"], speeds, params["maneuver_start_s"],
-                                                 params[f"{prefix}_speed_ms"],
-                                                 series.get(f"{prefix}_s_m"),
-                                                 _gap_targets(params, series, prefix)))
+                _keep(params, prefix, _fit_actor(params, series, prefix))
         return
     if maneuvers.get(params["maneuver_class"]).gap_at_end:
         with contextlib.suppress(NoProfile):
             _keep(params, "npc", npc_end_gap_phases(params))
 
 
+def _fit_actor(params: dict, series: dict, prefix: str) -> tuple:
+    """``prefix``'s phases from the series, keeping its gap to the ego too where that does
+    not take many more phases (a recorded gap that disagrees with the recorded motion, e.g.
+    measured across lanes, would otherwise cost a phase per sample)."""
+    args = (series["t"], series[f"{prefix}_speed_ms"], params["maneuver_start_s"],
+            params[f"{prefix}_speed_ms"], series.get(f"{prefix}_s_m"))
+    own = fit_series(*args)
+    targets = _gap_targets(params, series, prefix)
+    if targets is None:
+        return own
+    with_gap = fit_series(*args, targets)
+    return with_gap if len(with_gap) <= 2 * len(own) + 2 else own
+
+
 def _gap_targets(params: dict, series: dict, prefix: str) -> list[float | None] | None:
-    """The distance ``prefix`` must have driven at each sample for its recorded gap to the ego
-    to hold: the ego's fitted distance plus the gap's change (None: no gap recorded)."""
-    gaps = series.get(f"{prefix}_gap_m")
-    first = next((g for g in gaps or () if g is not None), None)
-    if prefix == "ego" or first is None:
+    """The distance ``prefix`` must have driven since its first speed sample at each sample
+    for its recorded gap to the ego to hold: what it had driven when the gap was first
+    measured, plus the ego's fitted distance since then and the gap's change (None: no gap
+    recorded)."""
+    # a gap of 0 is no measurement: the cars are side by side (no facing bumpers); past the
+    # first change of sign other bumpers face each other (the gap jumps by both lengths)
+    gaps = [None if g == 0 else g for g in series.get(f"{prefix}_gap_m") or ()]
+    sign = next((g > 0 for g in gaps if g is not None), None)
+    passed = next((k for k, g in enumerate(gaps) if g is not None and (g > 0) != sign), None)
+    if passed is not None:
+        gaps = [*gaps[:passed], *[None] * (len(gaps) - passed)]
+    times = series["t"]
+    measured = [(t, g) for t, g in zip(times, gaps, strict=False)
+                if t is not None and g is not None]
+    own = _recorded_distance(series, prefix)
+    if prefix == "ego" or not measured or own is None:
         return None
     ego, start = profile_of(params, "ego"), params["maneuver_start_s"]
-    times = series["t"]
-    t0 = next(t for t, v in zip(times, series.get(f"{prefix}_speed_ms"), strict=False)
-              if t is not None and v is not None)
-    base = ego.distance(start + t0)
-    return [None if g is None or t is None else ego.distance(start + t) - base + g - first
-            for t, g in zip(times, gaps, strict=False)]
+    (t1, first), base = measured[0], ego.distance(start + measured[0][0])
+    driven = own(t1)
+    return [None if g is None or t is None else driven + ego.distance(start + t) - base
+            + g - first for t, g in zip(times, gaps, strict=False)]
+
+
+def _recorded_distance(series: dict, prefix: str):
+    """``t -> `` what ``prefix`` drove from its first speed sample to sample time ``t``, by its
+    recorded positions where it has them, else by its speeds (None: no speeds)."""
+    rows = [(t, v, x) for t, v, x in zip(series["t"], series.get(f"{prefix}_speed_ms") or (),
+                                         series.get(f"{prefix}_s_m") or [None] * len(series["t"]),
+                                         strict=False) if t is not None and v is not None]
+    if not rows:
+        return None
+    with_positions = all(x is not None for _, _, x in rows)
+    table, total = {}, 0.0
+    for k, (t, v, x) in enumerate(rows):
+        if with_positions:
+            total = x - rows[0][2]
+        elif k:
+            total += (v + rows[k - 1][1]) / 2 * (t - rows[k - 1][0])
+        table[t] = total
+    return lambda t: table.get(t, 0.0)
 
 
 def npc_end_gap_phases(params: dict) -> tuple:

@@ -28,6 +28,9 @@ from scenweave.corpus.phases import Phase, PhasedProfile
 SPEED_TOL_MS = 0.3
 #: ... and the distance it drove since the first sample this much (m)
 DISTANCE_TOL_M = 0.5
+#: ... and an NPC's gap to the ego this much (m): tighter than the replay's 1 m, which also
+#: absorbs the player's step and lanes of different length on curves
+GAP_FIT_TOL_M = 0.3
 #: a begin/end record's end gap, played by one ramp, may be off this much (m): the replay's
 #: gap tolerance (``schemas.replay.GAP_TOL_M``)
 END_GAP_TOL_M = 1.0
@@ -60,7 +63,7 @@ def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], st
     ``speeds`` at ``times`` (record time; None values are gaps in the record), and the
     distance driven since the first sample: the recorded ``positions`` along the road where
     every sample has one (what the record's gaps are measured from), else the speeds'
-    trapezoid. ``relative``: distances the fit must also keep within ``DISTANCE_TOL_M``
+    trapezoid. ``relative``: distances the fit must also keep within ``GAP_FIT_TOL_M``
     where given (an NPC's: the ego's fitted distance plus the recorded gap's change, so the
     gap holds as well as each car's own motion)."""
     n = len(times)
@@ -78,7 +81,7 @@ def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], st
             driven.append(driven[-1] + (v[k] + v[k - 1]) / 2 * (t[k] - t[k - 1]))
     targets = [(driven, DISTANCE_TOL_M)]
     if relative is not None:
-        targets.append(([r[3] for r in rows], DISTANCE_TOL_M))
+        targets.append(([r[3] for r in rows], GAP_FIT_TOL_M))
     phases: list[Phase] = []
     knot = v_start
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field

@@ -400,15 +400,30 @@ def series_errors(playback, params: dict) -> list[SeriesError]:
         if speeds:
             found.append(SeriesError(entity, "speed", "m/s", [
                 (at, want, playback.value(entity, "speed", at)) for at, want in speeds]))
+        # a recorded gap of 0 means side by side (no facing bumpers): not a distance
         gaps = [(start + t, g) for t, g in zip(times, series.get(f"{role}_gap_m") or (),
                                                strict=False)
-                if role != "ego" and t is not None and g is not None
+                if role != "ego" and t is not None and g is not None and g != 0
                 and start + t <= playback.duration_s]
         if gaps and "hero" in playback.tracks:
-            found.append(SeriesError(entity, "gap change", "m", _gap_changes(playback, entity,
-                                                                             gaps)))
+            found.append(SeriesError(entity, "gap change", "m", [
+                sample for run in _same_bumpers(gaps)
+                for sample in _gap_changes(playback, entity, run)]))
     found += _lane_change_timing(playback, params)
     return found
+
+
+def _same_bumpers(gaps: list[tuple[float, float]]) -> list[list[tuple[float, float]]]:
+    """The samples in runs of one sign: when a car passes alongside, the facing bumpers
+    change (ahead: its rear and the ego's front; behind: the other two), so the bumper gap
+    jumps by both cars' lengths; each run's change is measured from its own first sample."""
+    runs: list[list[tuple[float, float]]] = []
+    for sample in gaps:
+        if runs and (runs[-1][-1][1] > 0) == (sample[1] > 0):
+            runs[-1].append(sample)
+        else:
+            runs.append([sample])
+    return runs
 
 
 def _gap_changes(playback, entity: str,

@@ -9,8 +9,11 @@ from click.testing import CliRunner
 
 from scenweave import maneuvers
 from scenweave.cli import cli
+from scenweave.commands.demo import PHASED_ROWS
 
 CLASSES = len(maneuvers.codes())
+#: the demo's rows that need a speed profile of two phases (issue 22): one per FL class
+SCENARIOS = CLASSES + PHASED_ROWS * sum(1 for m in maneuvers.maneuvers() if m.sample_phased)
 
 
 def test_demo_makes_ingests_and_validates_every_class(tmp_path):
@@ -24,8 +27,8 @@ def test_demo_makes_ingests_and_validates_every_class(tmp_path):
     run = out / "runs" / "no-llm"
     summary = json.loads((run / "summary.json").read_text())
     statuses = [s["status"] for s in summary["scenarios"]]
-    assert statuses == ["ok"] * CLASSES
+    assert statuses == ["ok"] * SCENARIOS
     assert len({s["maneuver_class"] for s in summary["scenarios"]}) == CLASSES
     assert (run / "report.html").stat().st_size > 0
-    assert f"{CLASSES} scenarios: {CLASSES} ok" in outcome.output
+    assert f"{SCENARIOS} scenarios: {SCENARIOS} ok" in outcome.output
     assert str(run) in outcome.output.strip().splitlines()[-1]

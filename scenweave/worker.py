@@ -100,7 +100,7 @@ class WorkerOptions:
     preload_matcher: str | None = DEFAULT_MATCHER
     #: the map whose matcher is preloaded (a bundled town or an .xodr path; None: Town04)
     preload_map: str | None = None
-    #: imported once in the worker so each forked work horse starts warm (~1 s per job saved)
+    #: imported once before work (and before ``--workers N`` forks), not on the first job
     preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.corpus.corpus_utils",
                                        "scenweave.schemas", "scenweave.agent",
                                        "scenweave.replay_figures")
@@ -358,7 +358,7 @@ def run_job(spec: dict) -> str:
             outcome = make_scenario(spec["params"], spec["index"], folder, settings, matcher)
         finally:
             _close_agent()
-        outcome.update(worker=job.worker_name, submission=spec.get("submission"))
+        outcome["worker"] = job.worker_name
         hand_back(connection, spec, folder, outcome)
     finally:
         _remove(folder)
@@ -370,6 +370,7 @@ def hand_back(connection: Any, spec: dict, folder: Path, outcome: dict) -> int:
     collector, in one transaction with the note that this submission made it; return the
     parcel's size in bytes."""
     limits = spec.get("limits") or Limits()
+    outcome["submission"] = spec.get("submission")  # which submit made it: --retry-failed
 
     def status(dropped: list[dict]) -> dict[str, bytes]:
         if dropped:
@@ -420,8 +421,8 @@ def _remove(path: Path) -> None:
 
 
 def _close_agent() -> None:
-    """Close the agent's LLM and sandbox (its warm pool) made for this job: RQ's work horse
-    ends with ``os._exit``, which skips ``atexit``, and a warm sandbox must not outlive it."""
+    """Close the agent's LLM and sandbox (its warm pool) made for this job: the worker lives
+    on for other runs, whose settings may differ, and a killed worker runs no ``atexit``."""
     agent_run = sys.modules.get("scenweave.agent.run")
     if agent_run is not None:
         agent_run.close_shared()
@@ -440,8 +441,7 @@ def on_job_failure(job: Any, connection: Any, exc_type: type, exc_value: BaseExc
     reason = str(exc_value) or "the worker died while running this scenario"
     outcome = {**base_outcome(spec["params"]), "error_taxonomy": ["infrastructure"],
                "error": f"{exc_type.__name__}: {reason} (no retries left; fix the "
-                        "infrastructure, then submit again with --retry-failed)",
-               "submission": spec.get("submission")}
+                        "infrastructure, then submit again with --retry-failed)"}
     with tempfile.TemporaryDirectory(prefix="scenweave-failed-") as empty:
         hand_back(connection, spec, Path(empty), outcome)
 
@@ -551,8 +551,8 @@ def make_worker(connection: Any, options: WorkerOptions) -> Any:
 
 
 def preload(options: WorkerOptions) -> None:
-    """Load the matcher and the pipeline's modules now, so forked work horses inherit them,
-    and settle the scratch folder they make scenarios in."""
+    """Load the matcher and the pipeline's modules now (``--workers N`` forks inherit them),
+    and settle the scratch folder scenarios are made in."""
     global _scratch_root
     if options.scratch is not None:
         _scratch_root = Path(options.scratch)
@@ -563,11 +563,9 @@ def preload(options: WorkerOptions) -> None:
 
 def warm_up(options: WorkerOptions) -> None:
     """Make the worked examples of ``WARM_UP_SCRIPTS`` once, replay and figure included, and
-    throw them away: every work horse is forked from this process and inherits what they
-    loaded (the matcher's lanes, the XSD, the player's road graph, matplotlib and its fonts),
-    which a horse would otherwise load again for each job (measured: 1.7 s instead of 0.3 s
-    per scenario). A failure here is no failure of the worker: the jobs will say what is
-    wrong."""
+    throw them away, so the first job finds what they loaded (the matcher's lanes, the XSD,
+    the player's road graph, matplotlib and its fonts) and ``--workers N`` forks inherit it.
+    A failure here is no failure of the worker: the jobs will say what is wrong."""
     from scenweave.corpus.worked_example import CORPUS_DIR, example_params
     from scenweave.player import ReplaySettings
 

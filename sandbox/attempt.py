@@ -9,8 +9,10 @@ import os
 import shutil
 import tempfile
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from scenweave.sandbox.errors import SandboxError
 from scenweave.sandbox.result import (
@@ -144,7 +146,7 @@ class Attempt:
         shutil.rmtree(self.root, ignore_errors=True)
 
 
-def params_to_json(params: dict) -> str:
+def params_to_json(params: Mapping[str, Any]) -> str:
     """``params`` as JSON text; ValueError naming ``params`` when it cannot be."""
     try:
         return json.dumps(params)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +32,7 @@ class Sandbox(ABC):
         if self.settings.warm_pool > 0 and self._pool is None:
             self._pool = WarmPool(self, self.settings.warm_pool)
 
-    def run(self, code: str, params: dict, out_dir: Path) -> ExecResult:
+    def run(self, code: str, params: Mapping[str, Any], out_dir: Path) -> ExecResult:
         """Run ``code``'s ``generate(params, <out_dir>/scenario.xosc)`` in a fresh sandbox.
 
         The script's failures (exceptions, timeout, limits) come back in the result; only

@@ -47,7 +47,7 @@ SYSTEM_DIRS = ("bin", "sbin", "lib", "lib32", "lib64")
 class Running:
     """A started bwrap sandbox: its launcher, cgroup and output capture."""
 
-    proc: subprocess.Popen
+    proc: subprocess.Popen[bytes]
     cgroup: RunCgroup | None
     stdout: CappedBuffer
     stderr: CappedBuffer
@@ -108,6 +108,8 @@ class BwrapSandbox(Sandbox):
             if cgroup is not None:
                 cgroup.remove()
             raise SandboxError(f"cannot start bwrap: {err}") from err
+        if proc.stdout is None or proc.stderr is None:  # never: both are pipes
+            raise SandboxError("bwrap started without its output pipes")
         stdout, stderr = CappedBuffer(s.stdout_max_bytes), CappedBuffer(s.stderr_max_bytes)
         readers = [drain_in_background(proc.stdout, stdout),
                    drain_in_background(proc.stderr, stderr)]
@@ -198,7 +200,7 @@ def _venv_root(python: str) -> Path:
     return Path(python).parent.parent
 
 
-def _kill_namespace(proc: subprocess.Popen, reaped_within_s: float = 5.0) -> None:
+def _kill_namespace(proc: subprocess.Popen[bytes], reaped_within_s: float = 5.0) -> None:
     """SIGKILL the sandbox's PID 1 (bwrap's child), let bwrap reap it, then reap bwrap."""
     if proc.poll() is not None:
         return  # bwrap exits only after its child, the namespace's PID 1, is reaped

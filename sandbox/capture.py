@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from typing import BinaryIO
+from typing import IO
 
 
 class CappedBuffer:
@@ -40,7 +40,7 @@ class CappedBuffer:
         return (bytes(self.head) + marker + tail).decode("utf-8", errors="replace")
 
 
-def drain_in_background(stream: BinaryIO, buffer: CappedBuffer) -> threading.Thread:
+def drain_in_background(stream: IO[bytes], buffer: CappedBuffer) -> threading.Thread:
     """Read ``stream`` to its end into ``buffer`` on a daemon thread (so a flood never blocks).
 
     ``stream`` must be unbuffered (``Popen(bufsize=0)``).

@@ -21,7 +21,12 @@ from dataclasses import dataclass
 
 import docker
 import requests
-from docker.errors import APIError, DockerException, NotFound
+from docker.errors import (
+    APIError,
+    DockerException,
+    NotFound,
+    create_api_error_from_http_exception,
+)
 from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
 
@@ -141,7 +146,8 @@ class DockerSandbox(Sandbox):
         try:
             timed_out, code = self._wait(handle.container, started)
             duration = time.monotonic() - started
-            handle.reader.join(timeout=10)
+            if handle.reader is not None:
+                handle.reader.join(timeout=10)
         except (DockerException, requests.RequestException) as err:
             raise SandboxError(f"container engine failed during the run: {err}") from err
         finally:
@@ -178,17 +184,21 @@ class DockerSandbox(Sandbox):
         if not self._podman:
             return int(container.wait(timeout=timeout_s).get("StatusCode", -1))
         api = self.client.api
-        response = api._post(f"{api.base_url}/{PODMAN_API}/libpod/containers/{container.id}/wait",
-                             params={"condition": "exited", "interval": WAIT_INTERVAL},
-                             timeout=timeout_s)
-        return int(api._result(response, json=True))
+        response = api.post(f"{api.base_url}/{PODMAN_API}/libpod/containers/{container.id}/wait",
+                            params={"condition": "exited", "interval": WAIT_INTERVAL},
+                            timeout=timeout_s)
+        try:
+            response.raise_for_status()
+        except requests.HTTPError as err:  # as the SDK's own calls raise it: an APIError
+            create_api_error_from_http_exception(err)
+        return int(response.json())
 
     @functools.cached_property
     def _podman(self) -> bool:
         components = self.client.version().get("Components") or []
         return any("podman" in str(c.get("Name", "")).lower() for c in components)
 
-    def _create(self, attempt: Attempt, warm: bool):
+    def _create(self, attempt: Attempt, warm: bool) -> Container:
         s = self.settings
         volumes = {str(attempt.job): {"bind": JOB_MOUNT, "mode": "ro"},
                    str(attempt.report): {"bind": RESULT_MOUNT, "mode": "rw"}}
@@ -255,5 +265,5 @@ def _remove(container: Container) -> None:
     except NotFound:
         pass
     except (DockerException, requests.RequestException) as err:
-        raise SandboxError(f"could not remove sandbox container {container.id[:12]}: {err}; "
+        raise SandboxError(f"could not remove sandbox container {container.short_id}: {err}; "
                            "remove it with `podman rm -f` / `docker rm -f`") from err

@@ -26,7 +26,8 @@ def engine_answers(url: str) -> bool:
         return False
 
 
-def start_podman_service(socket: Path, ready_within_s: float = 30.0) -> subprocess.Popen:
+def start_podman_service(socket: Path,
+                         ready_within_s: float = 30.0) -> subprocess.Popen[bytes]:
     """Start ``podman system service`` on ``socket``; the caller stops the returned process.
 
     It runs in the socket's folder: podman's conmon writes files into the service's working
@@ -44,7 +45,7 @@ def start_podman_service(socket: Path, ready_within_s: float = 30.0) -> subproce
     deadline = time.monotonic() + ready_within_s
     while time.monotonic() < deadline:
         if service.poll() is not None:
-            err = service.stderr.read().decode(errors="replace").strip()
+            err = service.communicate()[1].decode(errors="replace").strip()
             raise SandboxUnavailable(f"podman system service exited: {err}")
         if socket.exists() and engine_answers(url):
             return service

@@ -18,6 +18,7 @@ import struct
 import sys
 import time
 import traceback
+from typing import Any
 
 JOB = "/sandbox/job"
 LIB = "/sandbox/lib"  # holds the read-only `scenweave.corpus` package
@@ -82,7 +83,7 @@ def wait_for_job(idle_s: float) -> None:
         time.sleep(0.02)
 
 
-def run_script(marks: dict) -> dict:
+def run_script(marks: dict[str, float]) -> dict[str, Any]:
     """Import ``script.py`` as a module (its own imports included: the ``imported`` mark)
     and call ``generate(params, SCENARIO)``."""
     with open(os.path.join(JOB, "params.json"), encoding="utf-8") as handle:
@@ -90,9 +91,11 @@ def run_script(marks: dict) -> dict:
     if LIB not in sys.path:
         sys.path.insert(0, LIB)
     started = time.perf_counter()
-    report = {"error_type": None, "error_message": None, "traceback": None}
+    report: dict[str, Any] = {"error_type": None, "error_message": None, "traceback": None}
     try:
         spec = importlib.util.spec_from_file_location("llm_script", os.path.join(JOB, "script.py"))
+        if spec is None or spec.loader is None:
+            raise ImportError(f"cannot load {JOB}/script.py as a module")
         module = importlib.util.module_from_spec(spec)
         sys.modules["llm_script"] = module
         spec.loader.exec_module(module)
@@ -106,7 +109,7 @@ def run_script(marks: dict) -> dict:
     return report
 
 
-def output_paths() -> list:
+def output_paths() -> list[str]:
     """Every path under the output folder (never following links), the scenario first: the
     host takes outputs in this order up to its limits, and vets every name itself."""
     paths = [os.path.join(folder, name)
@@ -114,9 +117,10 @@ def output_paths() -> list:
     return sorted(paths, key=lambda path: (path != SCENARIO, path))
 
 
-def produced_files(limit_bytes: int) -> list:
+def produced_files(limit_bytes: int) -> list[dict[str, str]]:
     """The regular files of the output folder (no links, FIFOs...), up to ``limit_bytes``."""
-    files, total = [], 0
+    files: list[dict[str, str]] = []
+    total = 0
     for path in output_paths():
         info = os.lstat(path)
         if not stat.S_ISREG(info.st_mode) or total + info.st_size > limit_bytes:

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from itertools import pairwise
 from pathlib import Path
+from typing import Any
 
 from scenweave.errors import ScenarioError
 from scenweave.files import write_bytes_atomic
@@ -63,7 +64,7 @@ class ExecResult:
         """The script ran to the end of ``generate`` without raising, within its limits."""
         return self.exit_code == 0 and not self.timed_out and self.error_type is None
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """A JSON-ready copy (for traces and run folders), with ``ok`` included."""
         data = asdict(self)
         data["files"] = [str(path) for path in self.files]
@@ -210,17 +211,20 @@ class _Intake:
     def add(self, item: object) -> None:
         """Take one ``{"name": ..., "data": <base64>}`` entry, or note why not."""
         name = item.get("name") if isinstance(item, dict) else None
-        problem = name_problem(name, self.allowed) or self._limit_problem(name)
-        data = None if problem else _decoded(item)
-        if data is None:
-            problem = problem or "its data is not base64"
-        elif self.total + len(data) > self.max_bytes:
-            problem = f"outputs would exceed SandboxSettings.output_max_bytes ({self.max_bytes})"
-        if problem:
-            self.dropped.append(f"dropped output {shown(name)}: {problem}")
-            return
-        self.files[name] = data
-        self.total += len(data)
+        problem = name_problem(name, self.allowed)
+        if problem is None and isinstance(name, str):  # name_problem takes text names only
+            problem = self._limit_problem(name)
+            data = None if problem else _decoded(item)
+            if data is None:
+                problem = problem or "its data is not base64"
+            elif self.total + len(data) > self.max_bytes:
+                problem = (f"outputs would exceed SandboxSettings.output_max_bytes "
+                           f"({self.max_bytes})")
+            else:
+                self.files[name] = data
+                self.total += len(data)
+                return
+        self.dropped.append(f"dropped output {shown(name)}: {problem}")
 
     def _limit_problem(self, name: str) -> str | None:
         if name in self.files:

@@ -43,6 +43,7 @@ from scenweave.spawn_db.errors import (
     SpawnDatabaseError,
     SpawnDbError,
 )
+from scenweave.spawn_db.lanes import WorldPose
 from scenweave.spawn_db.map_ref import (
     BUNDLED_MAPS_DIR,
     DEFAULT_MAP,
@@ -111,7 +112,7 @@ def traffic_lights_carla(map_path: str | Path | None = None) -> dict[str, tuple[
             if is_traffic_light(signal)}
 
 
-def _carla_xy(pose) -> tuple[float, float]:
+def _carla_xy(pose: WorldPose) -> tuple[float, float]:
     return pose.x, -pose.y
 
 

@@ -181,7 +181,7 @@ def _entry(network: RoadNetwork, context: str, key: LaneKey, s: float,
                     "behind_m": _round(behind.side_m[side])} for side in SIDES}
     movements = sorted({m.movement for m in approach.movements}) if approach else []
     stop_line = ahead.junction_m if approach is not None else None
-    entry = {
+    entry: dict[str, Any] = {
         "spawn_id": 0,
         "context": context,
         "transform": {"x": _round(pose.x), "y": _round(-pose.y), "z": _round(pose.z),
@@ -272,7 +272,7 @@ def _lane_curvature(network: RoadNetwork, key: LaneKey, s: np.ndarray) -> np.nda
     road = network.road(key.road_id)
     curvature = road.plan_view.pose(s).curvature
     t, _ = lane_center_offset(road, road.sections[key.section], key.lane_id, s)
-    lane_curvature = curvature / (1.0 - curvature * t)
+    lane_curvature: np.ndarray = curvature / (1.0 - curvature * t)
     return lane_curvature if key.lane_id < 0 else -lane_curvature
 
 
@@ -358,7 +358,7 @@ def load_database(path: str | Path) -> dict[str, Any]:
     """Read and validate a spawn database file."""
     path = Path(path)
     try:
-        database = json.loads(path.read_text(encoding="utf-8"))
+        database: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as err:
         raise SpawnDatabaseError(f"{path}: spawn database not found; generate it with "
                                  "`scenweave spawn-db build`") from err
@@ -370,7 +370,8 @@ def load_database(path: str | Path) -> dict[str, Any]:
 
 @cache
 def _database_schema() -> dict[str, Any]:
-    return json.loads(DATABASE_SCHEMA.read_text(encoding="utf-8"))
+    schema: dict[str, Any] = json.loads(DATABASE_SCHEMA.read_text(encoding="utf-8"))
+    return schema
 
 
 def validate_database(database: dict[str, Any], path: Path) -> None:
@@ -390,7 +391,7 @@ def carry_reviews(database: dict[str, Any], previous: dict[str, Any]) -> int:
 
     A rebuild must not throw away a person's review. Returns how many marks were carried.
     """
-    def place(entry: dict[str, Any]) -> tuple:
+    def place(entry: dict[str, Any]) -> tuple[str, int, float]:
         geometry = entry["geometry"]
         return geometry["road_id"], geometry["lane_id"], geometry["s"]
 

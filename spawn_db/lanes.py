@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenweave.spawn_db.errors import OpenDriveError
-from scenweave.spawn_db.opendrive import LaneSection, Road
+from scenweave.spawn_db.opendrive import Lane, LaneSection, Road
 from scenweave.spawn_db.plan_view import GL_NODES, GL_WEIGHTS
 
 #: longest piece integrated with one Gauss-Legendre rule (m)
@@ -43,7 +43,7 @@ def normalize_angle(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
-def _lane(section: LaneSection, lane_id: int, road: Road):
+def _lane(section: LaneSection, lane_id: int, road: Road) -> Lane:
     lane = section.lanes.get(lane_id)
     if lane is None or lane_id == 0:
         raise OpenDriveError(f"road {road.id} has no lane {lane_id} in its lane section starting "
@@ -65,14 +65,17 @@ def lane_border_offsets(road: Road, section: LaneSection, lane_id: int,
     s_offset = np.minimum(s, np.nextafter(section.s_end, -np.inf))
     value = road.lane_offset.value(s_offset).astype(float)
     slope = road.lane_offset.slope(s_offset).astype(float)
-    inner = None
-    for current in range(sign, lane_id + sign, sign):
-        if current == lane_id:
-            inner = np.stack([value.copy(), slope.copy()])
-        lane = _lane(section, current, road)
-        value = value + sign * lane.width.value(s)
-        slope = slope + sign * lane.width.slope(s)
+    for current in range(sign, lane_id, sign):  # the lanes between the centre and this one
+        value, slope = _widened(value, slope, sign, _lane(section, current, road), s)
+    inner = np.stack([value, slope])
+    value, slope = _widened(value, slope, sign, _lane(section, lane_id, road), s)
     return inner, np.stack([value, slope])
+
+
+def _widened(value: np.ndarray, slope: np.ndarray, sign: int, lane: Lane,
+             s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A border's offset and slope moved ``sign``-wards across ``lane``."""
+    return value + sign * lane.width.value(s), slope + sign * lane.width.slope(s)
 
 
 def lane_center_offset(road: Road, section: LaneSection, lane_id: int,
@@ -91,7 +94,8 @@ def section_samples(section: LaneSection, step_m: float = 2.0) -> np.ndarray:
 
 def lane_width(road: Road, section: LaneSection, lane_id: int, s: np.ndarray) -> np.ndarray:
     """Width of the lane at ``s``."""
-    return _lane(section, lane_id, road).width.value(s)
+    width: np.ndarray = _lane(section, lane_id, road).width.value(s)
+    return width
 
 
 def lane_pose(road: Road, lane_id: int, s: float, offset: float = 0.0,
@@ -146,7 +150,8 @@ def lane_speed_factor(road: Road, section: LaneSection, lane_id: int,
     """``|dP/ds|``: metres driven along the lane centre per metre of ``s``."""
     t, slope = lane_center_offset(road, section, lane_id, s)
     curvature = road.plan_view.pose(s).curvature
-    return np.hypot(1.0 - curvature * t, slope)
+    factor: np.ndarray = np.hypot(1.0 - curvature * t, slope)
+    return factor
 
 
 def lane_distance(road: Road, section: LaneSection, lane_id: int, s_a: float,

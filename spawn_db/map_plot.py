@@ -16,7 +16,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
 import numpy as np  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Rectangle  # noqa: E402
 
 from scenweave.files import write_bytes_atomic  # noqa: E402
 from scenweave.spawn_db.lanes import lane_center_offset, section_samples  # noqa: E402
@@ -48,8 +51,8 @@ def plot_spawn_points(network: RoadNetwork, database: dict[str, Any], out_path: 
         (x0, x1), (y0, y1) = bounds
         zoom.set_xlim(x0, x1)
         zoom.set_ylim(y1, y0)
-        overview.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False,
-                                         linestyle="--", linewidth=1.0, color="black"))
+        overview.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False,
+                                     linestyle="--", linewidth=1.0, color="black"))
         _label_ids(zoom, entries, bounds)
     else:
         zoom.invert_yaxis()
@@ -65,7 +68,7 @@ def plot_spawn_points(network: RoadNetwork, database: dict[str, Any], out_path: 
     plt.close(figure)
 
 
-def _png_bytes(figure, dpi: int) -> bytes:
+def _png_bytes(figure: Figure, dpi: int) -> bytes:
     from io import BytesIO
 
     buffer = BytesIO()
@@ -73,7 +76,7 @@ def _png_bytes(figure, dpi: int) -> bytes:
     return buffer.getvalue()
 
 
-def _draw_roads(axes, network: RoadNetwork) -> None:
+def _draw_roads(axes: Axes, network: RoadNetwork) -> None:
     for key in network.drivable_lanes():
         road = network.road(key.road_id)
         section = road.sections[key.section]
@@ -86,7 +89,7 @@ def _draw_roads(axes, network: RoadNetwork) -> None:
         axes.plot(x, -y, color=colour, linewidth=width, zorder=1)
 
 
-def _draw_lights(axes, network: RoadNetwork) -> None:
+def _draw_lights(axes: Axes, network: RoadNetwork) -> None:
     for road in network.map.roads.values():
         for signal in road.signals:
             if is_traffic_light(signal):
@@ -95,7 +98,7 @@ def _draw_lights(axes, network: RoadNetwork) -> None:
                           markeredgecolor="black", markeredgewidth=0.5, zorder=4)
 
 
-def _draw_spawns(axes, entries: list[dict[str, Any]]) -> None:
+def _draw_spawns(axes: Axes, entries: list[dict[str, Any]]) -> None:
     for entry in entries:
         transform = entry["transform"]
         yaw = np.radians(transform["yaw"])
@@ -112,12 +115,16 @@ def _draw_spawns(axes, entries: list[dict[str, Any]]) -> None:
                   markeredgewidth=1.2 if reviewed else 0.0, zorder=3)
 
 
-def _densest_area(entries: list[dict[str, Any]], size: float = 340.0):
+Bounds = tuple[tuple[float, float], tuple[float, float]]
+
+
+def _densest_area(entries: list[dict[str, Any]], size: float = 340.0) -> Bounds | None:
     """The ``size`` x ``size`` window holding the most spawn points (None if no points)."""
     if not entries:
         return None
     points = np.array([[e["transform"]["x"], e["transform"]["y"]] for e in entries])
-    best, best_count = None, -1
+    best: Bounds | None = None
+    best_count = -1
     for x0 in np.arange(points[:, 0].min(), points[:, 0].max() + 1, size / 8):
         for y0 in np.arange(points[:, 1].min(), points[:, 1].max() + 1, size / 8):
             inside = ((points[:, 0] >= x0) & (points[:, 0] <= x0 + size)
@@ -128,7 +135,7 @@ def _densest_area(entries: list[dict[str, Any]], size: float = 340.0):
     return best
 
 
-def _label_ids(axes, entries: list[dict[str, Any]], bounds) -> None:
+def _label_ids(axes: Axes, entries: list[dict[str, Any]], bounds: Bounds) -> None:
     (x0, x1), (y0, y1) = bounds
     for entry in entries:
         x, y = entry["transform"]["x"], entry["transform"]["y"]

@@ -111,4 +111,6 @@ def spawn_database(map_ref: MapRef, cache_dir: Path) -> Path:
 
 @cache
 def _shipped_sha256() -> str:
-    return json.loads(DEFAULT_DB_PATH.read_text(encoding="utf-8"))["metadata"]["source_sha256"]
+    database = json.loads(DEFAULT_DB_PATH.read_text(encoding="utf-8"))
+    sha256: str = database["metadata"]["source_sha256"]
+    return sha256

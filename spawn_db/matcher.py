@@ -24,10 +24,11 @@ from __future__ import annotations
 import heapq
 import math
 from collections import Counter
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
@@ -78,6 +79,19 @@ class Rejection:
         return f"{self.constraint}: {self.detail}"
 
 
+class Transform(TypedDict):
+    """A spawn point's pose in CARLA's frame (``spawn_db.schema.json``)."""
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+
+
+#: a lane walk: ``(road, lane, from, to)`` metres of each lane section walked
+LanePath = list[tuple[str, int, float, float]]
+
+
 @dataclass(frozen=True)
 class SpawnCandidate:
     """A spawn point that passed the hard filters, with its score and OpenSCENARIO pose."""
@@ -87,24 +101,30 @@ class SpawnCandidate:
     entry: dict[str, Any] = field(repr=False)
 
     @property
+    def transform(self) -> Transform:
+        """The spawn's pose in CARLA's frame."""
+        transform: Transform = self.entry["transform"]
+        return transform
+
+    @property
     def x(self) -> float:
         """OpenSCENARIO x (= CARLA x)."""
-        return self.entry["transform"]["x"]
+        return self.transform["x"]
 
     @property
     def y(self) -> float:
         """OpenSCENARIO y = -y_carla."""
-        return -self.entry["transform"]["y"]
+        return -self.transform["y"]
 
     @property
     def z(self) -> float:
         """Height (same in both frames)."""
-        return self.entry["transform"]["z"]
+        return self.transform["z"]
 
     @property
     def h(self) -> float:
         """OpenSCENARIO heading = -radians(yaw_carla)."""
-        return -math.radians(self.entry["transform"]["yaw"])
+        return -math.radians(self.transform["yaw"])
 
     @property
     def lane_point(self) -> LanePoint:
@@ -151,7 +171,7 @@ class Requirements:
     light_free_m: float = 0.0
 
     @classmethod
-    def from_params(cls, params: dict[str, Any]) -> Requirements:
+    def from_params(cls, params: Mapping[str, Any]) -> Requirements:
         """Read the contract keys (docs/params.md) the matcher needs."""
         scenario_id = str(params.get("scenario_id", "<no scenario_id>"))
         number = _NumberReader(params, scenario_id)
@@ -191,14 +211,14 @@ class Requirements:
 
 
 
-def _light_movement(params: dict[str, Any]) -> str | None:
+def _light_movement(params: Mapping[str, Any]) -> str | None:
     maneuver = maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
         str(params.get("maneuver_tag", "")))
     return None if maneuver is None or maneuver.light is None else maneuver.turn
 
 
 class _NumberReader:
-    def __init__(self, params: dict[str, Any], scenario_id: str):
+    def __init__(self, params: Mapping[str, Any], scenario_id: str):
         self.params, self.scenario_id = params, scenario_id
 
     def __call__(self, key: str, default: float | None = None) -> float:
@@ -236,9 +256,9 @@ class SpawnMatcher:
             self._by_context.setdefault(entry["context"], []).append((_fixed_score(entry), entry))
         for ranked in self._by_context.values():
             ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
-        self._last_params: dict[str, Any] | None = None
+        self._last_params: Mapping[str, Any] | None = None
         #: lane walks of ``_lane_path``: start -> (metres walked, walk ended, path)
-        self._lane_paths: dict[tuple, tuple[float, bool, list]] = {}
+        self._lane_paths: dict[tuple[str, int, float], tuple[float, bool, LanePath]] = {}
 
     @classmethod
     def for_map(cls, map_ref: MapRef, cache_dir: Path) -> SpawnMatcher:
@@ -246,7 +266,7 @@ class SpawnMatcher:
         return cls(spawn_database(map_ref, cache_dir), map_ref.path)
 
     def _find_map(self) -> Path:
-        source = self.database["metadata"]["source_map"]
+        source: str = self.database["metadata"]["source_map"]
         for candidate in (self.db_path.parent / "maps" / source, self.db_path.parent / source):
             if candidate.exists():
                 return candidate
@@ -268,11 +288,11 @@ class SpawnMatcher:
         return {a.spawn_id: a.rejections for a in self.assess(self._last_params)
                 if not a.accepted}
 
-    def assess(self, params: dict[str, Any]) -> list[Assessment]:
+    def assess(self, params: Mapping[str, Any]) -> list[Assessment]:
         """Every spawn point judged against ``params``, in database order."""
         return self._assess(Requirements.from_params(params), params)
 
-    def _assess(self, needs: Requirements, params: dict[str, Any]) -> list[Assessment]:
+    def _assess(self, needs: Requirements, params: Mapping[str, Any]) -> list[Assessment]:
         assessments = []
         for entry in self.entries:
             rejections = tuple(_hard_filters(entry, needs)) or self._route_rejections(entry,
@@ -281,7 +301,7 @@ class SpawnMatcher:
             assessments.append(Assessment(entry["spawn_id"], score, rejections))
         return assessments
 
-    def find(self, params: dict[str, Any], top_n: int = 5) -> list[SpawnCandidate]:
+    def find(self, params: Mapping[str, Any], top_n: int = 5) -> list[SpawnCandidate]:
         """The ``top_n`` best spawn points for ``params``, best first.
 
         Raises :class:`NoSpawnFits` naming the constraint that ruled most spawn points out.
@@ -299,10 +319,11 @@ class SpawnMatcher:
             raise NoSpawnFits(_no_fit_message(params, self.map.name, self._assess(needs, params)))
         return _spread_over_roads(accepted)[:top_n]
 
-    def _accepted(self, needs: Requirements, params: dict[str, Any],
+    def _accepted(self, needs: Requirements, params: Mapping[str, Any],
                   top_n: int) -> list[SpawnCandidate]:
         """The spawn points passing every filter, as far down the ranking as the top N go."""
-        accepted, top_scores = [], []  # top_scores: a min-heap of the best top_n scores
+        accepted: list[SpawnCandidate] = []
+        top_scores: list[float] = []  # a min-heap of the best top_n scores
         for fixed, entry in self._by_context.get(needs.domain, []):
             if len(top_scores) == top_n and fixed + NEEDS_POINTS_MAX[needs.domain] < top_scores[0]:
                 break  # neither this spawn nor any after it can reach (or tie) the top N
@@ -318,7 +339,7 @@ class SpawnMatcher:
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
         return accepted
 
-    def assign(self, params: dict[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
+    def assign(self, params: Mapping[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
         candidates = self.find(params, top_n)
         return self._placed(params, candidates[index % len(candidates)])
@@ -397,8 +418,8 @@ class SpawnMatcher:
 
     def _ego_key(self, placed: dict[str, Any], needs: Requirements) -> LaneKey:
         try:
-            return self.network.key_at(str(placed.get("ego_road_id")), placed.get("ego_lane_id"),
-                                       placed.get("ego_s"))
+            return self.network.key_at(str(placed.get("ego_road_id")), placed["ego_lane_id"],
+                                       placed["ego_s"])
         except (KeyError, TypeError, ValueError, OpenDriveError) as err:
             raise ParamsError(f"{needs.scenario_id}: ego_road_id/ego_lane_id/ego_s do not name "
                               f"a lane of map {self.map.name}: {err}") from err
@@ -407,13 +428,14 @@ class SpawnMatcher:
         """Every same-direction lane beside ``here``, nearest first (left before right)."""
         found = []
         for side in ("left", "right"):
-            key, steps = here, 0
-            while (key := self.network.neighbour(key, side)) is not None:
+            key, steps = self.network.neighbour(here, side), 0
+            while key is not None:
                 steps += 1
                 found.append((steps, side == "right", key))
+                key = self.network.neighbour(key, side)
         return [key for *_, key in sorted(found, key=lambda item: item[:2])]
 
-    def place_at(self, params: dict[str, Any]) -> dict[str, Any]:
+    def place_at(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """``params`` placed anew from the spawn point they name (``spawn_id``): for a record
         whose values changed but whose place did not (a variant with another vehicle model,
         whose reference-point gaps differ). Raises :class:`NoSpawnFits` when that spawn point
@@ -427,11 +449,12 @@ class SpawnMatcher:
                               f"{self.map.name} does not fit the changed scenario ({why})")
         return self._placed(params, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
 
-    def _why_not(self, entry: dict[str, Any], needs: Requirements, params: dict[str, Any]) -> str:
+    def _why_not(self, entry: dict[str, Any], needs: Requirements,
+                 params: Mapping[str, Any]) -> str:
         rejections = (*_hard_filters(entry, needs), *self._route_rejections(entry, params))
         return str(rejections[0]) if rejections else "no reason found"
 
-    def _fits(self, entry: dict[str, Any], needs: Requirements, params: dict[str, Any]) -> bool:
+    def _fits(self, entry: dict[str, Any], needs: Requirements, params: Mapping[str, Any]) -> bool:
         if next(_hard_filters(entry, needs), None) is None and not self._route_rejections(entry,
                                                                                          params):
             return True
@@ -439,7 +462,7 @@ class SpawnMatcher:
         return (needs.domain == "highway" and next(_hard_filters(entry, relaxed), None) is None
                 and not self._route_rejections(entry, params))
 
-    def _placed(self, params: dict[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
+    def _placed(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
         """``params`` with the spawn keys filled from ``candidate``."""
         result = dict(params)
         result["map"] = self.map.logic_file
@@ -494,7 +517,7 @@ class SpawnMatcher:
         return network.advance(exit_lane.road_id, exit_lane.lane_id,
                                network.entry_s(exit_lane), TURN_EXIT_INTO_M)
 
-    def _route_rejections(self, entry: dict[str, Any], params: dict[str, Any]
+    def _route_rejections(self, entry: dict[str, Any], params: Mapping[str, Any]
                           ) -> tuple[Rejection, ...]:
         """Beyond the database's facts: a lane change must keep its lane ids.
 
@@ -506,7 +529,8 @@ class SpawnMatcher:
         change's length plus a car length, must keep one lane id.
         """
         maneuver = maneuvers.find(params.get("maneuver_class"))
-        actor = PREFIX_OF_CHANGER.get(maneuver.lane_change) if maneuver else None
+        changer = maneuver.lane_change if maneuver else None
+        actor = PREFIX_OF_CHANGER.get(changer) if changer else None
         if actor is None or entry["context"] != "highway":
             return ()
         lane_start, offset = self._changer_lane(entry, actor, params)
@@ -526,7 +550,7 @@ class SpawnMatcher:
         return (Rejection("lane_change_lane_ids", f"the {actor}'s lane changes its id during "
                           f"the lane change ({begin:.0f}-{end:.0f} m on: {path})"),)
 
-    def _changer_lane(self, entry: dict[str, Any], actor: str, params: dict[str, Any]
+    def _changer_lane(self, entry: dict[str, Any], actor: str, params: Mapping[str, Any]
                       ) -> tuple[LanePoint | None, float]:
         """The lane the lane-changing actor starts in, at the spawn's ``s``, and how far along
         it the actor stands at t = 0."""
@@ -544,15 +568,15 @@ class SpawnMatcher:
             return None, 0.0
         return LanePoint(neighbour.road_id, neighbour.lane_id, ego.s), distance
 
-    def _lane_path(self, start: LanePoint, upto_m: float
-                   ) -> list[tuple[str, int, float, float]]:
+    def _lane_path(self, start: LanePoint, upto_m: float) -> LanePath:
         """``(road, lane, from, to)`` metres of the lane walked from ``start`` (straightest
         on), at least ``upto_m`` far; kept per start, since batches reuse the best spawns."""
         key = (start.road_id, start.lane_id, start.s)
         cached = self._lane_paths.get(key)
         if cached is not None and (cached[0] >= upto_m or cached[1]):
             return cached[2]
-        path, travelled, ended = [], 0.0, True
+        path: LanePath = []
+        travelled, ended = 0.0, True
         reach = max(upto_m, LANE_PATH_M)
         for segment in self.network.walk(start.road_id, start.lane_id, start.s):
             path.append((segment.key.road_id, segment.key.lane_id, travelled,
@@ -565,7 +589,7 @@ class SpawnMatcher:
         return path
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
-               params: dict[str, Any]) -> LanePoint:
+               params: Mapping[str, Any]) -> LanePoint:
         if side == ONCOMING:
             return self._place_oncoming(ego, distance, params)
         key = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
@@ -578,7 +602,7 @@ class SpawnMatcher:
         return self.network.advance(key.road_id, key.lane_id, ego.s, distance)
 
     def _place_oncoming(self, ego: LanePoint, distance: float,
-                        params: dict[str, Any]) -> LanePoint:
+                        params: Mapping[str, Any]) -> LanePoint:
         """In the nearest lane of the other direction whose traffic does not turn left across
         the ego's path, ``distance`` ahead along the ego's lane (or, where the road there has
         none, as far ahead as one is, in 5 m steps)."""
@@ -626,7 +650,7 @@ def _turns_left(network: Any, start: LanePoint, reach_m: float) -> bool:
     return False
 
 
-def _hard_filters(entry: dict[str, Any], needs: Requirements):
+def _hard_filters(entry: dict[str, Any], needs: Requirements) -> Iterator[Rejection]:
     features, drivable = entry["features"], entry["drivable"]
     if entry["context"] != needs.domain:
         yield Rejection("context", f"spawn is {entry['context']}, scenario is {needs.domain}")
@@ -660,7 +684,7 @@ def _hard_filters(entry: dict[str, Any], needs: Requirements):
                                          f"{needs.behind_m:.0f} m needed")
 
 
-def _urban_filters(entry: dict[str, Any], needs: Requirements):
+def _urban_filters(entry: dict[str, Any], needs: Requirements) -> Iterator[Rejection]:
     movement = needs.light_movement
     if movement is not None and not entry["surroundings"]["traffic_lights"]:
         yield Rejection("traffic_light", "no traffic light ahead of the spawn")
@@ -679,23 +703,25 @@ def _score(entry: dict[str, Any], needs: Requirements) -> float:
 
 def _fixed_score(entry: dict[str, Any]) -> float:
     """The Table 5.3 points a spawn earns whatever the scenario."""
-    priority = 10.0 * entry["annotations"]["priority"]
+    priority: float = 10.0 * entry["annotations"]["priority"]
     if entry["context"] == "highway":
-        return (30.0 + 15.0 * entry["features"]["is_straight"]
-                + 10.0 * entry["surroundings"]["is_highway_layout"]
-                + 15.0 * (entry["drivable"]["ahead_m"] > 100.0) + priority)
-    return 30.0 + priority + 10.0 * entry["annotations"]["manually_reviewed"]
+        points: float = (30.0 + 15.0 * entry["features"]["is_straight"]
+                         + 10.0 * entry["surroundings"]["is_highway_layout"]
+                         + 15.0 * (entry["drivable"]["ahead_m"] > 100.0) + priority)
+        return points
+    reviewed: bool = entry["annotations"]["manually_reviewed"]
+    return 30.0 + priority + 10.0 * reviewed
 
 
 def _needs_score(entry: dict[str, Any], needs: Requirements) -> float:
     """The Table 5.3 points that depend on the scenario (at most ``NEEDS_POINTS_MAX``)."""
-    limit = entry["surroundings"]["speed_limit_kmh"]
+    limit: float = entry["surroundings"]["speed_limit_kmh"]
     if needs.domain == "highway":
         return max(0.0, 20.0 - 0.5 * abs(limit - needs.speed_kmh))
     score = 0.0
     if needs.speed_limit_kmh is not None:
         score += max(0.0, 20.0 - abs(limit - needs.speed_limit_kmh))
-    stop_line = entry["surroundings"]["stop_line_distance_m"]
+    stop_line: float | None = entry["surroundings"]["stop_line_distance_m"]
     if needs.light_movement is None:
         # no light in the manoeuvre: the light-distance points go to room to drive it before
         # the next light instead
@@ -712,7 +738,8 @@ def _needs_score(entry: dict[str, Any], needs: Requirements) -> float:
 
 def _light_for(entry: dict[str, Any], movement: str) -> dict[str, Any] | None:
     """The light controlling ``movement`` out of the spawn's lane, nearest first."""
-    for light in entry["surroundings"]["traffic_lights"]:
+    lights: list[dict[str, Any]] = entry["surroundings"]["traffic_lights"]
+    for light in lights:
         if movement in light.get("movements", []):
             return light
     return None
@@ -721,8 +748,8 @@ def _light_for(entry: dict[str, Any], movement: str) -> dict[str, Any] | None:
 def _spread_over_roads(candidates: list[SpawnCandidate]) -> list[SpawnCandidate]:
     """Best score first; among equal scores, alternate roads so the top N is spread out."""
     ordered = sorted(candidates, key=lambda c: (-c.score, c.spawn_id))
-    seen: Counter = Counter()
-    rank = {}
+    seen: Counter[tuple[float, str]] = Counter()
+    rank: dict[int, int] = {}
     for candidate in ordered:
         group = (candidate.score, candidate.entry["geometry"]["road_id"])
         rank[candidate.spawn_id] = seen[group]
@@ -736,14 +763,14 @@ ONCOMING = "oncoming"
 ONCOMING_SEARCH_STEP_M = 5.0
 
 
-def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]]:
+def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, float]]:
     """``(actor, adjacent side or None, signed distance along the lane at t = 0)`` of every
     NPC: a highway NPC where its recorded gap holds at ``maneuver_start_s``, the urban lead
     ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic), the
     oncoming car ``oncoming_distance_m`` ahead in the nearest lane of the other direction."""
     if params.get("domain") == "urban":
         number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
-        placed = []
+        placed: list[tuple[str, str | None, float]] = []
         if params.get("lead_present"):
             placed.append(("lead", None, number("lead_distance_m", 0.0)))
         if params.get("oncoming_present"):
@@ -766,7 +793,7 @@ def _placed_actors(params: dict[str, Any]) -> list[tuple[str, str | None, float]
     return placed
 
 
-def _start_distance(params: dict[str, Any], actor: str) -> float:
+def _start_distance(params: Mapping[str, Any], actor: str) -> float:
     """Where ``actor`` stands at t = 0, ahead of the ego (m): its recorded gap minus the
     lead-in drift (``corpus.kinematics.start_gap_m``)."""
     number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
@@ -797,7 +824,7 @@ def _light_keys(entry: dict[str, Any], needs: Requirements) -> dict[str, Any]:
     }
 
 
-def _no_fit_message(params: dict[str, Any], map_name: str,
+def _no_fit_message(params: Mapping[str, Any], map_name: str,
                     assessments: list[Assessment]) -> str:
     scenario = params.get("scenario_id", "<no scenario_id>")
     in_context = [a for a in assessments

@@ -205,7 +205,10 @@ def load_opendrive(path: str | Path) -> OpenDriveMap:
     for element in root.findall("road"):
         road = _read_road(element, path)
         roads[road.id] = road
-    junctions = {j.get("id"): _read_junction(j) for j in root.findall("junction")}
+    junctions = {}
+    for element in root.findall("junction"):
+        junction = _read_junction(element, f"{path.name}: junction {element.get('id')}")
+        junctions[junction.id] = junction
     return OpenDriveMap(name=path.stem, roads=roads, junctions=junctions)
 
 
@@ -221,16 +224,37 @@ def _float(element: ET.Element, name: str, where: str, default: float | None = N
         raise OpenDriveError(f"{where}: <{element.tag} {name}={raw!r}> is not a number") from err
 
 
+def _text(element: ET.Element, name: str, where: str) -> str:
+    raw = element.get(name)
+    if raw is None:
+        raise OpenDriveError(f"{where}: <{element.tag}> has no attribute {name!r}")
+    return raw
+
+
+def _int(element: ET.Element, name: str, where: str) -> int:
+    raw = _text(element, name, where)
+    try:
+        return int(raw)
+    except ValueError as err:
+        raise OpenDriveError(f"{where}: <{element.tag} {name}={raw!r}> is not an integer") from err
+
+
+def _cubic(element: ET.Element, names: tuple[str, str, str, str],
+           where: str) -> tuple[float, float, float, float]:
+    a, b, c, d = (_float(element, name, where) for name in names)
+    return a, b, c, d
+
+
 def _poly3_track(elements: list[ET.Element], where: str, start_attr: str = "s",
                  base: float = 0.0) -> Poly3Track:
     starts = [base + _float(e, start_attr, where) for e in elements]
-    coefficients = [tuple(_float(e, k, where) for k in "abcd") for e in elements]
+    coefficients = [_cubic(e, ("a", "b", "c", "d"), where) for e in elements]
     return Poly3Track(starts, coefficients)
 
 
 def _read_road(element: ET.Element, path: Path) -> Road:
-    road_id = element.get("id")
-    where = f"{path.name}: road {road_id}"
+    where = f"{path.name}: road {element.get('id')}"
+    road_id = _text(element, "id", where)
     length = _float(element, "length", where)
     link = element.find("link")
     geometries = [_read_geometry(g, where) for g in element.findall("planView/geometry")]
@@ -242,7 +266,8 @@ def _read_road(element: ET.Element, path: Path) -> Road:
     road = Road(
         id=road_id, name=element.get("name", ""), length=length,
         junction=element.get("junction", "-1"),
-        predecessor=_read_link(link, "predecessor"), successor=_read_link(link, "successor"),
+        predecessor=_read_link(link, "predecessor", where),
+        successor=_read_link(link, "successor", where),
         plan_view=PlanView(geometries),
         elevation=_poly3_track(element.findall("elevationProfile/elevation"), where),
         superelevation=_poly3_track(element.findall("lateralProfile/superelevation"), where),
@@ -258,18 +283,20 @@ def _read_road(element: ET.Element, path: Path) -> Road:
     return road
 
 
-def _read_link(link: ET.Element | None, kind: str) -> RoadLink | None:
+def _read_link(link: ET.Element | None, kind: str, where: str) -> RoadLink | None:
     target = None if link is None else link.find(kind)
     if target is None:
         return None
-    return RoadLink(target.get("elementType", "road"), target.get("elementId"),
+    return RoadLink(target.get("elementType", "road"), _text(target, "elementId", where),
                     target.get("contactPoint"))
 
 
 def _read_geometry(element: ET.Element, where: str) -> Geometry:
     start = {k: _float(element, k, where) for k in ("s", "x", "y", "hdg", "length")}
-    kind = element[0] if len(element) else None
-    tag = kind.tag if kind is not None else None
+    if not len(element):
+        raise OpenDriveError(f"{where}: geometry at s={start['s']} has unknown kind <None>")
+    kind = element[0]
+    tag = kind.tag
     if tag == "line":
         return Line(**start)
     if tag == "arc":
@@ -279,12 +306,12 @@ def _read_geometry(element: ET.Element, where: str) -> Geometry:
                       curv_end=_float(kind, "curvEnd", where))
     if tag == "poly3":
         return ParametricCubic(**start, coeff_u=(0.0, 1.0, 0.0, 0.0),
-                               coeff_v=tuple(_float(kind, k, where) for k in "abcd"))
+                               coeff_v=_cubic(kind, ("a", "b", "c", "d"), where))
     if tag == "paramPoly3":
         normalized = kind.get("pRange", "normalized") == "normalized"
         return ParametricCubic(**start,
-                               coeff_u=tuple(_float(kind, k + "U", where) for k in "abcd"),
-                               coeff_v=tuple(_float(kind, k + "V", where) for k in "abcd"),
+                               coeff_u=_cubic(kind, ("aU", "bU", "cU", "dU"), where),
+                               coeff_v=_cubic(kind, ("aV", "bV", "cV", "dV"), where),
                                p_end=1.0 if normalized else start["length"])
     raise OpenDriveError(f"{where}: geometry at s={start['s']} has unknown kind <{tag}>")
 
@@ -304,22 +331,25 @@ def _read_sections(lanes: ET.Element, road_length: float, where: str) -> list[La
                 raise OpenDriveError(f"{lane_where}: <border> lane shapes are not supported; "
                                      "convert the map to <width> records")
             link = lane.find("link")
-            lanes_by_id[int(lane.get("id"))] = Lane(
-                id=int(lane.get("id")), type=lane.get("type", "none"),
+            lane_id = _int(lane, "id", lane_where)
+            lanes_by_id[lane_id] = Lane(
+                id=lane_id, type=lane.get("type", "none"),
                 width=_poly3_track(lane.findall("width"), lane_where, "sOffset", s_start),
-                predecessor=_lane_link(link, "predecessor"),
-                successor=_lane_link(link, "successor"))
+                predecessor=_lane_link(link, "predecessor", lane_where),
+                successor=_lane_link(link, "successor", lane_where))
         sections.append(LaneSection(s_start, s_end, lanes_by_id))
     return sections
 
 
-def _lane_link(link: ET.Element | None, kind: str) -> int | None:
+def _lane_link(link: ET.Element | None, kind: str, where: str) -> int | None:
     target = None if link is None else link.find(kind)
-    return None if target is None else int(target.get("id"))
+    return None if target is None else _int(target, "id", where)
 
 
 def _read_speed(type_element: ET.Element, where: str) -> tuple[float, float]:
     speed = type_element.find("speed")
+    if speed is None:
+        raise OpenDriveError(f"{where}: <type> has no <speed>")
     unit = speed.get("unit", "m/s")
     if unit not in SPEED_TO_KMH:
         raise OpenDriveError(f"{where}: speed unit {unit!r} is not one of {sorted(SPEED_TO_KMH)}")
@@ -327,10 +357,10 @@ def _read_speed(type_element: ET.Element, where: str) -> tuple[float, float]:
 
 
 def _read_signal(element: ET.Element, road_id: str, where: str, reference_only: bool) -> Signal:
-    validity = tuple((int(v.get("fromLane")), int(v.get("toLane")))
+    validity = tuple((_int(v, "fromLane", where), _int(v, "toLane", where))
                      for v in element.findall("validity"))
     return Signal(
-        id=element.get("id"), road_id=road_id, s=_float(element, "s", where),
+        id=_text(element, "id", where), road_id=road_id, s=_float(element, "s", where),
         t=_float(element, "t", where), dynamic=element.get("dynamic") == "yes",
         type=element.get("type", ""), name=element.get("name", ""),
         orientation=element.get("orientation", "none"),
@@ -338,12 +368,12 @@ def _read_signal(element: ET.Element, road_id: str, where: str, reference_only: 
         reference_only=reference_only)
 
 
-def _read_junction(element: ET.Element) -> Junction:
+def _read_junction(element: ET.Element, where: str) -> Junction:
     connections = tuple(
-        Connection(id=c.get("id"), incoming_road=c.get("incomingRoad"),
-                   connecting_road=c.get("connectingRoad"),
+        Connection(id=_text(c, "id", where), incoming_road=_text(c, "incomingRoad", where),
+                   connecting_road=_text(c, "connectingRoad", where),
                    contact_point=c.get("contactPoint", "start"),
-                   lane_links=tuple((int(ll.get("from")), int(ll.get("to")))
+                   lane_links=tuple((_int(ll, "from", where), _int(ll, "to", where))
                                     for ll in c.findall("laneLink")))
         for c in element.findall("connection"))
-    return Junction(element.get("id"), connections)
+    return Junction(_text(element, "id", where), connections)

@@ -113,7 +113,8 @@ class ParametricCubic(Geometry):
     coeff_u: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 0.0)
     coeff_v: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     p_end: float | None = None
-    _table: dict = field(default_factory=dict, compare=False, repr=False)
+    _table: dict[str, np.ndarray] = field(default_factory=dict, init=False, compare=False,
+                                          repr=False)
 
     def local(self, ds: np.ndarray) -> LocalPose:
         p = self._parameter_at(np.clip(ds, 0.0, self.length))
@@ -123,12 +124,14 @@ class ParametricCubic(Geometry):
         return LocalPose(u, v, np.arctan2(dv, du), (du * ddv - dv * ddu) / speed**3)
 
     def _speed(self, p: np.ndarray) -> np.ndarray:
-        return np.hypot(_cubic(self.coeff_u, p)[1], _cubic(self.coeff_v, p)[1])
+        speed: np.ndarray = np.hypot(_cubic(self.coeff_u, p)[1], _cubic(self.coeff_v, p)[1])
+        return speed
 
     def _arc_length(self, p_from: np.ndarray, p_to: np.ndarray) -> np.ndarray:
         span = p_to - p_from
         nodes = p_from[..., None] + span[..., None] * GL_NODES
-        return span * (self._speed(nodes) @ GL_WEIGHTS)
+        length: np.ndarray = span * (self._speed(nodes) @ GL_WEIGHTS)
+        return length
 
     def _tabulate(self) -> tuple[np.ndarray, np.ndarray]:
         if "grid" not in self._table:
@@ -156,10 +159,12 @@ class ParametricCubic(Geometry):
         p = start + (ds - lengths[i]) / (lengths[i + 1] - lengths[i]) * (grid[i + 1] - start)
         for _ in range(4):  # Newton on the arc length from the table's linear guess
             p = p - (lengths[i] + self._arc_length(start, p) - ds) / self._speed(p)
-        return p
+        parameter: np.ndarray = p
+        return parameter
 
 
-def _cubic(coeff: tuple[float, float, float, float], p: np.ndarray):
+def _cubic(coeff: tuple[float, float, float, float],
+           p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     a, b, c, d = coeff
     return (a + p * (b + p * (c + p * d)), b + p * (2 * c + 3 * d * p), 2 * c + 6 * d * p)
 

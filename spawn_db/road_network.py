@@ -10,10 +10,10 @@ road boundaries the way a car keeping its lane would.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Hashable, Iterator
 from dataclasses import dataclass
 from functools import cached_property
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar, cast
 
 import numpy as np
 
@@ -29,6 +29,8 @@ from scenweave.spawn_db.lanes import (
     s_after_distance,
 )
 from scenweave.spawn_db.opendrive import OpenDriveMap, Road, RoadLink
+
+T = TypeVar("T")
 
 #: a neighbouring lane narrower than this somewhere in its section is not usable for a manoeuvre
 MIN_USABLE_WIDTH_M = 2.5
@@ -65,10 +67,10 @@ class Segment:
 class RoadNetwork:
     """An OpenDRIVE map with its lane graph."""
 
-    def __init__(self, odr: OpenDriveMap):
+    def __init__(self, odr: OpenDriveMap) -> None:
         self.map = odr
         #: per-network memo of derived facts (lane lengths, turns, neighbours, approaches)
-        self.memo: dict[tuple, object] = {}
+        self.memo: dict[tuple[str, Hashable], object] = {}
         self._next: dict[LaneKey, list[tuple[LaneKey, float]]] = {}
         self._previous: dict[LaneKey, list[tuple[LaneKey, float]]] = {}
         for key in self.drivable_lanes():
@@ -137,13 +139,20 @@ class RoadNetwork:
 
     def turn_angle(self, key: LaneKey) -> float:
         """Heading change (rad, left positive) traffic makes while driving this lane section."""
-        memo_key = ("turn", key)
-        if memo_key not in self.memo:
+        def turn() -> float:
             road = self.road(key.road_id)
             start = point_at(road, self.entry_s(key), 0.0, key.lane_id).h
             end = point_at(road, self.exit_s(key), 0.0, key.lane_id).h
-            self.memo[memo_key] = normalize_angle(end - start)
-        return self.memo[memo_key]
+            return normalize_angle(end - start)
+
+        return self.remembered("turn", key, turn)
+
+    def remembered(self, kind: str, key: Hashable, compute: Callable[[], T]) -> T:
+        """``compute()``'s answer for ``key``, computed once per network and ``kind``."""
+        memo_key = (kind, key)
+        if memo_key not in self.memo:
+            self.memo[memo_key] = compute()
+        return cast(T, self.memo[memo_key])  # one kind, one type: what compute() gave
 
     def segment_length(self, key: LaneKey, s_from: float, s_to: float) -> float:
         """Distance driven along the lane between two ``s`` of its section (whole ones cached)."""
@@ -151,10 +160,8 @@ class RoadNetwork:
         section = road.sections[key.section]
         if {s_from, s_to} != {section.s_start, section.s_end}:
             return lane_distance(road, section, key.lane_id, s_from, s_to)
-        memo_key = ("length", key)
-        if memo_key not in self.memo:
-            self.memo[memo_key] = lane_distance(road, section, key.lane_id, s_from, s_to)
-        return self.memo[memo_key]
+        return self.remembered(
+            "length", key, lambda: lane_distance(road, section, key.lane_id, s_from, s_to))
 
     def movement(self, key: LaneKey) -> str:
         """``straight``, ``left`` or ``right``: what driving this (junction) lane amounts to."""
@@ -169,10 +176,7 @@ class RoadNetwork:
         ``None`` when there is none, or when it is narrower than ``MIN_USABLE_WIDTH_M``
         somewhere in the section (a lane that opens or closes there).
         """
-        memo_key = ("neighbour", key, side)
-        if memo_key not in self.memo:
-            self.memo[memo_key] = self._find_neighbour(key, side)
-        return self.memo[memo_key]
+        return self.remembered("neighbour", (key, side), lambda: self._find_neighbour(key, side))
 
     def _find_neighbour(self, key: LaneKey, side: str) -> LaneKey | None:
         step = {"left": 1, "right": -1}[side] * (1 if key.lane_id < 0 else -1)
@@ -357,7 +361,7 @@ class RoadNetwork:
         return frozenset(r.id for r in self.map.roads.values() if r.in_junction)
 
 
-def _order(option: tuple[LaneKey, float]) -> tuple:
+def _order(option: tuple[LaneKey, float]) -> tuple[tuple[int, str], int, int]:
     key = option[0]
     return (_numeric(key.road_id), key.section, key.lane_id)
 

@@ -54,10 +54,7 @@ def is_traffic_light(signal: Signal) -> bool:
 
 def junction_approach(network: RoadNetwork, key: LaneKey) -> JunctionApproach | None:
     """The junction this lane section runs into, or ``None`` if it does not end at one."""
-    memo_key = ("approach", key)
-    if memo_key not in network.memo:
-        network.memo[memo_key] = _find_approach(network, key)
-    return network.memo[memo_key]
+    return network.remembered("approach", key, lambda: _find_approach(network, key))
 
 
 def _find_approach(network: RoadNetwork, key: LaneKey) -> JunctionApproach | None:

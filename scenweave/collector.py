@@ -51,7 +51,8 @@ class CollectResult:
         total, expected = self.summary.get("total", 0), self.expected
         counts = self.summary.get("counts") or {}
         statuses = ", ".join(f"{n} {s}" for s, n in counts.items())
-        waiting = f", {self.pending} still queued" if self.pending else ""
+        queued = self.pending - len(self.lost)
+        waiting = f", {queued} still queued" if queued else ""
         lost = (f", {len(self.lost)} no longer in the queue (submit the same --run-id again)"
                 if self.lost else "")
         report = (f" (open {self.folder.root / 'report.html'})"

@@ -45,8 +45,12 @@ def collect_run(run_dir: Path, connection: Any, wait: bool, timeout: float | Non
 def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None) -> None:
     """Write the scenario folders the workers handed back into RUN_DIR (atomically, once
     each), then its summary.json and, when every scenario is in, its report.html."""
+    from scenweave.run_folder import RUN_FILE
     from scenweave.worker import connect
 
+    if not (run_dir / RUN_FILE).is_file():
+        raise click.UsageError(f"{run_dir} is not a run folder (no {RUN_FILE}); give the "
+                               "folder scenweave submit printed, e.g. runs/<run_id>")
     result = collect_run(run_dir, connect(url), wait, timeout)
     click.echo(result.line())
     if result.lost or (wait and not result.complete):

@@ -113,7 +113,9 @@ def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
     ahead = gap >= 0
     lead, follower = (other, ego) if ahead else (ego, other)
     at_zero = abs(gap) - (lead.distance(start) - follower.distance(start))
-    closest = min_gap_m(lead, follower, at_zero, until, from_s=start)
+    # min_gap_m reads any profile's breakpoints and distances; its annotation names only
+    # SpeedProfile until corpus (being edited this round) types it with a Protocol
+    closest = min_gap_m(lead, follower, at_zero, until, from_s=start)  # type: ignore[arg-type]
     room = _clearance(kind, ahead)
     if closest < room - ROUNDING_M:
         when = "at the start" if until == start or closest >= abs(gap) - 1e-9 else \
@@ -126,12 +128,20 @@ def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
 
 
 def _recorded_gaps_never_overlap(params: dict, same_lane: SameLane) -> None:
-    """A mined record's own bumper gaps: a sample where the two overlap is no real motion."""
+    """A mined record's own bumper gaps: a car the class keeps in the ego's lane that is ever
+    side by side with the ego (gap 0) cannot be played without the two overlapping."""
     if not _present(params, same_lane):
         return
-    series = params["recorded_series"]
-    gaps = series.get(f"{same_lane.prefix}_gap_m") or []
-    for t, gap in zip(series["t"], gaps, strict=False):
-        if gap is not None and t is not None and gap == 0.0:
-            raise RecordIssue(f"the recorded gap is {gap:.2f} m at {t:.2f} s: the cars overlap",
-                              field=f"series.{same_lane.prefix}_gap_m")
+    series, prefix = params["recorded_series"], same_lane.prefix
+    gaps = series.get(f"{prefix}_gap_m") or []
+    lanes = zip(series.get(f"{prefix}_lane") or [None] * len(gaps),
+                series.get("ego_lane") or [None] * len(gaps), strict=False)
+    for t, gap, (lane, ego_lane) in zip(series["t"], gaps, lanes, strict=False):
+        # a gap of 0 is side by side: in one lane an overlap; beside it, the car left the
+        # ego's lane, which the class's scenario (the car keeps the ego's lane) cannot show
+        if gap == 0.0 and t is not None:
+            where = "" if None in (lane, ego_lane) else \
+                f" (recorded in lane {lane:g}, the ego in lane {ego_lane:g})"
+            raise RecordIssue(f"the car the class keeps in the ego's lane is side by side with "
+                              f"the ego at {t:.2f} s{where}: in one lane they would overlap",
+                              field=f"series.{prefix}_gap_m")

@@ -7,8 +7,8 @@ workers run the real agent on it (``--llm ollama --repair patch``; the stand-in 
 ``NO CHANGES``, so each scenario is the reference script, run in the real sandbox and
 validated), with a real ``redis-server`` on loopback and real ``scenweave submit`` and
 ``scenweave worker --workers N`` processes. The clock runs from the submit until the last
-scenario is committed and the report written (workers are started and idle beforehand, so
-their start-up is not counted).
+scenario is committed and the report written by ``submit --wait`` (workers are started and
+idle beforehand, so their start-up is not counted).
 
     .venv/bin/python benchmarks/workers.py [--latency-ms 1000] [--per-class 4] [--workers 1,2,4]
 """
@@ -57,13 +57,11 @@ def measure(count: int, url: str, llm: FakeOllama, data: Path, out: Path, env: d
         started = time.perf_counter()
         subprocess.run([*CLI, "submit", str(data), "--out", str(out), "--queue", url,
                         "--run-id", run_id, "--classes", ",".join(CLASSES), "--llm", "ollama",
-                        "--ollama-host", llm.url, "--repair", "patch", "--sandbox", sandbox],
-                       env=env, check=True, stdout=subprocess.DEVNULL)
+                        "--ollama-host", llm.url, "--repair", "patch", "--sandbox", sandbox,
+                        "--wait"], env=env, check=True, stdout=subprocess.DEVNULL)
+        elapsed = time.perf_counter() - started
         run = out / run_id
         expected = json.loads((run / "run.json").read_text())["scenarios"]
-        while len(list(run.glob("*/status.json"))) < expected or not (run / "report.html").exists():
-            time.sleep(0.05)
-        elapsed = time.perf_counter() - started
     finally:
         workers.send_signal(signal.SIGTERM)
         workers.wait(timeout=60)

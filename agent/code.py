@@ -145,7 +145,7 @@ def _scenario_minor_version(code: str) -> tuple[str, bool]:
     for node in ast.walk(tree):
         if (isinstance(node, ast.Call) and _dotted(node.func) in ("xosc.Scenario", "Scenario")
                 and not any(k.arg == "osc_minor_version" for k in node.keywords)
-                and node.end_lineno is not None):
+                and node.end_lineno is not None and node.end_col_offset is not None):
             inserts.append((node.end_lineno - 1, node.end_col_offset - 1))
     for line_no, col in sorted(inserts, reverse=True):
         line = lines[line_no]

@@ -222,7 +222,8 @@ def parse_edits(text: str) -> list[dict]:
 
 
 def _complete_edits(text: str) -> list[dict]:
-    decoder, edits, at = json.JSONDecoder(), [], text.find(EDIT_START)
+    decoder, at = json.JSONDecoder(), text.find(EDIT_START)
+    edits: list[dict] = []
     while at != -1:
         try:
             edit, end = decoder.raw_decode(text, at)

@@ -37,7 +37,7 @@ def after_validate(state: AgentState, runtime: Runtime[AgentContext]) -> Literal
         "repair", "fallback", "__end__"]:
     """Valid: done. Invalid (including a changed number): repair or fall back."""
     if state.get("final"):
-        return END
+        return "__end__"  # langgraph's END, as the literal this router's type names
     return _retry_or_fallback(state, runtime.context)
 
 
@@ -46,7 +46,7 @@ def _retry_or_fallback(state: AgentState, ctx: AgentContext) -> Literal["repair"
 
 
 
-def build_graph() -> StateGraph:
+def build_graph() -> StateGraph[AgentState, AgentContext, AgentState, AgentState]:
     """The agent's graph, not yet compiled (compile with a checkpointer to run it)."""
     graph = StateGraph(AgentState, context_schema=AgentContext)
     graph.add_node(retrieve)

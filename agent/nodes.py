@@ -7,7 +7,7 @@ import shutil
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from langgraph.runtime import Runtime
 
@@ -27,7 +27,15 @@ REPLAY_LEAD = ("The file is valid, but played in the esmini OpenSCENARIO engine 
 NodeBody = Callable[[AgentState, AgentContext], tuple[dict, dict]]
 
 
-def node(body: NodeBody) -> Callable[[AgentState, Runtime[AgentContext]], dict]:
+class GraphNode(Protocol):
+    """A node as langgraph calls it: the state, and the runtime by keyword."""
+
+    __name__: str
+
+    def __call__(self, state: AgentState, runtime: Runtime[AgentContext]) -> dict: ...
+
+
+def node(body: NodeBody) -> GraphNode:
     """Make ``body`` a graph node of the same name: timed, and traced with its event."""
 
     def run(state: AgentState, runtime: Runtime[AgentContext]) -> dict:
@@ -73,7 +81,7 @@ def repair(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 def execute(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Run the attempt's code in the sandbox (after a compile-only check on the host), given
     only the record's provenance: the values are the ones the LLM wrote in."""
-    attempt = dict(state["attempts"][-1])
+    attempt = state["attempts"][-1].copy()
     if attempt.get("error") is None:
         problem = static_check(attempt.get("code", ""))
         if problem is not None:
@@ -92,7 +100,7 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     and (with replay settings) what it does when played; a replay failure is repairable."""
     from scenweave.schemas import validate_xosc
 
-    attempt = dict(state["attempts"][-1])
+    attempt = state["attempts"][-1].copy()
     out_dir = Path(state["out_dir"])
     produced = out_dir / ATTEMPTS_DIR / str(attempt["number"]) / XOSC_NAME
     result = validate_xosc(produced, state["params"], replay=ctx.settings.replay)
@@ -127,8 +135,8 @@ def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     try:
         corpus.generate(state["params"], xosc)
     except Exception as err:  # noqa: BLE001 - a params problem fails this scenario only
-        final = {"status": "failed", "attempt": None, "validation": None,
-                 "error": f"{type(err).__name__}: {err}"}
+        final: dict[str, Any] = {"status": "failed", "attempt": None, "validation": None,
+                                 "error": f"{type(err).__name__}: {err}"}
         return {"final": final}, {"script": reference.get("name"), **final}
     (out_dir / CODE_NAME).write_text(reference.get("source", ""), encoding="utf-8")
     result = validate_xosc(xosc, state["params"], replay=ctx.settings.replay)
@@ -171,7 +179,7 @@ def _adapted(reference: dict) -> str:
     return reference.get("example") or reference["source"]
 
 
-def _describe(candidate: Candidate, reference: dict) -> dict:
+def _describe(candidate: Candidate, reference: dict) -> Attempt:
     prompt, reply = candidate.prompt, candidate.reply
     return {
         "prompt": {"system": prompt.system, "user": prompt.user} if prompt else None,
@@ -187,7 +195,7 @@ def _describe(candidate: Candidate, reference: dict) -> dict:
     }
 
 
-def _run_in_sandbox(attempt: dict, state: AgentState, ctx: AgentContext) -> None:
+def _run_in_sandbox(attempt: Attempt, state: AgentState, ctx: AgentContext) -> None:
     from scenweave.corpus.worked_example import provenance
 
     out_dir = Path(state["out_dir"])
@@ -205,12 +213,12 @@ def _run_in_sandbox(attempt: dict, state: AgentState, ctx: AgentContext) -> None
                         "message": f"generate() returned but wrote no {XOSC_NAME}"})
 
 
-def _fail(attempt: dict, error: dict, taxonomy: str | None = None) -> None:
+def _fail(attempt: Attempt, error: dict, taxonomy: str | None = None) -> None:
     attempt["error"] = {k: v for k, v in error.items() if v is not None}
     attempt["taxonomy"] = taxonomy or classify_exception(error.get("type"), error.get("message"))
 
 
-def _replace_last(state: AgentState, attempt: dict) -> list:
+def _replace_last(state: AgentState, attempt: Attempt) -> list[Attempt]:
     return [*state["attempts"][:-1], attempt]
 
 

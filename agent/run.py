@@ -16,15 +16,19 @@ from collections import Counter
 from contextlib import closing, suppress
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from scenweave.agent.context import AgentContext
 from scenweave.agent.graph import build_graph
 from scenweave.agent.llm import LLM, get_llm
 from scenweave.agent.repair import get_strategy
 from scenweave.agent.settings import AgentSettings
+from scenweave.agent.state import AgentState
 from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
 from scenweave.sandbox import Sandbox, get_sandbox
+
+if TYPE_CHECKING:
+    from langchain_core.runnables import RunnableConfig
 
 #: graph steps allowed per scenario: retrieve + (generate|repair, execute, validate) x attempts
 #: + fallback, with room to spare
@@ -67,14 +71,14 @@ def run_scenario(params: dict, out_dir: Path, settings: AgentSettings,
                            sandbox=shared_sandbox(settings),
                            strategy=get_strategy(settings.repair),
                            trace=trace or Trace(out_dir / TRACE_NAME))
-    thread = {"configurable": {"thread_id": params["scenario_id"]},
+    thread: RunnableConfig = {"configurable": {"thread_id": params["scenario_id"]},
               "recursion_limit": 4 + STEPS_PER_ATTEMPT * settings.max_attempts + 2}
     with closing(sqlite3.connect(out_dir / CHECKPOINTS_NAME, check_same_thread=False)) as db:
         from langgraph.checkpoint.sqlite import SqliteSaver
 
         graph = build_graph().compile(checkpointer=SqliteSaver(db))
-        state = graph.invoke({"params": params, "out_dir": str(out_dir)}, thread,
-                             context=context)
+        start: AgentState = {"params": params, "out_dir": str(out_dir)}
+        state = graph.invoke(start, thread, context=context)
     return outcome_of(state, settings)
 
 

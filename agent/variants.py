@@ -54,7 +54,7 @@ from scenweave.corpus.corpus_utils import known_type
 from scenweave.corpus.worked_example import provenance, worked_example
 from scenweave.errors import ScenarioError
 from scenweave.ingest.extract import with_vehicle_type
-from scenweave.player import REPLAY_NAME
+from scenweave.player import REPLAY_NAME, Playback
 from scenweave.schemas.variation import ASPECTS, compare
 from scenweave.spawn_db.errors import SpawnDbError
 
@@ -205,7 +205,7 @@ def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:
     weather = ScenarioDoc(etree.parse(str(scenario))).weather_name
     result = validate_xosc(scenario, {**params, "weather_key": weather or params["weather_key"]},
                            replay=replay)
-    if result.playback is not None:  # what it played, beside it (replay.json)
+    if isinstance(result.playback, Playback):  # what it played, beside it (replay.json)
         result.playback.write(scenario.with_name(REPLAY_NAME))
     return [f"{f.code}: {f.message}" for f in result.errors if f.severity == "error"]
 

@@ -7,7 +7,8 @@ from functools import cache
 from pathlib import Path
 
 CODES_PATH = Path(__file__).resolve().parent.parent / "schemas" / "adscene_codes.json"
-TRAFFIC_LIGHT_STATES = {167: "green", 170: "orange", 172: "red"}
+#: records give codes as numbers (167 or 167.0)
+TRAFFIC_LIGHT_STATES: dict[float, str] = {167: "green", 170: "orange", 172: "red"}
 
 
 @cache

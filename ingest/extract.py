@@ -49,6 +49,8 @@ def _extract_highway(record: dict) -> dict:
     if maneuver is None or maneuver.domain != "highway":
         raise RecordIssue(f"unknown highway class {code!r} (known: "
                           f"{', '.join(maneuvers.codes('highway'))})", field="maneuver_class")
+    if maneuver.extract is None:  # never: Maneuver requires one of a highway class
+        raise RecordIssue(f"class {code!r} has no extract function", field="maneuver_class")
     raw = record["params"]
     conventions = record_conventions(record)
     base = {

@@ -58,7 +58,7 @@ def check_record(record: dict) -> None:
     try:
         _compiled(domain, tuple(maneuvers.codes(domain)))(record)
     except fastjsonschema.JsonSchemaValueException as err:
-        field = err.name.removeprefix("data.").removeprefix("data") or None
+        field = (err.name or "").removeprefix("data.").removeprefix("data") or None
         raise RecordIssue(f"record breaks {schema_name(record)}.schema.json: {err.message}",
                           field=field) from err
 

@@ -269,15 +269,21 @@ def _frames(scene: dict, notes: list[RecordIssue]) -> list[dict]:
 
 # -- the parts of the record -------------------------------------------------------------------
 
+def _record_part(segment: dict) -> dict:
+    """The segment's ``record`` object (who recorded it, when), empty when it has none."""
+    record = segment.get("record")
+    return record if isinstance(record, dict) else {}
+
+
 def _scenario_id(code: str, segment: dict, source: str) -> str:
-    record = segment.get("record") if isinstance(segment.get("record"), dict) else {}
+    record = _record_part(segment)
     stamp = re.sub(r"[^0-9T]", "", str(record.get("date_time", "")))[:15] or "undated"
     stem = Path(source).stem.replace(".", "p")
     return f"{code}_{stamp}_{stem}"
 
 
 def _metadata(segment: dict, source: str, times: list[float], scene: dict) -> dict:
-    record = segment.get("record") if isinstance(segment.get("record"), dict) else {}
+    record = _record_part(segment)
     steps = [b - a for a, b in zip(times, times[1:], strict=False)]
     median = statistics.median(steps)
     regular = max(abs(s - median) for s in steps) <= REGULAR_STEP_TOLERANCE * median
@@ -372,9 +378,9 @@ def _element_value(element: dict, kind: str, where: str) -> float:
     value = element.get("value")
     if kind in ELEMENT_CODE_TABLES and isinstance(value, str):
         code = _code_of(value, ELEMENT_CODE_TABLES[kind])
-        if code is not None and not value.strip().lstrip("-").isdigit():
-            _NOTES.get().append(RecordIssue(f"{value!r} read as code {code}",
-                                            field=f"{where}.value"))
+        notes = _NOTES.get()
+        if code is not None and not value.strip().lstrip("-").isdigit() and notes is not None:
+            notes.append(RecordIssue(f"{value!r} read as code {code}", field=f"{where}.value"))
             element["value"] = code
     try:
         value = _get(element, "value", float, where)

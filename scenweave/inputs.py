@@ -59,7 +59,7 @@ def is_raw(data: Path) -> bool:
 def load_input(data: Path, selection: InputSelection) -> LoadedInput:
     """Read ``data`` and return the selected params (variants included) and input issues."""
     loaded = LoadedInput(kind="raw" if is_raw(data) else "canonical")
-    counts: dict[str, int] = {}
+    counts: dict[str | None, int] = {}
     for record, file in _records(data, loaded, selection):
         code = record.get("maneuver_class")
         if selection.classes and code not in selection.classes:

@@ -67,8 +67,8 @@ class EmbeddedLLM(LLM):
     def __init__(self, settings: AgentSettings) -> None:
         super().__init__(settings.model_name)
         self.settings = settings
-        named = settings.model and settings.model != DEFAULT_MODELS["embedded"]
-        self.path = Path(settings.model) if named else None
+        named = settings.model if settings.model != DEFAULT_MODELS["embedded"] else None
+        self.path = Path(named) if named else None
 
     def check(self) -> None:
         self._llama()

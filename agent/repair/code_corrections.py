@@ -102,13 +102,15 @@ def closest_attribute(owner: object, wrong: str, then: str | None = None) -> str
     names = [n for n in dir(owner) if not n.startswith("_")]
     close = difflib.get_close_matches(wrong, names, n=5, cutoff=0.6)
     fitting = [n for n in close if then and hasattr(getattr(owner, n, None), then)]
-    return (fitting or close or [None])[0]
+    found = fitting or close
+    return found[0] if found else None
 
 
 def fix_attribute(code: str, message: str, allowed: tuple[str, ...]) -> str:
     """``owner.wrong`` replaced by the closest real attribute, for ``module 'm' has no
     attribute`` (owner: the module's last name, e.g. ``xosc``) and ``type object 'C' has no
     attribute`` (owner: the class, looked up in the allowed modules)."""
+    owner: ModuleType | type | None
     if match := MISSING_MODULE_ATTR.search(message):
         module_name, wrong = match.groups()
         owner, prefix = allowed_module(module_name, allowed), module_name.rsplit(".", 1)[-1]

@@ -25,9 +25,11 @@ def write_highway_samples(out_dir: Path, seed: int, per_class: int,
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for offset, layout in enumerate(_seeding_order(layouts)):
-        code = layout.code
+        code, sample = layout.code, layout.maneuver.sample
+        if sample is None:  # a (plugin) class without a generator has no sample data
+            continue
         rng = np.random.default_rng([seed, offset])
-        columns = layout.maneuver.sample(rng, per_class, code)
+        columns = sample(rng, per_class, code)
         rows = per_class
         if phased and layout.maneuver.sample_phased is not None:
             extra = layout.maneuver.sample_phased(np.random.default_rng([seed, offset, 1]),

@@ -25,8 +25,11 @@ def collect_run(run_dir: Path, connection: Any, wait: bool, timeout: float | Non
 
     with tqdm(desc="collected", unit="scenario", leave=False,
               disable=not (wait and sys.stderr.isatty())) as bar:
-        result = collect(run_dir, connection, wait=wait, timeout_s=timeout,
-                         on_commit=bar.update)
+
+        def count(committed: int) -> None:
+            bar.update(committed)
+
+        result = collect(run_dir, connection, wait=wait, timeout_s=timeout, on_commit=count)
     for note in result.notes:
         click.echo(f"collect: {note}", err=True)
     for scenario_id in result.lost:

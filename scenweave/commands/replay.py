@@ -79,7 +79,7 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     its folder's params.json when there is one. A file that fails the static or parameter
     checks is not played, unless ``force``: then it is played and judged all the same, and
     ``forced`` names the checks it fails."""
-    from scenweave.player import REPLAY_NAME, replay_file
+    from scenweave.player import REPLAY_NAME, Playback, replay_file
     from scenweave.schemas import validate_xosc
     from scenweave.schemas.findings import Finding
     from scenweave.schemas.replay import judge_collisions_only
@@ -88,8 +88,9 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     if params_path.is_file():
         params = json.loads(params_path.read_text(encoding="utf-8"))
         result = validate_xosc(xosc, params, fix=False, replay=settings, map_path=map_path)
-        playback, findings = result.playback, [f for f in result.errors
-                                               if f.severity == "error"]
+        # schemas keeps the playback duck-typed (it does not import the player)
+        played = result.playback if isinstance(result.playback, Playback) else None
+        playback, findings = played, [f for f in result.errors if f.severity == "error"]
         forced = sorted({f.code for f in findings}) if force and playback is None else []
         if forced:
             playback, judged = _forced_replay(xosc, params, settings, map_path)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -50,7 +51,7 @@ from scenweave.runner import run_batch
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: tuple[str, ...],
         per_class: int | None, limit: int | None, variants: int, seed: int, vary: int,
         layout: Path | None, top_n: int, retry_failed: bool, jobs: int, as_json: bool,
-        **agent: object) -> None:
+        **agent: Any) -> None:
     """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios.
 
     By default (--llm auto) the agent has the Ollama server adapt each reference script when

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -34,7 +35,7 @@ def _delays(text: str) -> tuple[int, ...]:
 
 def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, matcher: str,
             max_artefact_mb: float, wait: bool, timeout: float | None, as_json: bool,
-            no_llm: bool, top_n: int, **selection_and_run: object) -> None:
+            no_llm: bool, top_n: int, **selection_and_run: Any) -> None:
     """Enqueue one job per scenario of DATA; workers (``scenweave worker``, on any machine
     that reaches the queue) make them and hand each folder back through the queue; --wait (or
     ``scenweave collect RUN_DIR`` later) writes them into the run folder."""

@@ -18,7 +18,7 @@ from scenweave.agent.repair.base import Candidate, Request
 from scenweave.agent.state import AgentState, Attempt
 from scenweave.agent.taxonomy import classify_exception
 from scenweave.agent.trace import CODE_NAME, XOSC_NAME
-from scenweave.schemas.findings import failure_category
+from scenweave.judge.findings import failure_category
 
 ATTEMPTS_DIR = "attempts"
 #: how a replay failure is put to the LLM: what the engine showed against what the record says
@@ -98,7 +98,7 @@ def execute(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Check the attempt's file: XSD, Table 5.8, semantics, parameter fidelity, CARLA lint,
     and (with replay settings) what it does when played; a replay failure is repairable."""
-    from scenweave.schemas import validate_xosc
+    from scenweave.judge import validate_xosc
 
     attempt = state["attempts"][-1].copy()
     out_dir = Path(state["out_dir"])
@@ -127,7 +127,7 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
 def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     """Out of attempts: run the reference script directly (trusted code, in-process)."""
     from scenweave import corpus
-    from scenweave.schemas import validate_xosc
+    from scenweave.judge import validate_xosc
 
     out_dir = Path(state["out_dir"])
     xosc = out_dir / XOSC_NAME

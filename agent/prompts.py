@@ -136,7 +136,7 @@ VARIANT_CONSTRAINTS = ("Every number of the manoeuvre stays as it is: speeds, di
 VARIANT_EDIT_FORMAT = f"""JSON, one edit per line to change:
 {EDIT_EXAMPLE}
 A "replace" may hold several lines (joined by \\n) to add lines after the one searched."""
-#: what each aspect of a variant asks for (schemas.variation.ASPECTS)
+#: what each aspect of a variant asks for (judge.variation.ASPECTS)
 VARIANT_CHANGES = {
     "weather": ("Change only the weather and time of day: set the \"weather_key\" value to "
                 "another of Day_Clear, Day_Cloudy, Day_Rain, Day_Fog, Night_Clear, Night_Rain, "

@@ -1,11 +1,11 @@
 """Variants of a delivered scenario (``scenweave run --vary N``): the LLM rewrites the final
 script changing one thing the record does not fix (weather and time of day, a vehicle model,
-background traffic, the lane; ``schemas.variation.ASPECTS`` in turn), and a variant is kept
+background traffic, the lane; ``judge.variation.ASPECTS`` in turn), and a variant is kept
 only when
 
 - it runs in the sandbox, given only the record's provenance (``scenario_id``): every value
   is written into the script;
-- it changes what it may and nothing the record fixes (``schemas.variation.compare``);
+- it changes what it may and nothing the record fixes (``judge.variation.compare``);
 - it is valid and still plays the recorded manoeuvre (``validate_xosc`` with the replay,
   against the record's params as the variant was asked to change them, with its own weather);
 - no kept variant of the record is the same file.
@@ -54,8 +54,8 @@ from scenweave.corpus.corpus_utils import known_type
 from scenweave.corpus.worked_example import provenance, worked_example
 from scenweave.errors import ScenarioError
 from scenweave.ingest.extract import with_vehicle_type
+from scenweave.judge.variation import ASPECTS, compare
 from scenweave.player import REPLAY_NAME, Playback
-from scenweave.schemas.variation import ASPECTS, compare
 from scenweave.spawn_db.errors import SpawnDbError
 
 VARIANTS_DIR = "variants"
@@ -199,8 +199,8 @@ def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:
     one value the record fixes that a variant may change)."""
     from lxml import etree
 
-    from scenweave.schemas import validate_xosc
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge import validate_xosc
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     weather = ScenarioDoc(etree.parse(str(scenario))).weather_name
     result = validate_xosc(scenario, {**params, "weather_key": weather or params["weather_key"]},

@@ -10,7 +10,7 @@ Three sources, each turned into scenarios by the reference scripts and played in
 
 For each it prints: records in (events mined, or sample rows), refused (by mining or by the
 run, with reasons), ok scenarios, the share of ok scenarios with a recorded series that stay
-within the series tolerances at every sample (``schemas.replay``: speed 0.75 m/s, gap change
+within the series tolerances at every sample (``judge.replay``: speed 0.75 m/s, gap change
 1 m, lane change start/end 0.3 s), and the median and p90 of each scenario's worst speed and
 gap-change error. Targets (issue 22): refusals <= 2 % of the events, >= 95 % of the ok mined
 scenarios within tolerance, the sample data 100 % ok.
@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
-from scenweave.schemas.replay import (
+from scenweave.judge.replay import (
     SERIES_GAP_TOL_M,
     SERIES_LANE_CHANGE_TOL_S,
     SERIES_SPEED_TOL_MS,

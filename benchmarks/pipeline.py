@@ -54,7 +54,7 @@ def measure(raw: Path, out: Path) -> dict:
 
 def quality_check(run_dir: Path) -> tuple[int, int]:
     """Files checked and issues the ASAM quality checker reports over a run."""
-    from scenweave.schemas import run_asam_qc
+    from scenweave.judge import run_asam_qc
 
     files = sorted(run_dir.glob("*/scenario.xosc"))
     return len(files), sum(len(run_asam_qc(path)) for path in files)

@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-VARY = 4  # weather, vehicles, traffic, lane: one round of scenweave.schemas.variation.ASPECTS
+VARY = 4  # weather, vehicles, traffic, lane: one round of scenweave.judge.variation.ASPECTS
 
 
 def fenced(code: str) -> str:

@@ -32,7 +32,7 @@ DISTANCE_TOL_M = 0.5
 #: absorbs the player's step and lanes of different length on curves
 GAP_FIT_TOL_M = 0.3
 #: a begin/end record's end gap, played by one ramp, may be off this much (m): the replay's
-#: gap tolerance (``schemas.replay.GAP_TOL_M``)
+#: gap tolerance (``judge.replay.GAP_TOL_M``)
 END_GAP_TOL_M = 1.0
 #: a phase changing the speed less than this is no phase (m/s)
 NO_CHANGE_MS = 1e-3

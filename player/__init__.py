@@ -7,7 +7,7 @@ Public API:
 - ``find_esmini()`` -> ``EsminiInstall`` (library, version, where it was found) or
   ``PlayerUnavailable``; ``player_status()`` for ``scenweave doctor``;
 - ``Playback`` (``replay.json``), ``ReplaySettings``; errors under ``PlayerError``.
-Judging a playback against the record lives with the other checks (``schemas.replay``).
+Judging a playback against the record lives with the other checks (``judge.replay``).
 """
 
 from __future__ import annotations

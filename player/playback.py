@@ -69,7 +69,7 @@ class Playback:
     quit_by_engine: bool = False
     log: list[str] = field(default_factory=list)
     timings_s: dict[str, float] = field(default_factory=dict)
-    #: the judge's comparison with a record's series (``schemas.replay``): per "<entity>
+    #: the judge's comparison with a record's series (``judge.replay``): per "<entity>
     #: <quantity>", the max and RMS error over the recorded samples; empty without series
     series_errors: dict[str, dict] = field(default_factory=dict)
 

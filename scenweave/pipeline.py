@@ -97,7 +97,7 @@ def write_playback(result: Any, out_dir: Path) -> None:
 def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
                         timings: dict, trace: Trace) -> dict:
     from scenweave import corpus
-    from scenweave.schemas import failure_category, validate_xosc
+    from scenweave.judge import failure_category, validate_xosc
 
     retrieval = _timed(timings, "retrieve", lambda: corpus.retrieve(params))
     trace.event("retrieve", script=retrieval.script_path.name, method=retrieval.method)

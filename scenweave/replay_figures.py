@@ -8,7 +8,7 @@
   reached (diamond, at start + duration), the bars the judge's tolerance; the manoeuvre window
   (``maneuver_start_s`` .. + ``duration_s``) shaded;
 - bottom left, highway: every other vehicle's gap to the ego along its lane
-  (``schemas.replay.gap_along_lane``, sampled every ``GAP_STEP_S`` or coarser on long replays)
+  (``judge.replay.gap_along_lane``, sampled every ``GAP_STEP_S`` or coarser on long replays)
   with the record's gaps marked (``*_distance_m`` at the manoeuvre start, FL also
   ``npc_distance_end_m`` at its end); urban: the distance the ego drove against the stop line,
   the traffic light's colour behind it and the lead's gap if there is one;
@@ -40,10 +40,10 @@ import numpy as np
 
 from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.files.atomic import write_bytes_atomic
+from scenweave.judge.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.run_folder import RECORDED_NAME
 from scenweave.schemas.params import number as number_of
-from scenweave.schemas.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 
 FIGURE_NAME = "replay.png"
 #: the PNG text chunk naming what the figure shows (``figure_source``)
@@ -258,7 +258,7 @@ def _read_json(path: Path) -> dict:
 def _scenario_doc(path: Path) -> Any:
     from lxml import etree
 
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     try:
         return ScenarioDoc(etree.parse(str(path)))
@@ -355,7 +355,7 @@ def _caption(figure: Any, facts: _Facts, series_errors: dict | None = None) -> N
             shown[-1] = f"… and {len(findings) - MAX_CAPTION_LINES + 1} more findings " \
                         "(status.json)"
         text = "\n".join(shown)
-    if series_errors:  # the whole record, sample by sample (schemas.replay)
+    if series_errors:  # the whole record, sample by sample (judge.replay)
         text += ("\n" if text else "") + "against the recorded series: " + "; ".join(
             f"{name} max {e['max']:.2f} / RMS {e['rms']:.2f}" for name, e in series_errors.items())
     figure.text(0.01, 0.1, text, va="top", ha="left", fontsize=7.5,
@@ -376,7 +376,7 @@ def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from scenweave.schemas.fidelity import placed_actors
+    from scenweave.judge.fidelity import placed_actors
 
     start, duration = facts.number("maneuver_start_s"), facts.number("duration_s")
     handles = []
@@ -408,7 +408,7 @@ def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str
 
 def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, target speed, when it should be reached) of every scripted speed change."""
-    from scenweave.schemas.fidelity import expected_speed_changes
+    from scenweave.judge.fidelity import expected_speed_changes
 
     changes = []
     if facts.doc is not None:
@@ -472,7 +472,7 @@ def _gaps(playback: Playback, entity: str, times: list[float], map_path: Any) ->
 
 def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, gap, time) of every gap the record has, as the judge compares them."""
-    from scenweave.schemas.fidelity import class_of, placed_actors
+    from scenweave.judge.fidelity import class_of, placed_actors
 
     start = facts.number("maneuver_start_s")
     if start is None:
@@ -519,7 +519,7 @@ def _gap_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, 
 # --- distance vs stop line (urban) -----------------------------------------------------------
 
 def _driven(playback: Playback, entity: str) -> np.ndarray:
-    """Metres driven from t = 0 at every sample (the trapezoid ``schemas.replay.travelled``
+    """Metres driven from t = 0 at every sample (the trapezoid ``judge.replay.travelled``
     sums, kept for every step)."""
     speeds, times = np.asarray(playback.tracks[entity]["speed"]), np.asarray(playback.times)
     steps = (speeds[1:] + speeds[:-1]) / 2 * np.diff(times)

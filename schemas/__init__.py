@@ -1,4 +1,6 @@
-"""Schemas and validation: column layouts, JSON Schemas, the OpenSCENARIO XSD, validate_xosc."""
+"""The contracts between the stages: column layouts (``highway_layouts.json``), the records'
+JSON Schemas, the params contract (``params``), the ADScene code tables and the OpenSCENARIO
+1.0 XSD (``xsd``). Judging a scenario against them is ``scenweave.judge``'s."""
 
 from __future__ import annotations
 
@@ -7,12 +9,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from scenweave.schemas.findings import Finding, ValidationResult, failure_category
-from scenweave.schemas.qc import run_asam_qc
-from scenweave.schemas.validate_xosc import validate_tree, validate_xosc
-
-__all__ = ["Finding", "ValidationResult", "failure_category", "load_json_schema", "run_asam_qc",
-           "validate_tree", "validate_xosc"]
+__all__ = ["load_json_schema"]
 
 SCHEMAS_DIR = Path(__file__).resolve().parent
 

@@ -79,7 +79,7 @@ class Params(TypedDict, total=False):
     ego_phases: list[PhaseRecord]
     npc_phases: list[PhaseRecord]
     #: what a mined record recorded at every sample (t from the manoeuvre start; speeds,
-    #: gaps...): the replay is compared with it (schemas.replay)
+    #: gaps...): the replay is compared with it (judge.replay)
     recorded_series: dict[str, list[float | None]]
 
     # -- urban -----------------------------------------------------------------------------

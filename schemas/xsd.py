@@ -9,7 +9,6 @@ from pathlib import Path
 from lxml import etree
 
 from scenweave.errors import InfrastructureError
-from scenweave.schemas.findings import Finding
 
 
 class SchemaUnavailable(InfrastructureError, RuntimeError):
@@ -34,10 +33,3 @@ def osc_1_0_schema() -> etree.XMLSchema:
     """The parsed schema, loaded once per process."""
     return etree.XMLSchema(etree.parse(str(xsd_path())))
 
-
-def xsd_findings(tree: etree._ElementTree) -> list[Finding]:
-    """One XSD_INVALID finding per schema violation, with its line."""
-    schema = osc_1_0_schema()
-    if schema.validate(tree):
-        return []
-    return [Finding("XSD_INVALID", e.message, "error", e.line) for e in schema.error_log]

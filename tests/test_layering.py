@@ -10,7 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
-BOTTOM = ("corpus", "sandbox", "schemas", "spawn_db", "player", "maneuvers", "files",
+BOTTOM = ("corpus", "sandbox", "schemas", "judge", "spawn_db", "player", "maneuvers", "files",
           "errors")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)

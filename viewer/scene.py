@@ -8,7 +8,7 @@ the rest adds the record's values, the judge's tolerance bands and its findings.
 
 Everything is plain JSON: lanes are polylines sampled from the OpenDRIVE map by ``spawn_db``
 (the one reader of the map), gaps are the judge's own measurement (``gap_along_lane``) and
-the findings are the judge's, run again on the playback (``schemas.replay.judge_replay``), so
+the findings are the judge's, run again on the playback (``judge.replay.judge_replay``), so
 a file played with ``scenweave replay --force`` shows them too.
 """
 
@@ -24,9 +24,7 @@ from typing import Any
 import numpy as np
 
 from scenweave.corpus.corpus_utils import reference_gap_m
-from scenweave.player import REPLAY_NAME, Playback
-from scenweave.schemas.params import number
-from scenweave.schemas.replay import (
+from scenweave.judge.replay import (
     GAP_TOL_M,
     LANE_CHANGE_TOL_S,
     SERIES_GAP_TOL_M,
@@ -36,6 +34,8 @@ from scenweave.schemas.replay import (
     judge_replay,
     light_state,
 )
+from scenweave.player import REPLAY_NAME, Playback
+from scenweave.schemas.params import number
 from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
 
 EGO = "hero"
@@ -171,7 +171,7 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
 def _charts(playback: Playback, params: dict, folder: Path, map_path: Path | None) -> dict:
     """Speed, gap, lateral offset and lane, light state: the replay's series, the record's
     values with the judge's tolerance, and the mined record's own series where there is one."""
-    from scenweave.schemas.fidelity import placed_actors
+    from scenweave.judge.fidelity import placed_actors
 
     recorded = _recorded(folder, params)
     speed_marks = [{"entity": entity, "t": 0.0, "value": value, "tol": SPEED_TOL_MS,
@@ -226,8 +226,8 @@ def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]
     """(entity, target speed, when it should be reached) of each scripted speed change."""
     from lxml import etree
 
-    from scenweave.schemas.fidelity import expected_speed_changes
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge.fidelity import expected_speed_changes
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     if not params:
         return []
@@ -257,7 +257,7 @@ def _recorded(folder: Path, params: dict) -> dict:
 def _gap_chart(playback: Playback, params: dict, recorded: dict,
                map_path: Path | None) -> dict:
     """Every other vehicle's gap to the ego along its lane (highway; the judge's measure)."""
-    from scenweave.schemas.fidelity import class_of, placed_actors
+    from scenweave.judge.fidelity import class_of, placed_actors
 
     others = [e for e in playback.entities if e != EGO]
     if not others or EGO not in playback.tracks:
@@ -297,7 +297,7 @@ def _findings(playback: Playback, params: dict, folder: Path, map_path: Path | N
     """The judge's REPLAY_* findings on this playback, each with its time where it has one."""
     from lxml import etree
 
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     if params and (folder / XOSC_NAME).is_file():
         try:

@@ -148,7 +148,7 @@ def _map_of(xosc: Path) -> Path | None:
 
     from lxml import etree
 
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     params_path = xosc.parent / "params.json"
     named = json.loads(params_path.read_text(encoding="utf-8")).get("map") \

@@ -79,10 +79,10 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     its folder's params.json when there is one. A file that fails the static or parameter
     checks is not played, unless ``force``: then it is played and judged all the same, and
     ``forced`` names the checks it fails."""
+    from scenweave.judge import validate_xosc
+    from scenweave.judge.findings import Finding
+    from scenweave.judge.replay import judge_collisions_only
     from scenweave.player import REPLAY_NAME, Playback, replay_file
-    from scenweave.schemas import validate_xosc
-    from scenweave.schemas.findings import Finding
-    from scenweave.schemas.replay import judge_collisions_only
 
     params_path = xosc.parent / "params.json"
     if params_path.is_file():
@@ -119,10 +119,10 @@ def _forced_replay(xosc: Path, params: dict, settings, map_path: Path | None) ->
     findings (a REPLAY_MAP finding when no map is named)."""
     from lxml import etree
 
+    from scenweave.judge.findings import Finding
+    from scenweave.judge.replay import judge_replay
+    from scenweave.judge.scenario_doc import ScenarioDoc
     from scenweave.player import replay_file
-    from scenweave.schemas.findings import Finding
-    from scenweave.schemas.replay import judge_replay
-    from scenweave.schemas.scenario_doc import ScenarioDoc
 
     doc = ScenarioDoc(etree.parse(str(xosc)), params.get("map"))
     map_path = map_path or doc.map_path
@@ -137,7 +137,7 @@ def _named_map(xosc: Path) -> Path | None:
     """The map the scenario's ``LogicFile`` names (None: no known map, or unreadable)."""
     from lxml import etree
 
-    from scenweave.schemas.scenario_doc import ScenarioDoc
+    from scenweave.judge.scenario_doc import ScenarioDoc
 
     try:
         return ScenarioDoc(etree.parse(str(xosc))).map_path

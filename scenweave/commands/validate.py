@@ -9,7 +9,7 @@ import click
 
 from scenweave import exit_codes
 from scenweave.commands.agent_options import json_option
-from scenweave.schemas import validate_xosc
+from scenweave.judge import validate_xosc
 
 
 @click.command("validate")

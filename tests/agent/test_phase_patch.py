@@ -17,11 +17,11 @@ from scenweave.agent.prompts import patch_prompt
 from scenweave.corpus.worked_example import adaptation, provenance, worked_example
 from scenweave.ingest.samples import write_highway_samples
 from scenweave.inputs import InputSelection, load_input
+from scenweave.judge import validate_xosc
+from scenweave.judge.replay import judge_replay
+from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.player import ReplaySettings, replay_file
 from scenweave.runner import default_matcher
-from scenweave.schemas import validate_xosc
-from scenweave.schemas.replay import judge_replay
-from scenweave.schemas.scenario_doc import ScenarioDoc
 from tests.agent.test_value_grammar import GrammarSampler
 from tests.replies import json_edits
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from scenweave.agent.taxonomy import classify_exception
-from scenweave.schemas import failure_category
+from scenweave.judge import failure_category
 
 
 def _finding(code: str, severity: str = "error") -> dict:

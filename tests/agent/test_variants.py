@@ -14,10 +14,10 @@ from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.corpus_utils import bumper_gap_m
 from scenweave.corpus.worked_example import example_params as stored_example
 from scenweave.inputs import InputSelection, load_input
+from scenweave.judge.variation import compare
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.player import ReplaySettings
 from scenweave.runner import default_matcher, variant_summary
-from scenweave.schemas.variation import compare
 from tests.agent.conftest import adapted_source, fenced
 from tests.replies import json_edits
 

@@ -17,7 +17,7 @@ from scenweave import corpus, spawn_db
 from scenweave.corpus.retrieval import class_tags
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples
-from scenweave.schemas import run_asam_qc, validate_xosc
+from scenweave.judge import run_asam_qc, validate_xosc
 from tests.corpus.conventions import assert_entities_match, assert_storyboard_matches
 
 LANE_OF = {"ego": -3, "npc": -3, "center": -3, "right": -4, "left": -2}

@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
+from scenweave.judge.replay import judge_replay
+from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.player import Playback
-from scenweave.schemas.replay import judge_replay
-from scenweave.schemas.scenario_doc import ScenarioDoc
 from tests.viewer.runs import CUT_IN, EDITED, RUN_ID
 
 pytestmark = pytest.mark.slow

@@ -13,10 +13,10 @@ from lxml import etree
 
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
+from scenweave.judge.fidelity import SPEED_TOL_MS
+from scenweave.judge.findings import Finding
+from scenweave.judge.scenario_doc import ScenarioDoc, number
 from scenweave.maneuvers import Maneuver
-from scenweave.schemas.fidelity import SPEED_TOL_MS
-from scenweave.schemas.findings import Finding
-from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))

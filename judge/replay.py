@@ -1,6 +1,6 @@
 """What the replay must show: a played scenario (``player.Playback``) against its params.
 
-The XML read-back (``schemas.fidelity``) proves the numbers are in the file; this proves a
+The XML read-back (``judge.fidelity``) proves the numbers are in the file; this proves a
 real OpenSCENARIO engine does with them what the record did. Every check is a ``REPLAY_*``
 finding whose message says what happened, when, and what the record says; the conventions
 it rests on (where a gap is measured, which time counts) are in docs/scenario-conventions.md
@@ -14,10 +14,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
-from scenweave.schemas.fidelity import class_of, expected_speed_changes, placed_actors
-from scenweave.schemas.findings import Finding
+from scenweave.judge.fidelity import class_of, expected_speed_changes, placed_actors
+from scenweave.judge.findings import Finding
+from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.schemas.params import number as number_of
-from scenweave.schemas.scenario_doc import ScenarioDoc
 
 #: a speed of the replay may differ this much from the record (m/s)
 SPEED_TOL_MS = 0.5

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-from scenweave.schemas.findings import Finding
+from scenweave.judge.findings import Finding
 
 
 def run_asam_qc(path: Path | str) -> list[Finding]:

@@ -31,11 +31,11 @@ from scenweave.corpus.phases import (
     phases_of,
     profile_of,
 )
+from scenweave.judge.findings import Finding
+from scenweave.judge.scenario_doc import ScenarioDoc, number
 from scenweave.maneuvers import Maneuver
 from scenweave.maneuvers.free_ride import SLOTS
-from scenweave.schemas.findings import Finding
 from scenweave.schemas.params import number as number_of
-from scenweave.schemas.scenario_doc import ScenarioDoc, number
 
 SPEED_TOL_MS = 0.01
 TIME_TOL_S = 0.01

@@ -12,14 +12,14 @@ from pathlib import Path
 from lxml import etree
 
 from scenweave.files import write_text_atomic
-from scenweave.schemas.autofix import apply_fixes
-from scenweave.schemas.carla_lint import carla_lint
-from scenweave.schemas.checks import detect_domain, semantics, structural
-from scenweave.schemas.fidelity import fidelity
-from scenweave.schemas.findings import Finding, ValidationResult
-from scenweave.schemas.replay import judge_replay
-from scenweave.schemas.scenario_doc import ScenarioDoc
-from scenweave.schemas.xsd import xsd_findings
+from scenweave.judge.autofix import apply_fixes
+from scenweave.judge.carla_lint import carla_lint
+from scenweave.judge.checks import detect_domain, semantics, structural
+from scenweave.judge.fidelity import fidelity
+from scenweave.judge.findings import Finding, ValidationResult
+from scenweave.judge.replay import judge_replay
+from scenweave.judge.scenario_doc import ScenarioDoc
+from scenweave.schemas.xsd import osc_1_0_schema
 
 DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
 
@@ -34,7 +34,7 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
     With ``replay`` (``player.ReplaySettings``) and params, a file that passes every static
     check is also played headless on ``map_path`` (default: the map params ``map`` names, else
     the file's ``LogicFile``, else Town04) and judged
-    against the params (``REPLAY_*``, ``schemas.replay``); ``result.playback`` holds what
+    against the params (``REPLAY_*``, ``judge.replay``); ``result.playback`` holds what
     happened.
     """
     path = Path(path)
@@ -107,3 +107,11 @@ def _class_from_header(doc: ScenarioDoc) -> str | None:
 
 def _invalid(finding: Finding, fixes: list[str] | None = None) -> ValidationResult:
     return ValidationResult(False, list(fixes or []), [finding], None)
+
+
+def xsd_findings(tree: etree._ElementTree) -> list[Finding]:
+    """One XSD_INVALID finding per violation of the OpenSCENARIO 1.0 schema, with its line."""
+    schema = osc_1_0_schema()
+    if schema.validate(tree):
+        return []
+    return [Finding("XSD_INVALID", e.message, "error", e.line) for e in schema.error_log]

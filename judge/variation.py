@@ -10,7 +10,7 @@ actor's start (``Init``), the stories of the recorded actors and the stop trigge
 faithful scenario has them, or, for a variant made as asked, as the reference has them
 (another model keeps the gaps between bumpers, so the cars start elsewhere; the record one
 lane over starts from another spawn point). Whether the variant still plays the recorded
-manoeuvre is the replay's to judge (``schemas.replay``).
+manoeuvre is the replay's to judge (``judge.replay``).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from scenweave.schemas.findings import Finding
+from scenweave.judge.findings import Finding
 
 #: what a variant may change, by what the reader sees
 ASPECTS = ("weather", "vehicles", "traffic", "lane")

@@ -8,8 +8,8 @@ from lxml import etree
 
 from scenweave import corpus
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
-from scenweave.schemas import validate_xosc
-from scenweave.schemas.validate_xosc import validate_tree
+from scenweave.judge import validate_xosc
+from scenweave.judge.validate_xosc import validate_tree
 from scenweave.spawn_db import SpawnMatcher, resolve_map
 
 

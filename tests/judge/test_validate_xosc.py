@@ -19,7 +19,7 @@ from lxml import etree
 
 from scenweave import corpus, spawn_db
 from scenweave.cli import cli
-from scenweave.schemas import run_asam_qc, validate_xosc
+from scenweave.judge import run_asam_qc, validate_xosc
 from tests.corpus.params_examples import TAGS, example_params
 
 Mutation = Callable[[etree._Element], None]

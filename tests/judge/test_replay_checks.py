@@ -17,10 +17,10 @@ from lxml import etree
 
 from scenweave import corpus, spawn_db
 from scenweave.inputs import InputSelection, load_input
+from scenweave.judge import validate_xosc
+from scenweave.judge.replay import judge_collisions_only, judge_replay, lane_changes
+from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.player import Playback, ReplaySettings, find_esmini, replay_file
-from scenweave.schemas import validate_xosc
-from scenweave.schemas.replay import judge_collisions_only, judge_replay, lane_changes
-from scenweave.schemas.scenario_doc import ScenarioDoc
 from scenweave.spawn_db import SpawnMatcher
 from tests.corpus.params_examples import TAGS
 

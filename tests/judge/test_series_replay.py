@@ -17,14 +17,14 @@ from lxml import etree
 
 from scenweave import corpus, spawn_db
 from scenweave.ingest import check_playable, extract_params
-from scenweave.player import ReplaySettings, replay_file
-from scenweave.schemas import validate_xosc
-from scenweave.schemas.replay import (
+from scenweave.judge import validate_xosc
+from scenweave.judge.replay import (
     SERIES_GAP_TOL_M,
     SERIES_SPEED_TOL_MS,
     judge_replay,
 )
-from scenweave.schemas.scenario_doc import ScenarioDoc
+from scenweave.judge.scenario_doc import ScenarioDoc
+from scenweave.player import ReplaySettings, replay_file
 from scenweave.spawn_db import SpawnMatcher
 
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("esmini")]

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import re
 
-from scenweave.schemas.findings import Finding
-from scenweave.schemas.scenario_doc import ScenarioDoc
+from scenweave.judge.findings import Finding
+from scenweave.judge.scenario_doc import ScenarioDoc
 
 SUPPORTED_ACTIONS = {
     # PrivateAction

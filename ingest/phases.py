@@ -23,6 +23,7 @@ import numpy as np
 
 from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.corpus.phases import Phase, PhasedProfile
+from scenweave.errors import InputError
 
 #: a fitted profile's speed may differ this much from a recorded sample (m/s)
 SPEED_TOL_MS = 0.3
@@ -52,7 +53,7 @@ CORNERS = tuple(k / 100 for k in range(5, 96))
 Targets = list[tuple[list[float | None], float]]
 
 
-class NoProfile(ValueError):
+class NoProfile(InputError, ValueError):
     """No phase profile can show the record: the message says why."""
 
 

@@ -166,8 +166,8 @@ def _in_this_process(todo: list[tuple[int, dict]], stage: Callable[[dict], Path]
 
 _worker_matcher: Any = None
 #: what a scenario's making imports, loaded before the workers fork so each starts warm
-_PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.player",
-                     "scenweave.replay_figures")
+_PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
+                     "scenweave.player", "scenweave.replay_figures")
 
 
 def _process_in_worker(params: dict, index: int, staging: Path,

@@ -95,8 +95,12 @@ def _speeds(doc: ScenarioDoc, domain: str) -> list[Finding]:
                              "error"))
     for entity in doc.entities:
         speed = doc.init_speed(entity)
-        # a start from standstill is a valid record (issue 22); a car that never moves is not
-        if speed is not None and (speed < 0 or (speed <= 0 and not _moves_later(doc, entity))):
+        # a start from standstill is a valid record (issue 22), and so is another car standing
+        # all along (a queue beside the ego); an ego that never moves is no manoeuvre (an
+        # NPC's speeds are held to the record by parameter fidelity)
+        never_moves = speed is not None and speed <= 0 and entity == "hero" \
+            and not _moves_later(doc, entity)
+        if speed is not None and (speed < 0 or never_moves):
             private = doc.init_private(entity)
             found.append(Finding("ZERO_SPEED", f"initial speed of {entity} is {speed} m/s"
                                  + ("" if speed < 0 else " and no speed action moves it"),

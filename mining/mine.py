@@ -124,8 +124,8 @@ def _moving_at_start(event: Event, least_ms: float) -> None:
         if key.endswith("_speed_ms") and values and (values[0] or 0.0) < least_ms:
             role = key.removesuffix("_speed_ms")
             raise RecordIssue(f"the {role} moves at {values[0] or 0.0:.1f} m/s when the event "
-                              f"starts: a highway scenario needs every car moving "
-                              f"(records.min_start_speed_ms = {least_ms:g})",
+                              f"starts, below records.min_start_speed_ms = {least_ms:g} (the "
+                              "thresholds skip stop-and-go events)",
                               field=f"series.{key}")
 
 

@@ -42,11 +42,17 @@ def test_a_bad_thresholds_file_is_one_line(data, tmp_path):
     assert "section 'smoothing' is missing" in result.output
 
 
-def test_a_standing_car_makes_no_highway_record(tmp_path):
+def test_a_crawling_car_is_a_record_unless_the_thresholds_skip_stop_and_go(tmp_path):
+    """A start from (near) standstill plays as a speed profile (issue 22): kept by default;
+    ``records.min_start_speed_ms`` raised skips it, naming the car and the setting."""
     queue = recording(car("lead", 10, 20, braking(6, 2, 3, 0), 2),
                       car("ego", 10, 5, steady(0.5), 2))
-    report = mine_recordings([queue], tmp_path, load_thresholds())
-    moving = [s for s in report.skipped if "needs every car moving" in s["reason"]]
+    kept = mine_recordings([queue], tmp_path / "kept", load_thresholds())
+    assert sum(kept.written.values()) >= 1 and not kept.skipped
+    strict = load_thresholds()
+    strict["records"]["min_start_speed_ms"] = 2.0
+    skipped = mine_recordings([queue], tmp_path / "strict", strict)
+    moving = [s for s in skipped.skipped if "records.min_start_speed_ms = 2" in s["reason"]]
     assert moving and moving[0]["field"] == "series.ego_speed_ms"
 
 

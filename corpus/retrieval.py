@@ -142,8 +142,9 @@ def _by_keyword(code: str) -> Retrieval | None:
     """The class's own script when the registry knows the code (a plugin class coded ``STOP``
     gets its script, not ``gen_ur_stop_at_tfl_red.py``); else a script whose name holds it."""
     maneuver = maneuvers.find(code) if code else None
-    if maneuver is not None:
-        return _read(script_path(maneuver), "keyword", 1.0)
+    if maneuver is not None:  # named after its class (thesis: keyword), or shared by its tag
+        path = script_path(maneuver)
+        return _read(path, "keyword" if code.lower() in path.stem else "tag", 1.0)
     key = code.lower()
     if not key or " " in key:
         return None

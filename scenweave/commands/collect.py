@@ -5,12 +5,16 @@ Safe to run again at any time (and beside ``submit --wait``): each scenario is w
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Any
 
 import click
 
+from scenweave import exit_codes
+from scenweave.commands.agent_options import json_option
+from scenweave.console import problem_lines
 from scenweave.worker import QUEUE_ENV
 
 QUEUE_HELP = ("Redis URL of the job queue (rediss:// for TLS, a password as "
@@ -45,7 +49,9 @@ def collect_run(run_dir: Path, connection: Any, wait: bool, timeout: float | Non
               help="Keep collecting until no scenario of the run is queued or running.")
 @click.option("--timeout", type=click.FloatRange(0), default=None,
               help="With --wait: stop waiting after this many seconds.")
-def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None) -> None:
+@json_option("the run's summary.json")
+def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None,
+            as_json: bool) -> None:
     """Write the scenario folders the workers handed back into RUN_DIR (atomically, once
     each), then its summary.json and, when every scenario is in, its report.html."""
     from scenweave.run_folder import RUN_FILE
@@ -55,6 +61,13 @@ def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None) -
         raise click.UsageError(f"{run_dir} is not a run folder (no {RUN_FILE}); give the "
                                "folder scenweave submit printed, e.g. runs/<run_id>")
     result = collect_run(run_dir, connect(url), wait, timeout)
-    click.echo(result.line())
-    if result.lost or (wait and not result.complete):
-        sys.exit(1)
+    if as_json:
+        click.echo(json.dumps(result.summary, indent=1))
+    else:
+        click.echo(result.line())
+        for line in problem_lines(result.summary.get("input_issues", []),
+                                  result.summary.get("scenarios", []),
+                                  str(run_dir / "summary.json")):
+            click.echo(line, err=True)
+    failed = any(o.get("status") == "failed" for o in result.summary.get("scenarios", []))
+    exit_codes.finish(bool(result.lost) or failed or (wait and not result.complete))

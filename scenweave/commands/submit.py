@@ -7,15 +7,16 @@ plus where the queue is and how jobs are retried.
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import click
 
+from scenweave import exit_codes
 from scenweave.commands.agent_options import AGENT_OPTION_NAMES, pipeline_settings
 from scenweave.commands.collect import QUEUE_HELP, collect_run
 from scenweave.commands.run import run as run_command
+from scenweave.console import problem_lines, refused_records
 from scenweave.handoff import MIB, Limits
 from scenweave.inputs import InputSelection
 from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, submit
@@ -57,14 +58,19 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
                                "already_queued": result.already_queued,
                                "input_issues": result.input_issues}, indent=1))
     else:
-        for issue in result.input_issues[:10]:
-            click.echo(f"input: {issue['file']}: {issue['message']}", err=True)
         click.echo(result.line())
     collected = collect_run(result.folder.root, connection, wait, timeout)
+    outcomes = collected.summary.get("scenarios", []) if wait else []
     if wait and not as_json:
         click.echo(collected.line())
-    if wait and (collected.lost or not collected.complete):
-        sys.exit(1)
+    if not as_json:
+        for line in problem_lines(result.input_issues, outcomes,
+                                  str(result.folder.root / "summary.json")):
+            click.echo(line, err=True)
+    failed = any(o.get("status") == "failed" for o in outcomes)
+    unfinished = wait and (bool(collected.lost) or not collected.complete
+                           or not collected.summary.get("total"))
+    exit_codes.finish(refused_records(result.input_issues) > 0 or failed or unfinished)
 
 
 submit_command = click.Command(

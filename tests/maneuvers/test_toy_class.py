@@ -88,7 +88,7 @@ def test_retrieval_asks_the_registry_before_script_names(toy_class):
         found = retrieve({"maneuver_class": "STOP", "maneuver_tag": "lead_speeds_off"})
     finally:
         maneuvers.unregister("STOP")
-    assert (found.script_path.name, found.method) == ("gen_hw_accel.py", "keyword")
+    assert (found.script_path.name, found.method) == ("gen_hw_accel.py", "tag")
 
 
 def test_a_plugin_urban_class_spawns_and_replays_ok(monkeypatch, esmini, tmp_path):

@@ -250,7 +250,7 @@ def test_every_command_running_the_agent_takes_the_same_llm_choices():
 
 def test_every_listing_and_summary_command_has_json_with_one_meaning():
     listing = ("run", "ingest", "mine", "replay", "validate", "bench", "logs", "trace",
-               "doctor", "sample-data", "report", "sandbox")
+               "doctor", "sample-data", "report", "sandbox", "collect")
     for name in listing:
         command = _command(name)
         commands = command.commands.values() if isinstance(command, click.Group) else [command]

@@ -26,7 +26,7 @@ def _exception_classes() -> list[str]:
     for module, path in MODULES.items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef) and any(
-                    isinstance(b, ast.Name) and (b.id.endswith(("Error", "Exception"))
+                    isinstance(b, ast.Name) and (b.id.endswith(("Error", "Exception", "Interrupt"))
                                                  or b.id in ("ValueError", "RuntimeError"))
                     for b in node.bases):
                 found.append(f"{module}.{node.name}")

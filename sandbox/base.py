@@ -32,6 +32,11 @@ class Sandbox(ABC):
         if self.settings.warm_pool > 0 and self._pool is None:
             self._pool = WarmPool(self, self.settings.warm_pool)
 
+    @property
+    def warm_ready(self) -> int:
+        """How many warm sandboxes wait for an attempt (0 without a pool)."""
+        return self._pool.ready if self._pool is not None else 0
+
     def run(self, code: str, params: Mapping[str, Any], out_dir: Path) -> ExecResult:
         """Run ``code``'s ``generate(params, <out_dir>/scenario.xosc)`` in a fresh sandbox.
 

@@ -44,6 +44,12 @@ class WarmPool:
         self._lock = threading.Lock()
         self._refill()
 
+    @property
+    def ready(self) -> int:
+        """How many warm sandboxes are started and waiting (some may have idled out)."""
+        with self._lock:
+            return len(self._ready)
+
     def take(self) -> Slot | None:
         """A live warm sandbox, or None (the caller then starts a cold one)."""
         taken, dead = None, []

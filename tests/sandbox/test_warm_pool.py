@@ -26,11 +26,18 @@ def _warm_harnesses(idle_s: int = IDLE_S) -> list[int]:
     return processes_with(f"--warm\0{idle_s}")
 
 
+def _wait_for_a_warm_one(box, timeout_s: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while box.warm_ready == 0:
+        assert time.monotonic() < deadline, "the warm pool started no sandbox in 60 s"
+        time.sleep(0.1)
+
+
 def test_each_attempt_gets_a_fresh_warm_sandbox(make_box, tmp_path):
     box = make_box(warm_pool=1, warm_idle_s=IDLE_S)
     outputs = []
     for index in range(3):
-        time.sleep(1.5)  # let the pool refill so the attempt finds a warm sandbox
+        _wait_for_a_warm_one(box)  # let the pool refill so the attempt finds a warm sandbox
         result = box.run(PROBE, {}, tmp_path / str(index))
         assert result.ok, result
         outputs.append((tmp_path / str(index) / "scenario.xosc").read_text())
@@ -63,9 +70,10 @@ def test_a_batch_runs_its_attempts_in_warm_sandboxes(tmp_path):
     settings = pipeline_settings(no_llm=False, top_n=1, llm="replay",
                                  replay_file=tmp_path / "replies.json", sandbox="bwrap",
                                  replay=False).agent
+    close_shared()  # an earlier test's shared sandbox may hold a warm one idled out by now
     try:
         box = shared_sandbox(settings)
-        time.sleep(5)  # the LLM's turn: the pool starts a sandbox and imports in it (~1 s idle)
+        _wait_for_a_warm_one(box)  # the LLM's turn: the pool starts a sandbox meanwhile
         result = box.run(PROBE, {}, tmp_path)
         assert result.ok, result
         assert (tmp_path / "scenario.xosc").read_text() == "False True"

@@ -5,27 +5,31 @@ Everything here works on outcome dicts (``status.json`` of each scenario, the ``
 The metrics follow thesis §6.1: success rate (SR, the LLM's own success: ``ok`` or
 ``repaired``), first-attempt rate, latency per scenario and the error taxonomy; a fallback
 still delivers a scenario, so ``delivered_rate`` counts it too. The HTML page is static and
-self-contained: figures are inline PNGs, links are relative to the run folder.
+self-contained: figures are inline PNGs, links are relative to the run folder. It is rendered
+from ``templates/run_report.html`` (Jinja2, every value escaped); this module only computes
+what the page shows.
 """
 
 from __future__ import annotations
 
 import base64
-import html
+import functools
 import io
 import json
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
-from string import Template
 from typing import Any
+
+import jinja2
+import markupsafe
 
 from scenweave.files.atomic import write_text_atomic
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
 
 REPORT_FILE = "report.html"
-TEMPLATE = Path(__file__).parent / "templates" / "report.html"
 REPLAY_JSON, REPLAY_PNG = "replay.json", "replay.png"
 SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE,
                   REPLAY_JSON, REPLAY_PNG)
@@ -231,7 +235,7 @@ def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
     return figure_png(fig)
 
 
-# --- HTML ----------------------------------------------------------------------------------
+# --- the data the templates show -----------------------------------------------------------
 
 def _rate(part: int, whole: int) -> float | None:
     return round(part / whole, 4) if whole else None
@@ -246,47 +250,73 @@ def _sec(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
-def _esc(value: Any) -> str:
-    return html.escape("" if value is None else str(value))
+@dataclass(frozen=True)
+class Table:
+    """What a table of a report shows (``table`` in templates/macros.html draws it): the first
+    ``text_columns`` columns are left-aligned text, ``column_classes`` adds a class to the
+    cells of a column, ``row_classes`` one to each row."""
+
+    header: list[str]
+    rows: list[list[Any]]
+    text_columns: int = 1
+    column_classes: dict[int, str] = field(default_factory=dict)
+    row_classes: list[str] | None = None
+
+    @property
+    def cell_classes(self) -> list[str]:
+        """The class attribute of each column's cells, empty for none."""
+        return [" ".join([*(["text"] if i < self.text_columns else []),
+                          *([self.column_classes[i]] if i in self.column_classes else [])])
+                for i in range(len(self.header))]
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A PNG shown inline, with its caption and alternative text."""
+
+    png: bytes
+    caption: str
+    alt: str
+
+    @property
+    def png_base64(self) -> str:
+        return base64.b64encode(self.png).decode("ascii")
+
+
+@functools.cache
+def templates() -> jinja2.Environment:
+    """The report templates (``scenweave/templates``), every value HTML-escaped."""
+    return jinja2.Environment(loader=jinja2.PackageLoader("scenweave", "templates"),
+                              autoescape=True, trim_blocks=True, lstrip_blocks=True,
+                              undefined=jinja2.StrictUndefined)
+
+
+def render(template: str, **context: Any) -> str:
+    """A template of ``scenweave/templates`` rendered with ``context``."""
+    return templates().get_template(template).render(**context)
+
+
+def _macros() -> Any:
+    return templates().get_template("macros.html").module
 
 
 def table(header: list[str], rows: list[list[Any]], text_columns: int = 1,
           row_classes: list[str] | None = None,
           column_classes: dict[int, str] | None = None) -> str:
-    """An HTML table; the first ``text_columns`` columns are left-aligned text, cells are
-    escaped unless they are already markup (``Markup``)."""
-    def cell(tag: str, i: int, value: Any) -> str:
-        names = ["text"] if i < text_columns else []
-        names += [column_classes[i]] if column_classes and i in column_classes else []
-        cls = f' class="{" ".join(names)}"' if names else ""
-        body = value.html if isinstance(value, Markup) else _esc(value)
-        return f"<{tag}{cls}>{body}</{tag}>"
-
-    head = "".join(cell("th", i, h) for i, h in enumerate(header))
-    body = []
-    for r, row in enumerate(rows):
-        cls = f' class="{row_classes[r]}"' if row_classes else ""
-        body.append(f"<tr{cls}>" + "".join(cell("td", i, v) for i, v in enumerate(row)) + "</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
-
-
-class Markup:
-    """A table cell that is already HTML (links, spans)."""
-
-    def __init__(self, markup: str):
-        self.html = markup
+    """An HTML table (cells escaped), for pages that are not a template of their own."""
+    return str(_macros().table(Table(header, rows, text_columns, column_classes or {},
+                                     row_classes)))
 
 
 def figure(png: bytes, caption: str, alt: str) -> str:
-    """An inline PNG figure with a caption."""
-    data = base64.b64encode(png).decode("ascii")
-    return (f'<figure><img alt="{_esc(alt)}" src="data:image/png;base64,{data}">'
-            f"<figcaption>{_esc(caption)}</figcaption></figure>")
+    """An inline PNG figure with a caption, for pages that are not a template of their own."""
+    return str(_macros().figure(Figure(png, caption, alt)))
 
 
 def page(title: str, body: str) -> str:
-    """The whole HTML page from the template."""
-    return Template(TEMPLATE.read_text(encoding="utf-8")).substitute(title=_esc(title), body=body)
+    """The report page around ``body``, HTML made by the caller from ``table`` and ``figure``
+    (``bench.html``); the reports of a run and of mining are templates of their own."""
+    return render("report.html", title=title, body=markupsafe.Markup(body))
 
 
 def metrics_row(name: str, m: dict) -> list[Any]:
@@ -303,72 +333,60 @@ METRICS_HEADER = ["", "n", *STATUSES, "SR", "delivered", "1st attempt", "mean s"
                   "p95 s", "per hour", "tokens"]
 
 
-def count_boxes(counts: dict[str, int], total: int) -> str:
-    """The outcome counts as big numbers."""
-    boxes = [(total, "scenarios", "total")] + [(counts.get(s, 0), s, s) for s in STATUSES]
-    boxes = [f'<div class="count {cls}"><span class="n">{n}</span> {label}</div>'
-             for n, label, cls in boxes]
-    return f'<div class="counts">{"".join(boxes)}</div>'
+def count_boxes(counts: dict[str, int], total: int) -> list[tuple[int, str, str]]:
+    """The outcome counts shown as big numbers: (number, label, class)."""
+    return [(total, "scenarios", "total")] + [(counts.get(s, 0), s, s) for s in STATUSES]
 
 
-def scenario_links(scenario_id: str, run_dir: Path) -> Markup:
-    """Relative links to a scenario's folder and the files in it that exist."""
+def scenario_links(scenario_id: str, run_dir: Path) -> list[tuple[str, str]]:
+    """(href, text) of relative links to a scenario's folder and the files in it that exist."""
     folder = safe_name(scenario_id)
-    links = [f'<a href="{_esc(folder)}/">folder</a>']
-    links += [f'<a href="{_esc(folder)}/{name}">{name}</a>'
-              for name in SCENARIO_FILES if (run_dir / folder / name).exists()]
-    return Markup(" ".join(links))
+    return [(f"{folder}/", "folder")] + [(f"{folder}/{name}", name) for name in SCENARIO_FILES
+                                         if (run_dir / folder / name).exists()]
 
 
 def render_run_report(run_dir: Path) -> str:
     """The HTML report of one run folder (reads ``summary.json``, ``run.json``, the folders)."""
-    run_dir = Path(run_dir)
+    return render("run_report.html", **run_report_context(Path(run_dir)))
+
+
+def run_report_context(run_dir: Path) -> dict[str, Any]:
+    """What ``templates/run_report.html`` shows of a run folder."""
     summary = _read_json(run_dir / SUMMARY_FILE) or {}
     run = _read_json(run_dir / RUN_FILE) or {}
     outcomes = summary.get("scenarios") or []
-    total = run.get("scenarios")
     m = metrics(outcomes)
-    grouped = by_class(outcomes)
-    parts = [
-        f"<h1>Run {_esc(summary.get('run_id', run_dir.name))}</h1>",
-        f'<p class="meta">mode {_esc(run.get("mode", "?"))} · input {_esc(run.get("input", "?"))}'
-        f" · started {_esc(run.get('started_at', '?'))} · summary written "
-        f"{_esc(summary.get('written_at', '?'))}"
-        + (f" · {len(outcomes)} of {total} scenarios finished" if total is not None else "")
-        + "</p>",
-        count_boxes(m["counts"], len(outcomes)),
-        "<h2>Per class</h2>",
-        _per_class_table(grouped, m, outcomes),
-        "<h2>Error taxonomy</h2>",
-        table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()])
-        if m["error_taxonomy"] else "<p>No errors.</p>" if outcomes else
-        "<p>No scenario was made: nothing to count (see the refused records below).</p>",
-    ]
+    run_id = summary.get("run_id", run_dir.name)
     replayed = [o for o in outcomes if o.get("replay")]
-    if replayed:
-        parts += ["<h2>Replay in esmini</h2>", _replay_overview(replayed)]
-    if outcomes:
-        parts += ["<h2>Figures</h2>", *_run_figures(run_dir, outcomes)]
-    if replayed:
-        parts += ["<h2>Replay figures</h2>", *_replay_figures(run_dir, replayed)]
-    varied = [o for o in outcomes if o.get("variants")]
-    if varied:
-        parts += ["<h2>Variants</h2>", _variant_table(varied)]
-    parts += ["<h2>Scenarios</h2>", _scenario_table(run_dir, outcomes)]
-    issues = summary.get("input_issues") or []
+    return {
+        "title": f"ScenWeave run {run_id}", "run_id": run_id,
+        "mode": run.get("mode", "?"), "input": run.get("input", "?"),
+        "started_at": run.get("started_at", "?"), "written_at": summary.get("written_at", "?"),
+        "finished": len(outcomes), "total": run.get("scenarios"),
+        "counts": count_boxes(m["counts"], len(outcomes)),
+        "per_class": _per_class_table(by_class(outcomes), m, outcomes),
+        "taxonomy": Table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()]),
+        "replay": _replay_overview(run_dir, replayed) if replayed else None,
+        "figures": _run_figures(run_dir, outcomes) if outcomes else [],
+        "variants": variant_table([o for o in outcomes if o.get("variants")]),
+        "scenarios": _scenario_table(run_dir, outcomes),
+        "issues": _issue_tables(summary.get("input_issues") or []),
+    }
+
+
+def _issue_tables(issues: list[dict]) -> list[tuple[str, Table]]:
+    """The refused records and the input warnings, each with its heading, when there are any."""
     errors = [i for i in issues if i.get("severity", "error") == "error"]
     warnings = [i for i in issues if i.get("severity") == "warning"]
-    for title, listed in (("Refused records (input errors)", errors),
-                          ("Input warnings (read, in a form not expected)", warnings)):
-        if listed:
-            parts += [f"<h2>{title}</h2>",
-                      table(["file", "row", "field", "message"],
-                            [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
-                             for i in listed], text_columns=4)]
-    return page(f"ScenWeave run {summary.get('run_id', run_dir.name)}", "\n".join(parts))
+    return [(title, Table(["file", "row", "field", "message"],
+                          [[i.get("file"), i.get("row"), i.get("field"), i.get("message")]
+                           for i in listed], text_columns=4))
+            for title, listed in (("Refused records (input errors)", errors),
+                                  ("Input warnings (read, in a form not expected)", warnings))
+            if listed]
 
 
-def _variant_table(varied: list[dict]) -> str:
+def variant_table(varied: list[dict]) -> Table:
     """Each record's variants (``run --vary``): the distinct ones kept and what each changed,
     or why a variant was not kept."""
     rows = []
@@ -378,8 +396,12 @@ def _variant_table(varied: list[dict]) -> str:
                           else f"{v['id']} ({v['aspect']}) not kept: "
                           f"{(v.get('errors') or ['?'])[0]}" for v in o["variants"])
         rows.append([o["scenario_id"], len(kept), len(o["variants"]), notes])
-    return table(["scenario", "kept", "asked", "variants"], rows, text_columns=1,
-                 column_classes={3: "text"})
+    return Table(["scenario", "kept", "asked", "variants"], rows, column_classes={3: "text"})
+
+
+def _variant_table(varied: list[dict]) -> str:
+    """The variants table as HTML."""
+    return str(_macros().table(variant_table(varied)))
 
 
 def _placed(variant: dict) -> str:
@@ -393,14 +415,14 @@ def _placed(variant: dict) -> str:
     return f" ({', '.join(models)})" if models else ""
 
 
-def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> str:
+def _per_class_table(grouped: dict[str, list[dict]], m: dict, outcomes: list[dict]) -> Table:
     """The metrics per class and in all; with a ``replay`` column (passed/played) when any
     scenario of the run was played in esmini."""
     rows = [metrics_row(code, metrics(g)) for code, g in grouped.items()] + [metrics_row("all", m)]
     if not any(o.get("replay") for o in outcomes):
-        return table(METRICS_HEADER, rows)
+        return Table(METRICS_HEADER, rows)
     groups = [*grouped.values(), outcomes]
-    return table([*METRICS_HEADER, "replay"],
+    return Table([*METRICS_HEADER, "replay"],
                  [[*row, replay_rate(group)] for row, group in zip(rows, groups, strict=True)])
 
 
@@ -416,31 +438,38 @@ def replay_rate(outcomes: Iterable[dict]) -> str:
     return f"{passed}/{played} ({pct(_rate(passed, played))})" if played else "–"
 
 
-def _replay_overview(replayed: list[dict]) -> str:
+def _replay_overview(run_dir: Path, replayed: list[dict]) -> dict[str, Any]:
+    """The replay sections: how many played and passed, the findings counted, the errors
+    against the recorded series, and the replay figures."""
+    from scenweave.replay_figures import is_current
+
     passed, played = replay_counts(replayed)
     codes = Counter(c for o in replayed for c in o["replay"].get("codes") or [])
-    engine = sum(not o["replay"].get("played", True) for o in replayed)
-    lines = [f"<p>{played} scenarios played headless in esmini, {passed} as recorded "
-             f"({pct(_rate(passed, played))})"
-             + (f"; esmini could not play {engine}" if engine else "") + ".</p>"]
-    lines.append(table(["replay finding", "scenarios"], [[k, v] for k, v in sorted(codes.items())])
-                 if codes else "<p>No replay finding.</p>")
-    return "\n".join(lines + _series_table(replayed))
+    picks = replay_figure_picks(
+        replayed, drawn=lambda o: is_current(run_dir / safe_name(o["scenario_id"]), o))
+    return {
+        "played": played, "passed": passed, "rate": pct(_rate(passed, played)),
+        "engine": sum(not o["replay"].get("played", True) for o in replayed),
+        "findings": Table(["replay finding", "scenarios"], sorted(map(list, codes.items()))),
+        "series": _series_table(replayed),
+        "failed": sum(not o["replay"].get("passed") for o in replayed),
+        "failed_shown": sum(not o["replay"].get("passed") for o in picks),
+        "passing_per_class": REPLAY_PASSING_PER_CLASS,
+        "figures": [shown for shown in map(lambda o: _replay_figure(run_dir, o), picks)
+                    if shown["figure"] or shown["problem"]],
+    }
 
 
-def _series_table(replayed: list[dict]) -> list[str]:
+def _series_table(replayed: list[dict]) -> Table:
     """Against the recorded series (mined records): per quantity, the scenarios compared and
     the largest max and RMS error over them (``series_errors``, docs/scenario-conventions.md)."""
     errors: dict[str, list[dict]] = {}
     for o in replayed:
         for name, error in (o["replay"].get("series_errors") or {}).items():
             errors.setdefault(name.split(" ", 1)[1], []).append(error)
-    if not errors:
-        return []
-    return ["<p>Against the records' series, at every recorded sample:</p>",
-            table(["quantity", "scenarios", "largest max error", "largest RMS error"],
-                  [[k, len(v), f"{max(e['max'] for e in v):.2f}",
-                    f"{max(e['rms'] for e in v):.2f}"] for k, v in sorted(errors.items())])]
+    return Table(["quantity", "scenarios", "largest max error", "largest RMS error"],
+                 [[k, len(v), f"{max(e['max'] for e in v):.2f}",
+                   f"{max(e['rms'] for e in v):.2f}"] for k, v in sorted(errors.items())])
 
 
 def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PASSING_PER_CLASS,
@@ -465,28 +494,18 @@ def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PA
     return sorted(picks, key=lambda o: (o["replay"].get("passed", False), order[id(o)]))
 
 
-def _replay_figures(run_dir: Path, replayed: list[dict]) -> list[str]:
-    """The picked replays' figures inline; a missing or stale ``replay.png`` is drawn first."""
-    from scenweave.replay_figures import is_current
-
-    picks = replay_figure_picks(
-        replayed, drawn=lambda o: is_current(run_dir / safe_name(o["scenario_id"]), o))
-    failed = sum(not o["replay"].get("passed") for o in replayed)
-    shown_failed = sum(not o["replay"].get("passed") for o in picks)
-    parts = [f"<p>Every failed replay ({shown_failed} of {failed} shown) and up to "
-             f"{REPLAY_PASSING_PER_CLASS} passing ones per class: speeds and gaps over time "
-             "against the record's values (diamonds, with the judge's tolerance), the paths on "
-             "the map. The figure of any scenario is its folder's replay.png.</p>"]
-    for o in picks:
-        png = _replay_png(run_dir / safe_name(o["scenario_id"]), o)
-        verdict = ("replay passed" if o["replay"].get("passed") else "replay failed: "
-                   + (", ".join(o["replay"].get("codes") or []) or "?"))
-        caption = f"{o['scenario_id']} ({o.get('maneuver_class', '?')}): {verdict}"
-        if isinstance(png, bytes):
-            parts.append(figure(png, caption, f"replay of {o['scenario_id']}"))
-        elif png:
-            parts.append(f'<p class="error">{_esc(caption)}: no figure ({_esc(png)})</p>')
-    return parts
+def _replay_figure(run_dir: Path, outcome: dict) -> dict[str, Any]:
+    """One picked replay: its figure (a missing or stale ``replay.png`` is drawn first), or
+    why there is none (``problem``); neither without a replay."""
+    png = _replay_png(run_dir / safe_name(outcome["scenario_id"]), outcome)
+    replay = outcome["replay"]
+    verdict = ("replay passed" if replay.get("passed") else
+               "replay failed: " + (", ".join(replay.get("codes") or []) or "?"))
+    caption = f"{outcome['scenario_id']} ({outcome.get('maneuver_class', '?')}): {verdict}"
+    return {"caption": caption,
+            "figure": Figure(png, caption, f"replay of {outcome['scenario_id']}")
+            if isinstance(png, bytes) else None,
+            "problem": png if isinstance(png, str) else None}
 
 
 def _replay_png(folder: Path, status: dict) -> bytes | str | None:
@@ -506,19 +525,19 @@ def _replay_png(folder: Path, status: dict) -> bytes | str | None:
         return f"{type(err).__name__}: {err}"
 
 
-def _run_figures(run_dir: Path, outcomes: list[dict]) -> list[str]:
+def _run_figures(run_dir: Path, outcomes: list[dict]) -> list[Figure]:
     latencies = {name: [v for v in map(latency_s, group) if v is not None]
                  for name, group in _domains(outcomes).items()}
     cumulative = {f"projected, sequential, {name}": projected_curve(values)
                   for name, values in latencies.items() if values}
     cumulative["observed"] = observed_curve(run_dir, outcomes)
     return [
-        figure(plot_latency_per_class({"run": outcomes}),
+        Figure(plot_latency_per_class({"run": outcomes}),
                "Mean latency ± standard deviation per class (thesis Fig. 6.2).",
                "latency per class"),
-        figure(plot_latency_boxplot(outcomes),
+        Figure(plot_latency_boxplot(outcomes),
                "Distribution of latencies per class (thesis Fig. 6.3).", "latency boxplot"),
-        figure(plot_cumulative(cumulative),
+        Figure(plot_cumulative(cumulative),
                "Cumulative scenarios: projected for one sequential pipeline over an hour "
                "(thesis Fig. 6.4) and as observed in this run.", "cumulative scenarios"),
     ]
@@ -531,17 +550,16 @@ def _domains(outcomes: list[dict]) -> dict[str, list[dict]]:
     return groups if len(groups) > 2 else {"mix": outcomes}
 
 
-def _scenario_table(run_dir: Path, outcomes: list[dict]) -> str:
-    rows, classes = [], []
-    for o in outcomes:
-        rows.append([o["scenario_id"], o.get("maneuver_class"), o.get("status"),
-                     o.get("attempts"), o.get("spawn_id"), _sec(latency_s(o)),
-                     scenario_links(o["scenario_id"], run_dir),
-                     Markup(f'<span class="error">{_esc(o.get("error") or "")}</span>')])
-        classes.append(f"status-{o.get('status')}")
-    return table(["scenario", "class", "status", "attempts", "spawn", "latency s", "files",
-                  "error"], rows, text_columns=3, row_classes=classes,
-                 column_classes={2: "status", 6: "text", 7: "text"})
+def _scenario_table(run_dir: Path, outcomes: list[dict]) -> Table:
+    """One row per scenario; the ``files`` column holds (href, text) links, the ``error``
+    column the error text (run_report.html draws both)."""
+    rows = [[o["scenario_id"], o.get("maneuver_class"), o.get("status"), o.get("attempts"),
+             o.get("spawn_id"), _sec(latency_s(o)), scenario_links(o["scenario_id"], run_dir),
+             o.get("error") or ""] for o in outcomes]
+    return Table(["scenario", "class", "status", "attempts", "spawn", "latency s", "files",
+                  "error"], rows, text_columns=3,
+                 column_classes={2: "status", 6: "text", 7: "text"},
+                 row_classes=[f"status-{o.get('status')}" for o in outcomes])
 
 
 def write_run_report(run_dir: Path) -> Path:

@@ -450,12 +450,13 @@ def _replay_overview(run_dir: Path, replayed: list[dict]) -> dict[str, Any]:
     return {
         "played": played, "passed": passed, "rate": pct(_rate(passed, played)),
         "engine": sum(not o["replay"].get("played", True) for o in replayed),
-        "findings": Table(["replay finding", "scenarios"], sorted(map(list, codes.items()))),
+        "findings": Table(["replay finding", "scenarios"],
+                          [[code, n] for code, n in sorted(codes.items())]),
         "series": _series_table(replayed),
         "failed": sum(not o["replay"].get("passed") for o in replayed),
         "failed_shown": sum(not o["replay"].get("passed") for o in picks),
         "passing_per_class": REPLAY_PASSING_PER_CLASS,
-        "figures": [shown for shown in map(lambda o: _replay_figure(run_dir, o), picks)
+        "figures": [shown for shown in (_replay_figure(run_dir, o) for o in picks)
                     if shown["figure"] or shown["problem"]],
     }
 

@@ -54,7 +54,7 @@ def make_scenarios(raw: Path, out: Path, per_class: int) -> list[Path]:
 def replay_all(files: list[Path], whole_map: bool) -> list[dict]:
     """Replay each file (this process should be pinned); one record per scenario."""
     from scenweave.player import ReplaySettings, replay_file
-    from scenweave.spawn_db import DEFAULT_MAP_PATH
+    from scenweave.roads import DEFAULT_MAP_PATH
 
     settings = ReplaySettings()
     if whole_map:

@@ -149,7 +149,7 @@ def bare_esmini(run: Path, count: int) -> tuple[list[float], list[float]]:
     """(replay seconds, bare esmini seconds) of the first ``count`` scenarios, interleaved."""
     from scenweave.player import ReplaySettings, find_esmini, replay_file
     from scenweave.player.replay import esmini_input
-    from scenweave.spawn_db import DEFAULT_MAP_PATH
+    from scenweave.roads import DEFAULT_MAP_PATH
 
     binary = find_esmini().library.parent / "esmini"
     settings = ReplaySettings()

@@ -38,13 +38,8 @@ def main() -> None:
 
     from scenweave.ingest import IngestReport, extract_params, iter_raw_records
     from scenweave.ingest.samples import write_highway_samples, write_urban_samples
-    from scenweave.spawn_db import (
-        SpawnMatcher,
-        build_database,
-        load_opendrive,
-        resolve_map,
-        spawn_database,
-    )
+    from scenweave.roads import load_opendrive, resolve_map
+    from scenweave.spawn_db import SpawnMatcher, build_database, spawn_database
     from scenweave.spawn_db.database import write_database
 
     town = resolve_map(args.map)

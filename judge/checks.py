@@ -246,7 +246,7 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     """Distance from the ego to the NPC at t = 0, as the file places them.
 
     Both on LanePositions of the scenario's map: measured along the NPC's lane from beside the ego
-    (``spawn_db.distance_along_lane``). Otherwise the params' start gap (the recorded gap
+    (``roads.distance_along_lane``). Otherwise the params' start gap (the recorded gap
     minus the lead-in drift), corrected by how far a WorldPosition moves the NPC from its
     spawn along its heading.
     """
@@ -271,7 +271,7 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
 def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Finding]:
     """A cut-in starts in the lane next to the ego's and ends in it; a cut-out starts in it.
 
-    The ego's lane is followed along the map (``spawn_db.advance_along_lane``) to where the
+    The ego's lane is followed along the map (``roads.advance_along_lane``) to where the
     NPC stands, so a gap across a road boundary compares the right lane ids.
     """
     keys = [params.get(k) for k in ("ego_road_id", "ego_lane_id", "ego_s", "npc_distance_m",
@@ -282,12 +282,12 @@ def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findi
     if None in keys or target is None or doc.map_path is None:
         return []
     ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
-    from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
+    from scenweave import roads  # here: the map loads once, and only for scenarios that need it
 
     try:
-        road, lane, _ = spawn_db.advance_along_lane(ego_road, int(ego_lane), ego_s, distance,
-                                                    map_path=doc.map_path)
-    except spawn_db.SpawnDbError:  # not a lane position of the map: nothing to compare with
+        road, lane, _ = roads.advance_along_lane(ego_road, int(ego_lane), ego_s, distance,
+                                                 map_path=doc.map_path)
+    except roads.RoadError:  # not a lane position of the map: nothing to compare with
         return []
     if str(road) != str(npc_road):
         return []

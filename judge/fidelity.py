@@ -141,20 +141,18 @@ def placed_actors(params: dict) -> list[tuple[str, str]]:
 
 def _spawns(check: _Check) -> None:
     params = check.params
+    highway = params.get("domain") == "highway"
     for entity, prefix in placed_actors(params):
         position = check.doc.spawn_position(entity)
         code = "FIDELITY_SPAWN" if entity == "hero" else "FIDELITY_GAP"
         if position is None:
             check.found.append(Finding("FIDELITY_MISSING", f"{entity} is not placed in Init"))
-        elif params.get("domain") == "highway" and entity == "hero":
+        elif position.tag == "LanePosition" or (highway and entity == "hero"):
             _lane_position(check, code, entity, prefix, position)
-        elif params.get("domain") == "highway" and position.tag == "LanePosition":
-            _lane_position(check, code, entity, prefix, position)
-            _gap_along_lane(check, entity, prefix, position)
-        elif params.get("domain") == "highway":
+            if highway and entity != "hero":
+                _gap_along_lane(check, entity, prefix, position)
+        else:  # where the spawn stage put it (the urban lead: on the ego's lane, ahead)
             _world_position(check, code, entity, _pose(params, prefix), position)
-        else:
-            _world_position(check, code, entity, _expected_world(params, prefix), position)
 
 
 def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
@@ -202,12 +200,12 @@ def _walk_back(doc: ScenarioDoc, position: etree._Element, metres: float
     lane, s = number(position, "laneId"), number(position, "s")
     if lane is None or s is None or doc.map_path is None:
         return None
-    from scenweave import spawn_db  # here: the map loads once, and only for scenarios that need it
+    from scenweave import roads  # here: the map loads once, and only for scenarios that need it
 
     try:
-        road, _, back_s = spawn_db.advance_along_lane(position.get("roadId"), int(lane), s,
-                                                      -metres, map_path=doc.map_path)
-    except spawn_db.SpawnDbError:
+        road, _, back_s = roads.advance_along_lane(position.get("roadId"), int(lane), s,
+                                                   -metres, map_path=doc.map_path)
+    except roads.RoadError:
         return None
     return str(road), back_s
 
@@ -226,11 +224,6 @@ def _lane_position(check: _Check, code: str, entity: str, prefix: str,
                                        f" params say {int(want)}", "error", position.sourceline))
     check.close(code, f"{entity} s", number(position, "s"), params.get(f"{prefix}_s"),
                 POSITION_TOL_M, position)
-
-
-def _expected_world(params: dict, prefix: str) -> tuple[float, ...] | None:
-    """Where the spawn stage put ``prefix`` (the urban lead: on the ego's lane, ahead)."""
-    return _pose(params, prefix)
 
 
 def _world_position(check: _Check, code: str, entity: str, want: tuple[float, ...] | None,

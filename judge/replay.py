@@ -114,9 +114,9 @@ def _start_poses(judge: _Judge) -> None:
     name it: inside a junction, connecting roads overlap and esmini may report any of them.
     Otherwise it is the lane esmini found the vehicle on.
     """
-    from scenweave import spawn_db
+    from scenweave import roads
 
-    network = spawn_db.road_network(judge.map_path)
+    network = roads.road_network(judge.map_path)
     planned = {entity: prefix for entity, prefix in placed_actors(judge.params)}
     for entity in judge.playback.entities:
         track = judge.playback.tracks[entity]
@@ -125,7 +125,7 @@ def _start_poses(judge: _Judge) -> None:
         try:
             pose = network.lane_to_world(*lane)
             drivable = network.is_drivable(*lane)
-        except spawn_db.SpawnDbError:
+        except roads.RoadError:
             judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {lane[0]} lane {lane[1]}, "
                        "which is not a lane of the map", 0.0)
             continue
@@ -481,7 +481,7 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
     ``time_s`` (positive ahead). The ego's position is carried sideways onto that lane at its
     own ``s``: the entity's lane id on a shared road, else the ego's lane or the lane beside it
     on either side (lane ids change across road ends, the chain of lanes does not)."""
-    from scenweave import spawn_db
+    from scenweave import roads
 
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[ego], playback.tracks[entity]
@@ -490,8 +490,8 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
     for lane in _lanes_beside(road, ta["lane"][i], tb["lane"][i] if tb["road"][i] == road
                               else None, s, map_path):
         try:
-            along = spawn_db.distance_along_lane(road, lane, s, *end, map_path=map_path)
-        except spawn_db.SpawnDbError:
+            along = roads.distance_along_lane(road, lane, s, *end, map_path=map_path)
+        except roads.RoadError:
             along = None
         if along is not None:
             return along
@@ -502,13 +502,13 @@ def _lanes_beside(road, ego_lane: int, shared_lane: int | None, s: float,
                   map_path) -> list[int]:
     """Lane ids on the ego's road to measure from: the other's own (same road), the ego's,
     and the same-direction lanes left and right of it."""
-    from scenweave import spawn_db
+    from scenweave import roads
 
     lanes = [lane for lane in (shared_lane, ego_lane) if lane]
-    network = spawn_db.road_network(map_path)
+    network = roads.road_network(map_path)
     try:
         key = network.key_at(road, ego_lane, s)
-    except spawn_db.SpawnDbError:
+    except roads.RoadError:
         return lanes
     lanes += [n.lane_id for side in ("left", "right")
               if (n := network.neighbour(key, side)) is not None]
@@ -608,15 +608,15 @@ def _same_lane(playback, a: str, b: str, time_s: float, map_path) -> bool | None
     either way (across lane sections, where lane ids are renumbered, and road ends), reaches
     ``b``. None when it does not and they are on different roads (e.g. overlapping junction
     roads)."""
-    from scenweave import spawn_db
+    from scenweave import roads
 
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[a], playback.tracks[b]
     try:
-        along = spawn_db.distance_along_lane(ta["road"][i], ta["lane"][i], ta["s"][i],
-                                             tb["road"][i], tb["lane"][i], tb["s"][i],
-                                             map_path=map_path)
-    except spawn_db.SpawnDbError:
+        along = roads.distance_along_lane(ta["road"][i], ta["lane"][i], ta["s"][i],
+                                          tb["road"][i], tb["lane"][i], tb["s"][i],
+                                          map_path=map_path)
+    except roads.RoadError:
         along = None
     if along is not None:
         return True

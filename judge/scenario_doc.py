@@ -49,13 +49,13 @@ class ScenarioDoc:
 
     @cached_property
     def map_path(self) -> Path | None:
-        """The OpenDRIVE file lane positions are read on (``spawn_db.resolve_map`` of
+        """The OpenDRIVE file lane positions are read on (``roads.resolve_map`` of
         ``map_name`` or else ``logic_file``); None when that names no known map."""
-        from scenweave import spawn_db
+        from scenweave import roads
 
         try:
-            return spawn_db.resolve_map(self.map_name or self.logic_file).path
-        except spawn_db.UnknownMapError:
+            return roads.resolve_map(self.map_name or self.logic_file).path
+        except roads.UnknownMapError:
             return None
 
     @cached_property
@@ -137,15 +137,13 @@ class ScenarioDoc:
         if None in values or self.map_path is None:
             return None
         ego_s, lane, other_s = values
-        from scenweave import (
-            spawn_db,  # here: the map loads once, and only for scenarios that need it
-        )
+        from scenweave import roads  # here: the map loads once, only for scenarios needing it
 
         try:
-            return spawn_db.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
-                                                other.get("roadId"), int(lane), other_s,
-                                                map_path=self.map_path)
-        except spawn_db.SpawnDbError:  # not a lane position of the map
+            return roads.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
+                                             other.get("roadId"), int(lane), other_s,
+                                             map_path=self.map_path)
+        except roads.RoadError:  # not a lane position of the map
             return None
 
     @cached_property

@@ -57,7 +57,7 @@ from lxml import etree
 
 from scenweave.errors import ScenarioError
 from scenweave.player.scratch import scratch_folder
-from scenweave.spawn_db.opendrive import DRIVABLE_LANE_TYPES
+from scenweave.roads.opendrive import DRIVABLE_LANE_TYPES
 
 #: a WorldPosition starts an entity on every road passing this close (m)
 SEED_NEAR_M = 20.0
@@ -329,9 +329,9 @@ def _s_rate(road, s: np.ndarray, curvature: np.ndarray) -> float:
 
 
 def _sample_reference_lines(index: MapIndex) -> None:
-    from scenweave import spawn_db
+    from scenweave import roads
 
-    network = spawn_db.road_network(index.identity[0])
+    network = roads.road_network(index.identity[0])
     xy, hdg, ss, which = [], [], [], []
     for order, rid in enumerate(index.roads):
         index.road_order.append(rid)

@@ -116,12 +116,12 @@ def _play(scenario: etree._Element, map_path: Path, cut: maps.MapCut, until_s: f
 
 
 def _lights_of(map_path: Path) -> dict[str, tuple[float, float]]:
-    """``spawn_db.traffic_lights_carla`` of the map, once per process and file version."""
+    """``roads.traffic_lights_carla`` of the map, once per process and file version."""
     key = maps.map_identity(map_path)
     if key not in _lights:
-        from scenweave import spawn_db
+        from scenweave import roads
 
-        _lights[key] = spawn_db.traffic_lights_carla(map_path)
+        _lights[key] = roads.traffic_lights_carla(map_path)
     return _lights[key]
 
 

@@ -48,7 +48,7 @@ def translate(xosc_text: bytes, map_file: Path,
     """The esmini copy of ``xosc_text``, playing on ``map_file``.
 
     ``lights_carla`` maps each dynamic signal id of the map to its position in CARLA's frame
-    (``spawn_db.traffic_lights_carla``), what ``pos=x,y`` names are resolved against.
+    (``roads.traffic_lights_carla``), what ``pos=x,y`` names are resolved against.
     """
     try:
         root = etree.fromstring(xosc_text)

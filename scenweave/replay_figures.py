@@ -235,12 +235,12 @@ class _Facts:
     @property
     def map_path(self) -> Path | None:
         """The map the scenario was made for (params ``map``, else its LogicFile)."""
-        from scenweave import spawn_db
+        from scenweave import roads
 
         try:
-            return spawn_db.resolve_map(self.params.get("map") or (
+            return roads.resolve_map(self.params.get("map") or (
                 self.doc.logic_file if self.doc is not None else None)).path
-        except spawn_db.UnknownMapError:
+        except roads.UnknownMapError:
             return None
 
     def number(self, key: str) -> float | None:
@@ -683,9 +683,9 @@ def _draw_lanes(axes: Any, map_path: Any, box: tuple[float, float, float, float]
 
 
 def _network(map_path: Any) -> Any:
-    from scenweave import spawn_db
+    from scenweave import roads
 
-    return spawn_db.road_network(map_path)
+    return roads.road_network(map_path)
 
 
 @lru_cache(maxsize=4)
@@ -693,7 +693,7 @@ def _lane_borders(network: Any) -> list[tuple[tuple[float, float, float, float],
                                               np.ndarray]]:
     """(x0, x1, y0, y1), in a junction, (n, 2) points of each border of every drivable lane,
     sampled every ~2 m along the road (as spawn_db's map picture does). Once per map."""
-    from scenweave.spawn_db.lanes import lane_border_offsets, section_samples
+    from scenweave.roads.lanes import lane_border_offsets, section_samples
 
     found = []
     for key in network.drivable_lanes():

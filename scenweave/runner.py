@@ -88,7 +88,8 @@ def default_matcher(map_name: str | None = None) -> Any:
     in ``spawn_db_cache()`` (``spawn_db.spawn_database``). Imported here so ``scenweave
     --help`` stays fast.
     """
-    from scenweave.spawn_db import SpawnMatcher, resolve_map
+    from scenweave.roads import resolve_map
+    from scenweave.spawn_db import SpawnMatcher
 
     return SpawnMatcher.for_map(resolve_map(map_name), spawn_db_cache())
 

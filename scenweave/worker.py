@@ -242,7 +242,7 @@ def _described_queue(kwargs: dict) -> dict:
 def share_map(connection: Any, map_name: str | None, ttl_s: int) -> dict | None:
     """What a job says about its map: a bundled town by name; a map file by name and content
     hash, its content stored once in Redis for workers that do not have the file."""
-    from scenweave.spawn_db import resolve_map
+    from scenweave.roads import resolve_map
 
     if map_name is None:
         return None
@@ -309,7 +309,7 @@ _scratch_root: Path | None = None
 
 def matcher_for(factory: str, map_name: str | None = None) -> Any:
     """The spawn matcher ``module:callable`` makes for ``map_name``, made once per process."""
-    from scenweave.spawn_db import DEFAULT_MAP
+    from scenweave.roads import DEFAULT_MAP
 
     key = (factory, map_name or DEFAULT_MAP)
     if key not in _matchers:

@@ -1,129 +1,36 @@
-"""Spawn points: an OpenDRIVE reader, a spawn database per map and the SpawnMatcher.
+"""Spawn points: a spawn database per map and the SpawnMatcher (maps and lanes: ``roads``).
 
 Public API:
-- ``resolve_map(name_or_path)`` -> ``MapRef`` (a bundled CARLA town by name, any ``.xodr``
-  file by path; default Town04; ``UnknownMapError`` otherwise), ``bundled_maps()``, and
-  ``spawn_database(map_ref, cache_dir)`` -> the map's database file (shipped for Town04,
-  else built on first use and cached under the map file's sha256).
+- ``spawn_database(map_ref, cache_dir)`` -> the map's database file (shipped for Town04,
+  else built on first use and cached under the map file's sha256), ``database_path``.
 - ``SpawnMatcher(db_path=DEFAULT_DB_PATH)`` or ``SpawnMatcher.for_map(map_ref, cache_dir)``,
   with ``.find(params, top_n)`` (ranked ``SpawnCandidate`` list), ``.assess(params)``
   (every spawn's score or rejections) and
   ``.assign(params, index, top_n=5)`` (a new params dict with the spawn keys and ``map``
   filled).
-- ``lane_position_to_world(road_id, lane_id, s, offset=0)`` -> ``(x, y, z, h)`` and
-  ``advance_along_lane(road_id, lane_id, s, distance)`` -> ``(road_id, lane_id, s)`` on the
-  bundled Town04 map or ``map_path=``, OpenSCENARIO frame (= OpenDRIVE frame);
-  ``distance_along_lane(from_road, from_lane, from_s, to_road, to_lane, to_s)`` -> signed
-  metres along the lane (``None`` when not reached); ``traffic_lights_carla()``
-  (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
 - ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``,
   ``carry_reviews``.
-- ``load_opendrive(path)`` and ``RoadNetwork`` for any other map.
-- Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``OpenDriveError``,
-  ``LaneEndsError``, ``SpawnDatabaseError``, ``UnknownMapError``.
+- Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``SpawnDatabaseError``.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
 from scenweave.spawn_db.database import (
+    DEFAULT_DB_PATH,
     build_database,
     carry_reviews,
+    database_path,
     load_database,
     mark_reviewed,
+    spawn_database,
     write_database,
 )
-from scenweave.spawn_db.errors import (
-    LaneEndsError,
-    NoSpawnFits,
-    OpenDriveError,
-    ParamsError,
-    SpawnDatabaseError,
-    SpawnDbError,
-)
-from scenweave.spawn_db.lanes import WorldPose
-from scenweave.spawn_db.map_ref import (
-    BUNDLED_MAPS_DIR,
-    DEFAULT_MAP,
-    MapRef,
-    UnknownMapError,
-    bundled_maps,
-    database_path,
-    resolve_map,
-    spawn_database,
-)
+from scenweave.spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError, SpawnDbError
 from scenweave.spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
-from scenweave.spawn_db.opendrive import load_opendrive
-from scenweave.spawn_db.road_network import LanePoint, RoadNetwork
-from scenweave.spawn_db.signals import is_traffic_light, signal_position
-
-
-def lane_position_to_world(road_id: int | str, lane_id: int, s: float, offset: float = 0.0,
-                           map_path: str | Path | None = None
-                           ) -> tuple[float, float, float, float]:
-    """``(x, y, z, h)`` of a lane position, OpenSCENARIO frame; ``h`` along the lane's traffic.
-
-    ``offset`` is lateral, along OpenDRIVE's ``t`` (positive = left of the road's reference
-    direction). Default map: the bundled Town04.
-    """
-    pose = road_network(map_path).lane_to_world(road_id, lane_id, s, offset)
-    return pose.x, pose.y, pose.z, pose.h
-
-
-def advance_along_lane(road_id: int | str, lane_id: int, s: float, distance: float,
-                       map_path: str | Path | None = None) -> tuple[int | str, int, float]:
-    """The lane position ``distance`` metres further along the lane (negative: behind).
-
-    The distance is measured along the lane centre, following successors across road and
-    junction boundaries (straightest continuation). Raises :class:`LaneEndsError` if the
-    drivable lane ends first.
-    """
-    point = road_network(map_path).advance(road_id, lane_id, s, distance)
-    road = int(point.road_id) if point.road_id.lstrip("-").isdigit() else point.road_id
-    return road, point.lane_id, point.s
-
-
-def distance_along_lane(from_road_id: int | str, from_lane_id: int, from_s: float,
-                        to_road_id: int | str, to_lane_id: int, to_s: float,
-                        cap_m: float = 1000.0, map_path: str | Path | None = None
-                        ) -> float | None:
-    """Signed metres driven along the lane from one lane position to another.
-
-    Positive when the second lies ahead in the driving direction, negative when behind;
-    ``None`` when it is not on the same lane (followed across road and junction boundaries
-    like :func:`advance_along_lane`) within ``cap_m``. Raises :class:`OpenDriveError` when the
-    first position is not on the map.
-    """
-    start = LanePoint(str(from_road_id), int(from_lane_id), float(from_s))
-    end = LanePoint(str(to_road_id), int(to_lane_id), float(to_s))
-    return road_network(map_path).distance_between(start, end, cap_m)
-
-
-def traffic_lights_carla(map_path: str | Path | None = None) -> dict[str, tuple[float, float]]:
-    """Every dynamic traffic light of the map: signal id -> ``(x, y)`` in CARLA's frame.
-
-    These are the positions a ``TrafficSignalStateAction name="pos=x,y"`` resolves against.
-    """
-    network = road_network(map_path)
-    return {signal.id: _carla_xy(signal_position(network, signal))
-            for road in network.map.roads.values() for signal in road.signals
-            if is_traffic_light(signal)}
-
-
-def _carla_xy(pose: WorldPose) -> tuple[float, float]:
-    return pose.x, -pose.y
-
 
 __all__ = [
-    "BUNDLED_MAPS_DIR", "DEFAULT_DB_PATH", "DEFAULT_MAP", "DEFAULT_MAP_PATH", "Assessment",
-    "LaneEndsError", "NoSpawnFits",
-    "OpenDriveError", "ParamsError", "Rejection", "RoadNetwork", "SpawnCandidate",
-    "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "advance_along_lane",
-    "distance_along_lane",
-    "build_database", "carry_reviews", "lane_position_to_world", "load_database", "load_opendrive",
-    "mark_reviewed", "road_network", "traffic_lights_carla", "write_database",
-    "MapRef", "UnknownMapError", "bundled_maps", "database_path", "resolve_map",
-    "spawn_database",
+    "DEFAULT_DB_PATH", "Assessment", "NoSpawnFits", "ParamsError", "Rejection",
+    "SpawnCandidate", "SpawnDatabaseError", "SpawnDbError", "SpawnMatcher", "build_database",
+    "carry_reviews", "database_path", "load_database", "mark_reviewed", "spawn_database",
+    "write_database",
 ]

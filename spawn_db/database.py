@@ -26,13 +26,17 @@ import numpy as np
 
 from scenweave import maneuvers
 from scenweave.files import write_text_atomic
-from scenweave.spawn_db.bundled import road_network
-from scenweave.spawn_db.errors import LaneEndsError, SpawnDatabaseError
-from scenweave.spawn_db.lanes import lane_center_offset, lane_width
-from scenweave.spawn_db.road_network import LaneKey, RoadNetwork
-from scenweave.spawn_db.signals import JunctionApproach, junction_approach, signal_position
+from scenweave.roads.bundled import road_network
+from scenweave.roads.errors import LaneEndsError
+from scenweave.roads.lanes import lane_center_offset, lane_width
+from scenweave.roads.map_ref import MapRef
+from scenweave.roads.road_network import LaneKey, RoadNetwork
+from scenweave.roads.signals import JunctionApproach, junction_approach, signal_position
+from scenweave.spawn_db.errors import SpawnDatabaseError
 
 DATABASE_SCHEMA = Path(__file__).with_name("spawn_db.schema.json")
+#: the spawn database generated from the bundled Town04 by ``scenweave spawn-db build``
+DEFAULT_DB_PATH = Path(__file__).resolve().parent / "Town04.json"
 
 FORMAT_VERSION = 1
 #: roads whose speed record is at least this are highway (km/h)
@@ -420,3 +424,33 @@ def mark_reviewed(path: str | Path, spawn_ids: Iterable[int], reviewed: bool = T
             changed += 1
     write_database(database, path)
     return changed
+
+
+def database_path(map_ref: MapRef, cache_dir: Path) -> Path:
+    """Where the spawn database of ``map_ref`` lives (whether or not it exists yet).
+
+    The shipped ``Town04.json`` serves the bundled Town04 (people's reviews live there);
+    every other map's database is ``cache_dir/<name>-<sha256>.json``, so a changed map file
+    gets its own.
+    """
+    if _shipped_sha256() == map_ref.sha256:
+        return DEFAULT_DB_PATH
+    return Path(cache_dir) / f"{map_ref.name}-{map_ref.sha256}.json"
+
+
+def spawn_database(map_ref: MapRef, cache_dir: Path) -> Path:
+    """The spawn database file of ``map_ref`` (:func:`database_path`), built on first use
+    (written atomically) and read as it is on every later use: the shipped ``Town04.json``
+    for the bundled Town04, otherwise a database cached in ``cache_dir`` under the map
+    file's sha256 (a changed file gets a new database, an unchanged one never rebuilds)."""
+    path = database_path(map_ref, cache_dir)
+    if not path.exists():
+        write_database(build_database(map_ref.path), path)
+    return path
+
+
+@cache
+def _shipped_sha256() -> str:
+    database = json.loads(DEFAULT_DB_PATH.read_text(encoding="utf-8"))
+    sha256: str = database["metadata"]["source_sha256"]
+    return sha256

@@ -2,19 +2,11 @@
 
 from __future__ import annotations
 
-from scenweave.errors import InfrastructureError, InputError, ScenarioError, ScenWeaveError
+from scenweave.errors import InfrastructureError, ScenarioError, ScenWeaveError
 
 
 class SpawnDbError(ScenWeaveError):
     """Root of every error raised by ``spawn_db``."""
-
-
-class OpenDriveError(SpawnDbError, InputError):
-    """The OpenDRIVE file is missing, malformed or uses a feature this reader does not support."""
-
-
-class LaneEndsError(SpawnDbError, ScenarioError):
-    """A walk along a lane ran into the end of the drivable network."""
 
 
 class SpawnDatabaseError(SpawnDbError, InfrastructureError):

@@ -22,9 +22,9 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
 from scenweave.files import write_bytes_atomic  # noqa: E402
-from scenweave.spawn_db.lanes import lane_center_offset, section_samples  # noqa: E402
-from scenweave.spawn_db.road_network import RoadNetwork  # noqa: E402
-from scenweave.spawn_db.signals import is_traffic_light, signal_position  # noqa: E402
+from scenweave.roads.lanes import lane_center_offset, section_samples  # noqa: E402
+from scenweave.roads.road_network import RoadNetwork  # noqa: E402
+from scenweave.roads.signals import is_traffic_light, signal_position  # noqa: E402
 
 CONTEXT_COLOURS = {"highway": "#1f77b4", "urban": "#d62728", "rural": "#2ca02c",
                    "divided road": "#9467bd"}

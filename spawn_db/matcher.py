@@ -32,18 +32,18 @@ from typing import Any, TypedDict
 
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
-from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, DEFAULT_MAP_PATH, road_network
-from scenweave.spawn_db.database import load_database, suits_urban
-from scenweave.spawn_db.errors import (
-    LaneEndsError,
-    NoSpawnFits,
-    OpenDriveError,
-    ParamsError,
-    SpawnDatabaseError,
+from scenweave.roads.bundled import DEFAULT_MAP_PATH, road_network
+from scenweave.roads.errors import LaneEndsError, OpenDriveError
+from scenweave.roads.map_ref import MapRef, resolve_map
+from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
+from scenweave.roads.signals import junction_approach
+from scenweave.spawn_db.database import (
+    DEFAULT_DB_PATH,
+    load_database,
+    spawn_database,
+    suits_urban,
 )
-from scenweave.spawn_db.map_ref import MapRef, resolve_map, spawn_database
-from scenweave.spawn_db.road_network import LaneKey, LanePoint, RoadNetwork
-from scenweave.spawn_db.signals import junction_approach
+from scenweave.spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
 VEHICLE_MARGIN_M = 6.0
@@ -463,7 +463,15 @@ class SpawnMatcher:
                 and not self._route_rejections(entry, params))
 
     def _placed(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
-        """``params`` with the spawn keys filled from ``candidate``."""
+        """``params`` with the spawn keys filled from ``candidate``; :class:`NoSpawnFits` when
+        an actor's lane ends before its place (the road model's ``LaneEndsError``)."""
+        try:
+            return self._filled(params, candidate)
+        except LaneEndsError as err:
+            raise NoSpawnFits(f"{params.get('scenario_id')}: spawn point {candidate.spawn_id} "
+                              f"of map {self.map.name}: {err}") from err
+
+    def _filled(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
         result = dict(params)
         result["map"] = self.map.logic_file
         result["spawn_id"] = candidate.spawn_id
@@ -475,6 +483,7 @@ class SpawnMatcher:
             pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
             result.update(_pose_keys(actor, pose.x, pose.y, pose.z, pose.h))
             result.update(_lane_keys(actor, point))
+            result[f"{actor}_in_junction"] = self.network.road(point.road_id).in_junction
         if params.get("domain") == "urban":
             needs = Requirements.from_params(params)
             result.update(_light_keys(candidate.entry, needs))

@@ -64,7 +64,7 @@ def test_every_exception_of_ours_has_the_one_root(dotted):
     ("scenweave.spawn_db.NoSpawnFits", ScenarioError),
     ("scenweave.agent.code.PatchError", ScenarioError),
     ("scenweave.ingest.issues.RecordIssue", InputError),
-    ("scenweave.spawn_db.UnknownMapError", InputError),
+    ("scenweave.roads.UnknownMapError", InputError),
     ("scenweave.schemas.params.ParamsInvalid", InputError),
 ])
 def test_the_branches_say_what_a_caller_does(dotted, branch):

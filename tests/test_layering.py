@@ -10,8 +10,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
-BOTTOM = ("corpus", "sandbox", "schemas", "judge", "spawn_db", "player", "maneuvers", "files",
-          "errors")
+BOTTOM = ("corpus", "sandbox", "schemas", "judge", "spawn_db", "player", "roads", "maneuvers",
+          "files", "errors")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 
@@ -132,7 +132,7 @@ def test_the_packages_import_each_other_without_a_cycle():
 
 
 @pytest.mark.parametrize("package, below", [("maneuvers", {"errors"}), ("files", set()),
-                                            ("errors", set())])
+                                            ("errors", set()), ("roads", {"errors", "files"})])
 def test_the_bottom_layer_imports_nothing_of_ours_but_the_error_root(package, below):
     assert {layer(target) for name, targets in GRAPH.items() if layer(name) == package
             for target in targets} <= {package, *below}

@@ -48,8 +48,8 @@ def test_the_wheel_holds_only_the_scenweave_namespace(tmp_path):
     assert tops == {"scenweave", next(t for t in tops if t.endswith(".dist-info"))}, tops
     for expected in ("scenweave/agent/graph.py", "scenweave/corpus/corpus_utils.py",
                      "scenweave/schemas/highway_layouts.json", "scenweave/spawn_db/Town04.json",
-                     "scenweave/spawn_db/maps/Town04.xodr", "scenweave/spawn_db/maps/Town06.xodr",
-                     "scenweave/spawn_db/maps/Town10HD.xodr",
-                     "scenweave/spawn_db/maps/LICENSE-CARLA-MIT.txt",
+                     "scenweave/roads/maps/Town04.xodr", "scenweave/roads/maps/Town06.xodr",
+                     "scenweave/roads/maps/Town10HD.xodr",
+                     "scenweave/roads/maps/LICENSE-CARLA-MIT.txt",
                      "scenweave/templates/report.html"):
         assert expected in names

@@ -6,7 +6,7 @@ are there, ``params.json`` (the record's values), ``scenario.xosc`` (the scripte
 changes) and the mined record's ``recorded.json``. The animation needs only ``replay.json``;
 the rest adds the record's values, the judge's tolerance bands and its findings.
 
-Everything is plain JSON: lanes are polylines sampled from the OpenDRIVE map by ``spawn_db``
+Everything is plain JSON: lanes are polylines sampled from the OpenDRIVE map by ``roads``
 (the one reader of the map), gaps are the judge's own measurement (``gap_along_lane``) and
 the findings are the judge's, run again on the playback (``judge.replay.judge_replay``), so
 a file played with ``scenweave replay --force`` shows them too.
@@ -90,13 +90,13 @@ def read_json(path: Path) -> dict:
 
 
 def _map_path(name: str | None) -> Path | None:
-    from scenweave import spawn_db
+    from scenweave import roads
 
     if name and Path(name).is_file():
         return Path(name)
     try:
-        return spawn_db.resolve_map(Path(name).stem if name else None).path
-    except spawn_db.UnknownMapError:
+        return roads.resolve_map(Path(name).stem if name else None).path
+    except roads.UnknownMapError:
         return None
 
 
@@ -147,10 +147,10 @@ def _lanes_near(map_path: Path | None, playback: Playback) -> list[dict]:
 def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[list[float]]]]:
     """(x0, x1, y0, y1), in a junction, [[x, y], ...] of both borders of every drivable lane
     section of the map (once per map and process)."""
-    from scenweave import spawn_db
-    from scenweave.spawn_db.lanes import lane_border_offsets, section_samples
+    from scenweave import roads
+    from scenweave.roads.lanes import lane_border_offsets, section_samples
 
-    network = spawn_db.road_network(map_path)
+    network = roads.road_network(map_path)
     found = []
     for key in network.drivable_lanes():
         road = network.road(key.road_id)

@@ -72,7 +72,7 @@ def map_option(optional: bool = False, help: str = MAP_HELP
     def resolve(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
         if value is None and optional:
             return None
-        from scenweave.spawn_db import UnknownMapError, resolve_map
+        from scenweave.roads import UnknownMapError, resolve_map
 
         try:
             return resolve_map(value)

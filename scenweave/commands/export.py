@@ -84,7 +84,7 @@ def _folder_names(files: list[Path]) -> dict[Path, str]:
 
 def _export_esmini(xosc: Path, out_dir: Path, name: str, esmini: Path) -> str | None:
     """Write the esmini copy of ``xosc`` and its recording; a line naming the problem, if any."""
-    from scenweave import spawn_db
+    from scenweave import roads
     from scenweave.player import TranslationError
     from scenweave.player.maps import esmini_map
     from scenweave.player.translate import translate
@@ -102,7 +102,7 @@ def _export_esmini(xosc: Path, out_dir: Path, name: str, esmini: Path) -> str | 
     try:
         # the map by a path relative to the scenario: the exported folder can be moved whole
         translated = translate(xosc.read_bytes(), Path("..") / MAPS_DIR / map_copy.name,
-                               spawn_db.traffic_lights_carla(map_path))
+                               roads.traffic_lights_carla(map_path))
     except TranslationError as err:
         return f"{xosc}: {err}"
     scenario = folder / "scenario.xosc"

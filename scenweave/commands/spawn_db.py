@@ -9,16 +9,15 @@ from pathlib import Path
 import click
 
 from scenweave.commands.agent_options import map_option
+from scenweave.roads import MapRef, road_network
 from scenweave.runner import spawn_db_cache
 from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
-    MapRef,
     build_database,
     carry_reviews,
     database_path,
     load_database,
     mark_reviewed,
-    road_network,
     spawn_database,
     write_database,
 )

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from scenweave import corpus, spawn_db
+from scenweave import corpus, roads
 from scenweave.agent.edits import apply_edits
 from scenweave.agent.prompts import patch_prompt
 from scenweave.corpus.worked_example import adaptation, provenance, worked_example
@@ -82,6 +82,6 @@ def test_the_right_patch_plays_back_and_a_flattened_one_does_not(tmp_path, phase
     flat_path = _run(code, phased, tmp_path / "flat.xosc")
     flattened = validate_xosc(flat_path, phased, replay=ReplaySettings())
     assert not flattened.valid  # the phases it dropped are missing (FIDELITY_MISSING) ...
-    playback = replay_file(flat_path, spawn_db.DEFAULT_MAP_PATH, ReplaySettings())
+    playback = replay_file(flat_path, roads.DEFAULT_MAP_PATH, ReplaySettings())
     findings = judge_replay(playback, phased, ScenarioDoc(etree.parse(str(flat_path))))
     assert "REPLAY_GAP" in {f.code for f in findings}  # ... and played, the end gap is off

@@ -11,7 +11,7 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from scenweave import spawn_db
+from scenweave import roads
 from scenweave.corpus.retrieval import class_tags
 
 TAGS = class_tags()  # checked against docs/params.md
@@ -36,8 +36,8 @@ def _common(code: str, duration_s: float, start_s: float, ego: float, ego_end: f
 
 def _lane(actor: str, lane_id: int, ahead_m: float = 0.0) -> dict:
     """Spawn keys of ``actor`` in ``lane_id`` of road 45, ``ahead_m`` along it from s = 100."""
-    road, lane, s = spawn_db.advance_along_lane(45, lane_id, EGO_S, ahead_m)
-    x, y, z, h = spawn_db.lane_position_to_world(road, lane, s)
+    road, lane, s = roads.advance_along_lane(45, lane_id, EGO_S, ahead_m)
+    x, y, z, h = roads.lane_position_to_world(road, lane, s)
     return {f"{actor}_road_id": road, f"{actor}_lane_id": lane, f"{actor}_s": round(s, 4),
             f"{actor}_x": round(x, 4), f"{actor}_y": round(y, 4), f"{actor}_z": round(z, 4),
             f"{actor}_h": round(h, 6)}

@@ -177,7 +177,7 @@ def test_nan_speed_is_refused(tmp_path):
 SANDBOX_RUN = """
 import importlib.abc, importlib.machinery, json, sys
 LIB = sys.argv[1]
-OTHERS = {"ingest", "agent", "sandbox", "schemas", "spawn_db", "player", "tests"}
+OTHERS = {"ingest", "agent", "sandbox", "schemas", "spawn_db", "player", "roads", "tests"}
 class OnlyTheCorpus(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path, target=None):
         if name == "scenweave":  # as in the sandbox: a namespace that holds only the corpus

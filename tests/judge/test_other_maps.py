@@ -10,7 +10,8 @@ from scenweave import corpus
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.judge import validate_xosc
 from scenweave.judge.validate_xosc import validate_tree
-from scenweave.spawn_db import SpawnMatcher, resolve_map
+from scenweave.roads import resolve_map
+from scenweave.spawn_db import SpawnMatcher
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from scenweave import corpus, spawn_db
+from scenweave import corpus, roads
 from scenweave.inputs import InputSelection, load_input
 from scenweave.judge import validate_xosc
 from scenweave.judge.replay import judge_collisions_only, judge_replay, lane_changes
@@ -44,7 +44,7 @@ def _scenario(sample_params) -> Callable[[Path, str], tuple[Path, dict]]:
 
 
 def _judge(path: Path, params: dict, settings: ReplaySettings | None = None) -> set[str]:
-    playback = replay_file(path, spawn_db.DEFAULT_MAP_PATH, settings)
+    playback = replay_file(path, roads.DEFAULT_MAP_PATH, settings)
     doc = ScenarioDoc(etree.parse(str(path)))
     return {f.code for f in judge_replay(playback, params, doc)}
 
@@ -181,7 +181,7 @@ def test_each_replay_code_fires_on_its_damage(tmp_path, code, _scenario):
 
 def test_a_replay_past_its_wall_time_is_an_engine_failure_not_a_crash(tmp_path, _scenario):
     path, params = _scenario(tmp_path, "FRF")
-    playback = replay_file(path, spawn_db.DEFAULT_MAP_PATH, ReplaySettings(wall_time_s=0.01))
+    playback = replay_file(path, roads.DEFAULT_MAP_PATH, ReplaySettings(wall_time_s=0.01))
     assert playback.engine_error and "wall_time_s" in playback.engine_error
     assert {f.code for f in judge_collisions_only(playback)} == {"REPLAY_ENGINE"}
 
@@ -189,14 +189,14 @@ def test_a_replay_past_its_wall_time_is_an_engine_failure_not_a_crash(tmp_path, 
 def test_replay_leaves_the_delivered_file_as_it_was(tmp_path, _scenario):
     path, params = _scenario(tmp_path, "U4_2")
     before = path.read_bytes()
-    replay_file(path, spawn_db.DEFAULT_MAP_PATH)
+    replay_file(path, roads.DEFAULT_MAP_PATH)
     assert path.read_bytes() == before
     assert b'name="pos=' in before  # CARLA's light names stay in the delivered file
 
 
 def test_playback_round_trips_through_its_file(tmp_path, _scenario):
     path, params = _scenario(tmp_path, "CINF")
-    playback = replay_file(path, spawn_db.DEFAULT_MAP_PATH)
+    playback = replay_file(path, roads.DEFAULT_MAP_PATH)
     playback.write(tmp_path / "replay.json")
     again = Playback.read(tmp_path / "replay.json")
     assert again.to_dict() == json.loads(json.dumps(playback.to_dict()))

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from scenweave import corpus, spawn_db
+from scenweave import corpus, roads
 from scenweave.ingest import check_playable, extract_params
 from scenweave.judge import validate_xosc
 from scenweave.judge.replay import (
@@ -89,7 +89,7 @@ def scenario(tmp_path, params) -> tuple[Path, dict]:
 
 
 def _findings(path: Path, params: dict) -> list:
-    playback = replay_file(path, spawn_db.DEFAULT_MAP_PATH, ReplaySettings())
+    playback = replay_file(path, roads.DEFAULT_MAP_PATH, ReplaySettings())
     return judge_replay(playback, params, ScenarioDoc(etree.parse(str(path))))
 
 

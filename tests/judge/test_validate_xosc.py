@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 from lxml import etree
 
-from scenweave import corpus, spawn_db
+from scenweave import corpus, roads
 from scenweave.cli import cli
 from scenweave.judge import run_asam_qc, validate_xosc
 from tests.corpus.params_examples import TAGS, example_params
@@ -212,8 +212,8 @@ CHECK_CASES: dict[str, tuple[str, Mutation, bool]] = {
 def _s_at_recorded_gap(code: str) -> float:
     """``s`` of the example NPC's lane ``npc_distance_m`` along it from the ego's ``s``."""
     p = example_params(code)
-    return spawn_db.advance_along_lane(p["npc_road_id"], p["npc_lane_id"], p["ego_s"],
-                                       p["npc_distance_m"])[2]
+    return roads.advance_along_lane(p["npc_road_id"], p["npc_lane_id"], p["ego_s"],
+                                    p["npc_distance_m"])[2]
 
 
 def _event_from(code: str, action: str) -> str:
@@ -322,8 +322,8 @@ def test_npc_placed_by_a_difference_in_s_on_a_curved_road_is_caught(tmp_path, co
     path, params = _scenario(tmp_path, code)
     actor = "center" if code == "FRB" else "npc"
     entity = "npc_center" if code == "FRB" else "npc"
-    along = spawn_db.distance_along_lane(45, params[f"{actor}_lane_id"], params["ego_s"], 45,
-                                         params[f"{actor}_lane_id"], params[f"{actor}_s"])
+    along = roads.distance_along_lane(45, params[f"{actor}_lane_id"], params["ego_s"], 45,
+                                      params[f"{actor}_lane_id"], params[f"{actor}_s"])
     by_s = params["ego_s"] + along
     assert abs(by_s - params[f"{actor}_s"]) > 0.5  # the curve makes the two differ
     _mutate(path, _set(f"//Private[@entityRef='{entity}']//LanePosition", "s", str(by_s)))

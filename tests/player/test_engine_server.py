@@ -16,12 +16,12 @@ from pathlib import Path
 
 import pytest
 
-from scenweave import spawn_db
+from scenweave import roads
 from scenweave.player import ReplaySettings, engine, find_esmini, replay_file
 from scenweave.player.errors import PlayerUnavailable
 
 ROOT = Path(__file__).resolve().parents[2]
-MAP = spawn_db.DEFAULT_MAP_PATH
+MAP = roads.DEFAULT_MAP_PATH
 
 SCENARIO = """<?xml version="1.0" encoding="utf-8"?>
 <OpenSCENARIO>
@@ -97,10 +97,10 @@ def test_the_callers_main_module_is_imported_once_not_per_replay(tmp_path):
         "import sys\n"
         "from pathlib import Path\n"
         "if __name__ == '__main__':\n"
-        "    import spawn_db\n"
+        "    import roads\n"
         "    from player import replay_file\n"
         "    for _ in range(3):\n"
-        "        playback = replay_file(Path(sys.argv[1]), spawn_db.DEFAULT_MAP_PATH)\n"
+        "        playback = replay_file(Path(sys.argv[1]), roads.DEFAULT_MAP_PATH)\n"
         "        assert playback.engine_error is None, playback.engine_error\n"
         "    print('replayed', flush=True)\n", encoding="utf-8")
     env = {**os.environ, "PYTHONPATH": str(ROOT)}

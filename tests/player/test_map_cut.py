@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from scenweave import corpus, spawn_db
+from scenweave import corpus, roads
 from scenweave.inputs import InputSelection, load_input
 from scenweave.player import Playback, ReplaySettings, find_esmini, maps, replay_file
 from scenweave.player.errors import PlayerUnavailable
@@ -23,7 +23,7 @@ from scenweave.player.replay import _lights_of
 from scenweave.player.translate import translate
 from scenweave.spawn_db import SpawnMatcher
 
-MAP = spawn_db.DEFAULT_MAP_PATH
+MAP = roads.DEFAULT_MAP_PATH
 CLASSES = ("LCF", "CINB", "U4_4")
 
 

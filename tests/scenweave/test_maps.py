@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from scenweave import maneuvers
 from scenweave.cli import cli
-from scenweave.spawn_db import BUNDLED_MAPS_DIR
+from scenweave.roads import BUNDLED_MAPS_DIR
 
 URBAN = "U1_1,U4_1,U4_2,U4_3,U4_4"
 

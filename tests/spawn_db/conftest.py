@@ -1,17 +1,12 @@
-"""Fixtures of the spawn_db tests: the bundled Town04 network and database, loaded once."""
+"""Fixtures of the spawn_db tests: the bundled Town04 network (``tests.roads``) and database,
+loaded once."""
 
 from __future__ import annotations
 
 import pytest
 
-from scenweave.spawn_db import DEFAULT_DB_PATH, load_database, road_network
-from scenweave.spawn_db.road_network import RoadNetwork
-
-
-@pytest.fixture(scope="session")
-def town04() -> RoadNetwork:
-    """The lane graph of the bundled Town04 map."""
-    return road_network()
+from scenweave.spawn_db import DEFAULT_DB_PATH, load_database
+from tests.roads.conftest import town04  # noqa: F401 - the road model's fixture, shared
 
 
 @pytest.fixture(scope="session")

@@ -9,9 +9,11 @@ import shutil
 import numpy as np
 import pytest
 
+from scenweave.roads import DEFAULT_MAP_PATH
+from scenweave.roads.lanes import lane_border_offsets
+from scenweave.roads.signals import is_traffic_light, signal_position
 from scenweave.spawn_db import (
     DEFAULT_DB_PATH,
-    DEFAULT_MAP_PATH,
     SpawnDatabaseError,
     build_database,
     carry_reviews,
@@ -19,9 +21,7 @@ from scenweave.spawn_db import (
     mark_reviewed,
     write_database,
 )
-from scenweave.spawn_db.database import validate_database
-from scenweave.spawn_db.lanes import lane_border_offsets
-from scenweave.spawn_db.signals import is_traffic_light, signal_position
+from scenweave.spawn_db.database import DATABASE_SCHEMA, validate_database
 
 
 @pytest.fixture(scope="module")
@@ -142,8 +142,8 @@ def test_invalid_database_names_the_field(tmp_path):
 
 def test_any_map_builds_and_matches(tmp_path):
     from scenweave.spawn_db import SpawnMatcher
+    from tests.roads.synthetic_maps import two_road_chain, write
     from tests.spawn_db.contract_params import highway
-    from tests.spawn_db.synthetic_maps import two_road_chain, write
 
     map_path = write(tmp_path, two_road_chain().replace('max="50"', 'max="120"'), "Chain.xodr")
     database = build_database(map_path)
@@ -168,3 +168,9 @@ def test_any_map_builds_and_matches(tmp_path):
     map_path.unlink()
     with pytest.raises(SpawnDatabaseError, match="Chain.xodr.*map_path="):
         SpawnMatcher(db_path)
+
+
+def test_schema_of_the_database_is_a_valid_json_schema():
+    from jsonschema import Draft202012Validator
+
+    Draft202012Validator.check_schema(json.loads(DATABASE_SCHEMA.read_text()))

@@ -13,9 +13,10 @@ import pytest
 from scenweave import maneuvers
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
-from scenweave.spawn_db import NoSpawnFits, SpawnMatcher, traffic_lights_carla
-from scenweave.spawn_db.road_network import LanePoint
-from scenweave.spawn_db.signals import junction_approach
+from scenweave.roads import traffic_lights_carla
+from scenweave.roads.road_network import LanePoint
+from scenweave.roads.signals import junction_approach
+from scenweave.spawn_db import NoSpawnFits, SpawnMatcher
 
 PER_CLASS = 12
 

@@ -17,8 +17,8 @@ from typing import NamedTuple, TypeVar, cast
 
 import numpy as np
 
-from scenweave.spawn_db.errors import LaneEndsError, OpenDriveError
-from scenweave.spawn_db.lanes import (
+from scenweave.roads.errors import LaneEndsError, OpenDriveError
+from scenweave.roads.lanes import (
     WorldPose,
     driving_direction,
     lane_distance,
@@ -28,7 +28,7 @@ from scenweave.spawn_db.lanes import (
     point_at,
     s_after_distance,
 )
-from scenweave.spawn_db.opendrive import OpenDriveMap, Road, RoadLink
+from scenweave.roads.opendrive import OpenDriveMap, Road, RoadLink
 
 T = TypeVar("T")
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from scenweave.spawn_db.lanes import WorldPose, point_at
-from scenweave.spawn_db.opendrive import Signal
-from scenweave.spawn_db.road_network import LaneKey, RoadNetwork
+from scenweave.roads.lanes import WorldPose, point_at
+from scenweave.roads.opendrive import Signal
+from scenweave.roads.road_network import LaneKey, RoadNetwork
 
 #: OpenDRIVE signal type of a traffic light (as CARLA writes it)
 TRAFFIC_LIGHT_TYPE = "1000001"

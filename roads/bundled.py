@@ -1,18 +1,18 @@
-"""The map and database that ship with ScenWeave (CARLA Town04), loaded once per process."""
+"""The default map that ships with ScenWeave (CARLA Town04), and every map's lane graph
+loaded once per process."""
 
 from __future__ import annotations
 
 from functools import cache
 from pathlib import Path
 
-from scenweave.spawn_db.opendrive import load_opendrive
-from scenweave.spawn_db.road_network import RoadNetwork
+from scenweave.roads.opendrive import load_opendrive
+from scenweave.roads.road_network import RoadNetwork
 
-PACKAGE_DIR = Path(__file__).resolve().parent
-#: CARLA's Town04 OpenDRIVE map (CC-BY 4.0, see maps/ATTRIBUTION.md)
-DEFAULT_MAP_PATH = PACKAGE_DIR / "maps" / "Town04.xodr"
-#: the spawn database generated from it by ``scenweave spawn-db build``
-DEFAULT_DB_PATH = PACKAGE_DIR / "Town04.json"
+#: the CARLA towns that ship with ScenWeave (MIT, see maps/ATTRIBUTION.md)
+BUNDLED_MAPS_DIR = Path(__file__).resolve().parent / "maps"
+#: CARLA's Town04 OpenDRIVE map, the map a scenario is made for when nothing names one
+DEFAULT_MAP_PATH = BUNDLED_MAPS_DIR / "Town04.xodr"
 
 
 @cache

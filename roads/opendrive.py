@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scenweave.spawn_db.errors import OpenDriveError
-from scenweave.spawn_db.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
+from scenweave.roads.errors import OpenDriveError
+from scenweave.roads.plan_view import Arc, Geometry, Line, ParametricCubic, PlanView, Spiral
 
 #: lane types a car may drive on (the one set: the player's map cutter asks it too)
 DRIVABLE_LANE_TYPES = frozenset(

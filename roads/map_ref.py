@@ -1,37 +1,24 @@
-"""Which map: a bundled CARLA town by name or any OpenDRIVE file, and its spawn database.
+"""Which map: a bundled CARLA town by name or any OpenDRIVE file.
 
-Two definitions live here and nowhere else:
-
-- :func:`resolve_map` turns what a user or a params dict says (``"Town06"``, a path to an
-  ``.xodr`` file, nothing = Town04) into a :class:`MapRef`: the file, and the name a scenario's
-  ``RoadNetwork/LogicFile`` gives it (``MapRef.logic_file``, also the params key ``map``);
-- :func:`spawn_database` gives the spawn database of a map: the shipped ``Town04.json`` for
-  the bundled Town04, otherwise a database built on first use and cached in ``cache_dir``
-  under the map file's sha256 (a changed file gets a new database, an unchanged one never
-  rebuilds).
+:func:`resolve_map` (defined here and nowhere else) turns what a user or a params dict says
+(``"Town06"``, a path to an ``.xodr`` file, nothing = Town04) into a :class:`MapRef`: the
+file, and the name a scenario's ``RoadNetwork/LogicFile`` gives it (``MapRef.logic_file``,
+also the params key ``map``).
 """
 
 from __future__ import annotations
 
 import hashlib
-import json
 from dataclasses import dataclass
-from functools import cache, cached_property
+from functools import cached_property
 from pathlib import Path
 
-from scenweave.errors import InputError
-from scenweave.spawn_db.bundled import DEFAULT_DB_PATH, PACKAGE_DIR
-from scenweave.spawn_db.errors import SpawnDbError
+from scenweave.roads.bundled import BUNDLED_MAPS_DIR
+from scenweave.roads.errors import UnknownMapError
 
-#: the CARLA towns that ship with ScenWeave (MIT, see maps/ATTRIBUTION.md)
-BUNDLED_MAPS_DIR = PACKAGE_DIR / "maps"
 #: the map a scenario is made for when nothing names one
 DEFAULT_MAP = "Town04"
 MAP_SUFFIX = ".xodr"
-
-
-class UnknownMapError(SpawnDbError, InputError, ValueError):
-    """A map name that is not bundled, or a map file that does not exist."""
 
 
 @dataclass(frozen=True)
@@ -40,7 +27,7 @@ class MapRef:
 
     name: str
     path: Path
-    #: one of the CARLA towns in ``spawn_db/maps/`` (CARLA loads it by name)
+    #: one of the CARLA towns in ``roads/maps/`` (CARLA loads it by name)
     bundled: bool
 
     @property
@@ -84,33 +71,3 @@ def _map_file(path: Path) -> MapRef:
     path = path.resolve()
     bundled = path.parent == BUNDLED_MAPS_DIR.resolve()
     return MapRef(path.stem, path, bundled=bundled)
-
-
-def database_path(map_ref: MapRef, cache_dir: Path) -> Path:
-    """Where the spawn database of ``map_ref`` lives (whether or not it exists yet).
-
-    The shipped ``Town04.json`` serves the bundled Town04 (people's reviews live there);
-    every other map's database is ``cache_dir/<name>-<sha256>.json``, so a changed map file
-    gets its own.
-    """
-    if _shipped_sha256() == map_ref.sha256:
-        return DEFAULT_DB_PATH
-    return Path(cache_dir) / f"{map_ref.name}-{map_ref.sha256}.json"
-
-
-def spawn_database(map_ref: MapRef, cache_dir: Path) -> Path:
-    """The spawn database file of ``map_ref`` (:func:`database_path`), built on first use
-    (written atomically) and read as it is on every later use."""
-    path = database_path(map_ref, cache_dir)
-    if not path.exists():
-        from scenweave.spawn_db.database import build_database, write_database
-
-        write_database(build_database(map_ref.path), path)
-    return path
-
-
-@cache
-def _shipped_sha256() -> str:
-    database = json.loads(DEFAULT_DB_PATH.read_text(encoding="utf-8"))
-    sha256: str = database["metadata"]["source_sha256"]
-    return sha256

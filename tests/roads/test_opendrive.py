@@ -8,9 +8,9 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from scenweave.spawn_db import DEFAULT_MAP_PATH, OpenDriveError, load_opendrive
-from scenweave.spawn_db.lanes import driving_direction, lane_center_offset, lane_distance
-from tests.spawn_db.synthetic_maps import opendrive, road_xml, write
+from scenweave.roads import DEFAULT_MAP_PATH, OpenDriveError, load_opendrive
+from scenweave.roads.lanes import driving_direction, lane_center_offset, lane_distance
+from tests.roads.synthetic_maps import opendrive, road_xml, write
 
 RAW = ET.parse(DEFAULT_MAP_PATH).getroot()
 
@@ -148,13 +148,3 @@ def test_every_plan_view_kind_is_read_from_xml(tmp_path):
     assert (pose.x[1], pose.y[1]) == pytest.approx((100 + 5 * math.cos(0.7),
                                                     40 + 5 * math.sin(0.7)))
     assert odr.roads["5"].speed_limit_kmh(0.0) == 50.0
-
-
-def test_schema_of_the_database_is_a_valid_json_schema():
-    import json
-
-    from jsonschema import Draft202012Validator
-
-    from scenweave.spawn_db.database import DATABASE_SCHEMA
-
-    Draft202012Validator.check_schema(json.loads(DATABASE_SCHEMA.read_text()))

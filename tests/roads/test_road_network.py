@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from scenweave.spawn_db import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
-from scenweave.spawn_db.road_network import LanePoint
-from tests.spawn_db.synthetic_maps import two_road_chain, write
+from scenweave.roads import LaneEndsError, OpenDriveError, RoadNetwork, load_opendrive
+from scenweave.roads.road_network import LanePoint
+from tests.roads.synthetic_maps import two_road_chain, write
 
 
 @pytest.fixture
@@ -114,7 +114,7 @@ def test_heading_of_a_widening_lane_follows_its_centre_line(chain):
 def test_closed_form_lane_distance_equals_the_quadrature_on_town04(town04):
     # where a lane keeps its offset on a line or arc, lane_distance takes a closed form; it
     # must agree with the Gauss-Legendre integral it replaces (and be used somewhere)
-    from scenweave.spawn_db.lanes import (
+    from scenweave.roads.lanes import (
         _constant_centre_offset,
         integrated_lane_distance,
         lane_distance,

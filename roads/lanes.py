@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenweave.spawn_db.errors import OpenDriveError
-from scenweave.spawn_db.opendrive import Lane, LaneSection, Road
-from scenweave.spawn_db.plan_view import GL_NODES, GL_WEIGHTS
+from scenweave.roads.errors import OpenDriveError
+from scenweave.roads.opendrive import Lane, LaneSection, Road
+from scenweave.roads.plan_view import GL_NODES, GL_WEIGHTS
 
 #: longest piece integrated with one Gauss-Legendre rule (m)
 _PIECE_M = 10.0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from scenweave.spawn_db.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
+from scenweave.roads.plan_view import Arc, Line, ParametricCubic, PlanView, Spiral
 
 
 def _integrated_clothoid(k0: float, rate: float, ds: float) -> tuple[float, float]:

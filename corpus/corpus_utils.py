@@ -181,6 +181,16 @@ def world_position(params: Mapping[str, Any], actor: str) -> xosc.WorldPosition:
     return xosc.WorldPosition(*(number(params, f"{actor}_{axis}") for axis in "xyzh"))
 
 
+def road_position(params: Mapping[str, Any], actor: str) -> Any:
+    """Where an urban NPC starts: its WorldPosition, or its LanePosition when the spawn stage
+    put it on a junction's connecting road (``<actor>_in_junction``). Connecting roads overlap
+    there, and a player snaps a world position to whichever is closest: possibly one that
+    turns off the ego's path."""
+    if params.get(f"{actor}_in_junction"):
+        return lane_position(params, actor)
+    return world_position(params, actor)
+
+
 # --- actors ----------------------------------------------------------------------------------
 
 def hero(position: Any, speed_ms: float) -> Actor:
@@ -275,7 +285,7 @@ def urban_lead(params: Mapping[str, Any]) -> list[Actor]:
     along its lane, where the spawn stage put it (``lead_*`` spawn keys)."""
     if not params.get("lead_present"):
         return []
-    return [npc("lead", world_position(params, "lead"), number(params, "lead_speed_ms"),
+    return [npc("lead", road_position(params, "lead"), number(params, "lead_speed_ms"),
                 params.get("lead_vehicle_type"))]
 
 
@@ -309,7 +319,7 @@ def urban_traffic(params: Mapping[str, Any]) -> list[Actor]:
     ``oncoming_*``), each at its recorded speed."""
     traffic = urban_lead(params)
     if params.get("oncoming_present"):
-        traffic.append(npc("oncoming", world_position(params, "oncoming"),
+        traffic.append(npc("oncoming", road_position(params, "oncoming"),
                            number(params, "oncoming_speed_ms"),
                            params.get("oncoming_vehicle_type")))
     return traffic

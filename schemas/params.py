@@ -132,7 +132,8 @@ SLOT_KEYS: dict[str, Any] = {
 #: ``<actor>_<key>`` of each placed actor: world pose (OpenSCENARIO frame) and lane position
 POSE_KEYS: dict[str, Any] = {
     "x": float | None, "y": float | None, "z": float | None, "h": float | None,
-    "road_id": int | None, "lane_id": int | None, "s": float | None}
+    "road_id": int | None, "lane_id": int | None, "s": float | None,
+    "in_junction": bool | None}
 
 
 class ParamsInvalid(InputError, ValueError):

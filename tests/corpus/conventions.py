@@ -202,7 +202,8 @@ def assert_entities_match(doc: etree._ElementTree, p: dict) -> None:
         private = doc.find(f"Storyboard/Init/Actions/Private[@entityRef='{name}']")
         assert float(private.find(".//AbsoluteTargetSpeed").get("value")) == speed
         position = private.find(".//TeleportAction/Position")[0]
-        if p["domain"] == "highway":  # every highway actor stands where the spawn stage put it
+        on_lane = p["domain"] == "highway" or (name != "hero" and p.get(f"{actor}_in_junction"))
+        if on_lane:  # every highway actor, and an urban one on a junction's connecting road
             assert position.tag == "LanePosition"
             assert (int(position.get("roadId")), int(position.get("laneId")),
                     float(position.get("s"))) == (p[f"{actor}_road_id"], p[f"{actor}_lane_id"],

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from scenweave.agent.llm.backends import backend_names
 from scenweave.agent.repair import checked_repair
 from scenweave.sandbox import SandboxSettings
 
@@ -65,19 +66,20 @@ class AgentSettings:
     """The run the calls belong to, logged with each (``scenweave logs --run``)."""
 
     def __post_init__(self) -> None:
-        if self.llm not in LLM_CHOICES:
-            raise ValueError(f"llm: {self.llm!r} is not one of {', '.join(LLM_CHOICES)}")
+        choices = (*backend_names(), "none")  # the built-in ones (LLM_CHOICES), the plugins'
+        if self.llm not in choices:
+            raise ValueError(f"llm: {self.llm!r} is not one of {', '.join(choices)}")
         if self.max_attempts < 1:
             raise ValueError("max_attempts: must be at least 1")
         self.repair = checked_repair(self.repair)
 
     @property
     def model_name(self) -> str:
-        return self.model or DEFAULT_MODELS[self.llm]
+        return self.model or DEFAULT_MODELS.get(self.llm, self.llm)  # a plugin's: its name
 
     @property
     def output_tokens(self) -> int:
-        return self.max_tokens or DEFAULT_MAX_TOKENS[self.llm]
+        return self.max_tokens or DEFAULT_MAX_TOKENS.get(self.llm, DEFAULT_MAX_TOKENS["ollama"])
 
     @property
     def host(self) -> str:

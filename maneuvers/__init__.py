@@ -1,7 +1,7 @@
 """Manoeuvre classes: one definition per class, asked by every stage.
 
 See ``docs/adding-a-manoeuvre.md``. ``get("BRAKE")`` -> :class:`Maneuver`;
-``codes("urban")``; ``maneuvers()``; a plugin adds classes through ``$SCENWEAVE_MANEUVERS``.
+``codes("urban")``; ``maneuvers()``; a plugin adds classes (``plugins``, ``docs/plugins.md``).
 This package imports nothing else of ScenWeave's.
 """
 

@@ -36,16 +36,17 @@ import tempfile
 import threading
 import uuid
 import zlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 from urllib.parse import urlsplit, urlunsplit
 
-from scenweave.errors import InfrastructureError
+from scenweave.errors import InfrastructureError, InputError
 from scenweave.handoff import Limits, pack
 from scenweave.inputs import InputSelection, load_input
+from scenweave.maneuvers.plugins import DOCS, Registry, resolve
 from scenweave.pipeline import PipelineSettings, base_outcome
 from scenweave.progress import progress
 from scenweave.report import write_run_report
@@ -62,8 +63,11 @@ from scenweave.runner import make_scenario, round_robin, run_description, summar
 QUEUE_NAME = "scenweave"
 QUEUE_ENV = "SCENWEAVE_QUEUE"
 DEFAULT_QUEUE_URL = "redis://127.0.0.1:6379/0"
-#: ``module:callable`` making a job's spawn matcher, called with the map's name (None: Town04)
-DEFAULT_MATCHER = "scenweave.runner:default_matcher"
+#: the spawn matcher a job uses: a name in ``SPAWN_MATCHERS`` (or a plugin's) or
+#: ``module:callable``, called with the map's name (None: Town04)
+DEFAULT_MATCHER = "default"
+#: the built-in spawn matchers, declared as a plugin declares its own (``docs/plugins.md``)
+SPAWN_MATCHERS = {DEFAULT_MATCHER: "scenweave.runner:default_matcher"}
 #: RQ job states in which a job will still run: such a job is not enqueued a second time
 PENDING_STATES = ("queued", "started", "scheduled", "deferred")
 #: where a worker makes its scenarios unless told (``scenweave worker --scratch``)
@@ -305,16 +309,40 @@ def _queue(connection: Any) -> Any:
 
 _matchers: dict[tuple[str, str | None], Any] = {}
 _scratch_root: Path | None = None
+_matcher_factories: Registry[Callable[[str | None], Any]] = Registry(
+    "spawn matcher", "SPAWN_MATCHERS", expected="a callable making a matcher from a map name",
+    accepts=callable, builtin_modules=[__name__])
+
+
+def matcher_names() -> list[str]:
+    """Every spawn matcher's name: ``default`` and the plugins'."""
+    return _matcher_factories.names()
+
+
+def matcher_factory(factory: str) -> Callable[[str | None], Any]:
+    """The callable making the matchers ``factory`` names: a registered name or
+    ``module:callable``; an :class:`InputError` naming ``--matcher`` and the choices."""
+    found = _matcher_factories.find(factory)
+    if found is None and ":" in factory:
+        try:
+            found = cast(Callable[[str | None], Any], resolve(factory))
+        except (ImportError, AttributeError) as err:
+            raise InputError(f"--matcher {factory}: {type(err).__name__}: {err}") from err
+    if found is None:
+        raise InputError(f"--matcher {factory!r}: no such spawn matcher (choose "
+                         f"{', '.join(matcher_names())} or give module:callable; plugins add "
+                         f"more, see {DOCS})")
+    return found
 
 
 def matcher_for(factory: str, map_name: str | None = None) -> Any:
-    """The spawn matcher ``module:callable`` makes for ``map_name``, made once per process."""
+    """The spawn matcher ``factory`` (a registered name or ``module:callable``) makes for
+    ``map_name``, made once per process."""
     from scenweave.roads import DEFAULT_MAP
 
     key = (factory, map_name or DEFAULT_MAP)
     if key not in _matchers:
-        module, _, name = factory.partition(":")
-        _matchers[key] = getattr(importlib.import_module(module), name)(map_name)
+        _matchers[key] = matcher_factory(factory)(map_name)
     return _matchers[key]
 
 

@@ -2,35 +2,29 @@
 
 ``ollama`` (a server through the official client), ``embedded`` (a GGUF model in-process via
 llama-cpp-python, SmolLM2-135M by default) and ``replay`` (recorded replies, for tests and for
-re-running a past trace). Adding a backend is one module and one line in ``BACKENDS``.
+re-running a past trace). They are named in ``agent.llm.backends`` exactly as a plugin names
+its own (``LLM_BACKENDS``; ``docs/plugins.md``).
 """
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
+from scenweave.agent.llm.backends import LLM_BACKENDS, backend_names, find_backend
 from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
+from scenweave.maneuvers.plugins import DOCS
 
 if TYPE_CHECKING:
     from scenweave.agent.settings import AgentSettings
 
-__all__ = ["BACKENDS", "LLM", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt", "get_llm"]
-
-#: backend name -> "module:class"
-BACKENDS = {
-    "ollama": "scenweave.agent.llm.ollama:OllamaLLM",
-    "embedded": "scenweave.agent.llm.embedded:EmbeddedLLM",
-    "replay": "scenweave.agent.llm.replay:ReplayLLM",
-}
+__all__ = ["LLM", "LLM_BACKENDS", "LLMReply", "LLMTimeout", "LLMUnavailable", "Prompt",
+           "backend_names", "get_llm"]
 
 
 def get_llm(settings: AgentSettings) -> LLM:
     """The backend ``settings.llm`` names, constructed from ``settings``."""
-    try:
-        target = BACKENDS[settings.llm]
-    except KeyError:
-        raise LLMUnavailable(f"--llm {settings.llm}: no such LLM backend "
-                             f"(choose {', '.join(BACKENDS)})") from None
-    module_name, class_name = target.split(":")
-    return getattr(importlib.import_module(module_name), class_name)(settings)
+    make = find_backend(settings.llm)
+    if make is None:
+        raise LLMUnavailable(f"--llm {settings.llm}: no such LLM backend (choose "
+                             f"{', '.join(backend_names())}; plugins add more, see {DOCS})")
+    return make(settings)

@@ -1,36 +1,51 @@
-"""Repair strategies, selectable by name (``--repair``). Adding one is one module in this
-package that defines ``STRATEGY``, an instance of :class:`agent.repair.base.RepairStrategy`."""
+"""Repair strategies, selectable by name (``--repair``): one registry, asked by the settings
+and the graph. The built-in ones are declared below exactly as a plugin declares its own
+(``REPAIR_STRATEGIES``, name -> a :class:`agent.repair.base.RepairStrategy` or
+``"module:attribute"``; ``docs/plugins.md``)."""
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
 from scenweave.agent.repair.base import Candidate, RepairStrategy, Request
+from scenweave.maneuvers.plugins import DOCS, Registry
 
-__all__ = ["Candidate", "RepairStrategy", "Request", "checked_repair", "get_strategy",
-           "strategy_names"]
+__all__ = ["REPAIR_STRATEGIES", "Candidate", "RepairStrategy", "Request", "checked_repair",
+           "get_strategy", "strategy_names"]
 
-_NOT_STRATEGIES = {"base"}
+REPAIR_STRATEGIES = {
+    "code_corrections": "scenweave.agent.repair.code_corrections:STRATEGY",
+    "error_feedback": "scenweave.agent.repair.error_feedback:STRATEGY",
+    "patch": "scenweave.agent.repair.patch:STRATEGY",
+}
+
+
+def _module_style(name: str) -> str:
+    """``error-feedback`` and ``error_feedback`` are one strategy."""
+    return name.replace("-", "_")
+
+
+_strategies: Registry[RepairStrategy] = Registry(
+    "repair strategy", "REPAIR_STRATEGIES", expected="a RepairStrategy",
+    accepts=lambda thing: isinstance(thing, RepairStrategy), normalize=_module_style,
+    builtin_modules=[__name__])
 
 
 def strategy_names() -> list[str]:
-    """Every strategy module in this package, e.g. ``code_corrections``, ``error_feedback``."""
-    return sorted(m.name for m in pkgutil.iter_modules(__path__)
-                  if m.name not in _NOT_STRATEGIES and not m.name.startswith("_"))
+    """Every strategy's name, e.g. ``code_corrections``, ``error_feedback``, a plugin's."""
+    return _strategies.names()
 
 
 def checked_repair(name: str) -> str:
-    """``name`` as a strategy module name (``patch``, ``error_feedback``); a ValueError naming
-    ``--repair`` and the choices when there is no such strategy."""
-    module_name = name.replace("-", "_")
-    names = strategy_names()
-    if module_name not in names:
-        choices = ", ".join(n.replace("_", "-") for n in names)
-        raise ValueError(f"--repair {name!r}: no such repair strategy (choose {choices})")
-    return module_name
+    """``name`` as a strategy's registered name (``patch``, ``error_feedback``); a ValueError
+    naming ``--repair`` and the choices when there is no such strategy."""
+    get_strategy(name)
+    return _module_style(name)
 
 
 def get_strategy(name: str) -> RepairStrategy:
     """The strategy called ``name`` (dashes and underscores alike); ValueError if none is."""
-    return importlib.import_module(f"scenweave.agent.repair.{checked_repair(name)}").STRATEGY
+    found = _strategies.find(name)
+    if found is None:
+        choices = ", ".join(n.replace("_", "-") for n in strategy_names())
+        raise ValueError(f"--repair {name!r}: no such repair strategy (choose {choices}; "
+                         f"plugins add more, see {DOCS})")
+    return found

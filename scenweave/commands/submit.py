@@ -17,9 +17,17 @@ from scenweave.commands.agent_options import AGENT_OPTION_NAMES, pipeline_settin
 from scenweave.commands.collect import QUEUE_HELP, collect_run
 from scenweave.commands.run import run as run_command
 from scenweave.console import problem_lines, refused_records
+from scenweave.errors import InputError
 from scenweave.handoff import MIB, Limits
 from scenweave.inputs import InputSelection
-from scenweave.worker import DEFAULT_MATCHER, QUEUE_ENV, JobOptions, connect, submit
+from scenweave.worker import (
+    DEFAULT_MATCHER,
+    QUEUE_ENV,
+    JobOptions,
+    connect,
+    matcher_factory,
+    submit,
+)
 
 #: options of ``scenweave run`` that mean the same here
 SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",
@@ -32,6 +40,17 @@ def _delays(text: str) -> tuple[int, ...]:
         return tuple(int(part) for part in text.split(",") if part.strip())
     except ValueError as err:
         raise click.BadParameter(f"{text!r}: give seconds like 10,60,300") from err
+
+
+def _checked_matcher(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    """A registered matcher's name must be known here already; ``module:callable`` is
+    imported by the workers (which may have more installed than this machine)."""
+    if ":" not in value:
+        try:
+            matcher_factory(value)
+        except InputError as err:
+            raise click.BadParameter(str(err), ctx=ctx, param=param) from err
+    return value
 
 
 def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, matcher: str,
@@ -84,7 +103,9 @@ submit_command = click.Command(
             click.Option(["--job-timeout"], default=3600, show_default=True,
                          type=click.IntRange(1), help="Seconds one scenario may take."),
             click.Option(["--matcher"], default=DEFAULT_MATCHER, show_default=True,
-                         help="Spawn matcher factory (module:callable) the workers use."),
+                         callback=_checked_matcher,
+                         help="Spawn matcher the workers use: a registered name (default, or "
+                              "a plugin's: docs/plugins.md) or module:callable."),
             click.Option(["--max-artefact-mb"], default=16.0, show_default=True,
                          type=click.FloatRange(0.001),
                          help="Largest file a worker hands back (a scenario's folder: 4x); "

@@ -31,7 +31,8 @@ from scenweave.worker import (
 @click.option("--maintenance-interval", default=60, show_default=True, type=click.IntRange(1),
               help="Seconds between looks for jobs of dead workers.")
 @click.option("--preload", default=DEFAULT_MATCHER, show_default=True,
-              help="Spawn matcher (module:callable) to load once before work starts.")
+              help="Spawn matcher (a registered name or module:callable) to load once "
+                   "before work starts.")
 @map_option(help="Map whose spawn matcher is loaded (and database built) before work starts: "
                  "a bundled CARLA town or an .xodr path. Jobs name their own map.  "
                  "[default: Town04]")

@@ -50,8 +50,24 @@ def test_a_toy_class_runs_end_to_end_and_replays_as_recorded(toy_class, esmini, 
 
 def test_without_the_plugin_the_class_is_unknown_in_one_line(tmp_path):
     with pytest.raises(maneuvers.UnknownManeuver, match="unknown manoeuvre class 'ACCEL'.*"
-                       "SCENWEAVE_MANEUVERS"):
+                       r"\$SCENWEAVE_PLUGINS, see docs/plugins.md"):
         maneuvers.get("ACCEL")
+
+
+def test_the_old_variable_still_loads_the_class_with_one_warning(monkeypatch):
+    """``$SCENWEAVE_MANEUVERS`` (the first plugin mechanism) works for one more release."""
+    from scenweave.maneuvers import plugins
+
+    monkeypatch.setattr(plugins, "_warned_deprecated", False)
+    monkeypatch.setenv(plugins.DEPRECATED_ENV, str(TOY))
+    try:
+        with pytest.warns(FutureWarning, match=r"SCENWEAVE_MANEUVERS is deprecated.*"
+                                               r"SCENWEAVE_PLUGINS") as warned:
+            assert maneuvers.get("ACCEL").tag == "lead_accelerates"
+            assert "ACCEL" in maneuvers.codes("highway")
+    finally:
+        maneuvers.unregister("ACCEL")
+    assert len(warned) == 1
 
 
 def test_a_plugin_class_ships_the_example_its_worked_example_shows(toy_class, tmp_path,

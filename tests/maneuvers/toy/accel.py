@@ -2,7 +2,7 @@
 
 Everything ScenWeave needs to know of the class is here (its layout, how a row becomes params,
 its sample rows, where its NPC starts, what the checks look for) plus its reference script
-next to this file. Load it with ``SCENWEAVE_MANEUVERS=/path/to/accel.py``.
+next to this file. Load it with ``SCENWEAVE_PLUGINS=/path/to/accel.py`` (docs/plugins.md).
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ from scenweave.agent.repair import Candidate, RepairStrategy, Request
 class Reference(RepairStrategy):
     """Gives up on the LLM at once: the reference script is the repair."""
 
-    name = "reference"
+    name = "reference_only"
 
     def repair(self, request: Request, llm: LLM) -> Candidate:
         return Candidate(request.reference)

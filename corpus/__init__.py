@@ -16,7 +16,7 @@ from typing import Any
 
 #: name -> the module that defines it, imported when the name is first used
 _LAZY = {"Retrieval": "retrieval", "generate": "retrieval", "list_scripts": "retrieval",
-         "retrieve": "retrieval", "CorpusError": "errors", "ParamsError": "errors"}
+         "retrieve": "retrieval", "CorpusError": "errors"}
 
 __all__ = sorted(_LAZY)
 

@@ -1,11 +1,7 @@
-"""The corpus package's root exception."""
+"""The corpus package's root exception; a script's params problem is ``errors.ParamsError``."""
 
-from scenweave.errors import ScenarioError, ScenWeaveError
+from scenweave.errors import ScenWeaveError
 
 
 class CorpusError(ScenWeaveError):
     """Root of the corpus package's errors (missing scripts, no match, model not installed)."""
-
-
-class ParamsError(CorpusError, ScenarioError, ValueError):
-    """A params dict a reference script cannot build a scenario from (names the key)."""

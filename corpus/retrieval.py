@@ -28,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from scenweave import maneuvers
-from scenweave.corpus.errors import CorpusError, ParamsError
+from scenweave.corpus.errors import CorpusError
+from scenweave.errors import ParamsError
 from scenweave.files import write_bytes_atomic
 
 CORPUS_DIR = Path(__file__).resolve().parent

@@ -36,4 +36,9 @@ class InfrastructureError(ScenWeaveError):
     """The machine or a service fails; the run stops and the message names what to change."""
 
 
-__all__ = ["InfrastructureError", "InputError", "ScenWeaveError", "ScenarioError"]
+class ParamsError(ScenarioError, ValueError):
+    """A params dict a stage cannot build the scenario from (the spawn stage, a reference
+    script): a key missing or holding the wrong kind of value; the message names the key."""
+
+
+__all__ = ["InfrastructureError", "InputError", "ParamsError", "ScenWeaveError", "ScenarioError"]

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
-from scenweave.errors import InfrastructureError
+from scenweave.errors import InfrastructureError, ParamsError
 
 __all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
            "process_scenario"]
@@ -150,12 +150,10 @@ def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:
 
 def _taxonomy_of(err: Exception) -> str:
     # imported here: only a failed scenario needs them (and its stages loaded them already)
-    from scenweave.corpus.errors import ParamsError as ScriptParamsError
     from scenweave.spawn_db.errors import NoSpawnFits
-    from scenweave.spawn_db.errors import ParamsError as SpawnParamsError
 
     if isinstance(err, NoSpawnFits):
         return "spawn"
-    if isinstance(err, SpawnParamsError | ScriptParamsError | KeyError):
+    if isinstance(err, ParamsError | KeyError):
         return "params"
     return "other"  # infrastructure errors are raised, never get here

@@ -22,7 +22,7 @@ from typing import Any, Literal, TypedDict
 import fastjsonschema
 
 from scenweave.corpus.phases import PhaseRecord
-from scenweave.errors import InputError
+from scenweave.errors import InputError, ParamsError
 from scenweave.maneuvers.free_ride import SLOTS
 
 SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
@@ -217,10 +217,41 @@ def check_params(params: Mapping[str, Any]) -> None:
 
 
 def number(params: Mapping[str, Any], key: str) -> float | None:
-    """``params[key]`` as a float, or None when it is absent or null (not yet filled)."""
+    """``params[key]`` as a float, or None when it is absent, null (not yet filled) or not a
+    finite number: for judging what a scenario did, where a missing value means "not checked"."""
     value = params.get(key)
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    return float(value) if ok else None
+    return float(value) if _is_finite_number(value) else None
+
+
+class NumberReader:
+    """Reads numbers a stage needs from one params dict: ``reader(key)``, ``reader(key,
+    default)`` and ``reader.optional(key)`` give floats, and a missing (or null) needed key or a
+    value that is not a finite number raises :class:`errors.ParamsError` naming the scenario and
+    the key. Stages are public APIs too: hand-made params get one clear error."""
+
+    def __init__(self, params: Mapping[str, Any]) -> None:
+        self.params = params
+        self.scenario_id = str(params.get("scenario_id", "<no scenario_id>"))
+
+    def __call__(self, key: str, default: float | None = None) -> float:
+        value = self.params.get(key, default)
+        if value is None:
+            raise ParamsError(f"{self.scenario_id}: params lack {key!r} (docs/params.md)")
+        return self._finite(key, value)
+
+    def optional(self, key: str) -> float | None:
+        """``params[key]``, None when absent or null."""
+        value = self.params.get(key)
+        return None if value is None else self._finite(key, value)
+
+    def _finite(self, key: str, value: Any) -> float:
+        if not _is_finite_number(value):
+            raise ParamsError(f"{self.scenario_id}: {key}={value!r} is not a finite number")
+        return float(value)
+
+
+def _is_finite_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def write_schema() -> None:

@@ -10,11 +10,13 @@ Public API:
   filled).
 - ``build_database(map_path)``, ``write_database``, ``load_database``, ``mark_reviewed``,
   ``carry_reviews``.
-- Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``ParamsError``, ``SpawnDatabaseError``.
+- Errors: ``SpawnDbError`` (root), ``NoSpawnFits``, ``SpawnDatabaseError``; params it cannot
+  place raise ``errors.ParamsError``.
 """
 
 from __future__ import annotations
 
+from scenweave.errors import ParamsError
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
     build_database,
@@ -25,7 +27,7 @@ from scenweave.spawn_db.database import (
     spawn_database,
     write_database,
 )
-from scenweave.spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError, SpawnDbError
+from scenweave.spawn_db.errors import NoSpawnFits, SpawnDatabaseError, SpawnDbError
 from scenweave.spawn_db.matcher import Assessment, Rejection, SpawnCandidate, SpawnMatcher
 
 __all__ = [

@@ -1,4 +1,5 @@
-"""The exceptions of ``spawn_db``: one root, :class:`SpawnDbError`, for everything it raises."""
+"""The exceptions of ``spawn_db``: one root, :class:`SpawnDbError`, for everything it raises
+but a params dict it cannot place (``errors.ParamsError``, shared with the reference scripts)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,3 @@ class SpawnDatabaseError(SpawnDbError, InfrastructureError):
 
 class NoSpawnFits(SpawnDbError, ScenarioError):
     """No spawn point of the database satisfies the scenario's constraints."""
-
-
-class ParamsError(SpawnDbError, ScenarioError, ValueError):
-    """A params dict lacks a key the matcher needs, or holds a value of the wrong kind."""

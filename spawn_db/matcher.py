@@ -32,18 +32,20 @@ from typing import Any, TypedDict
 
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
+from scenweave.errors import ParamsError
 from scenweave.roads.bundled import DEFAULT_MAP_PATH, road_network
 from scenweave.roads.errors import LaneEndsError, OpenDriveError
 from scenweave.roads.map_ref import MapRef, resolve_map
 from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.roads.signals import junction_approach
+from scenweave.schemas.params import NumberReader
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
     load_database,
     spawn_database,
     suits_urban,
 )
-from scenweave.spawn_db.errors import NoSpawnFits, ParamsError, SpawnDatabaseError
+from scenweave.spawn_db.errors import NoSpawnFits, SpawnDatabaseError
 
 #: length of a vehicle plus a little room, added to every required drivable length (m)
 VEHICLE_MARGIN_M = 6.0
@@ -174,7 +176,7 @@ class Requirements:
     def from_params(cls, params: Mapping[str, Any]) -> Requirements:
         """Read the contract keys (docs/params.md) the matcher needs."""
         scenario_id = str(params.get("scenario_id", "<no scenario_id>"))
-        number = _NumberReader(params, scenario_id)
+        number = NumberReader(params)
         domain = params.get("domain")
         if domain not in ("highway", "urban"):
             raise ParamsError(f"{scenario_id}: domain must be 'highway' or 'urban', got {domain!r}")
@@ -215,28 +217,6 @@ def _light_movement(params: Mapping[str, Any]) -> str | None:
     maneuver = maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
         str(params.get("maneuver_tag", "")))
     return None if maneuver is None or maneuver.light is None else maneuver.turn
-
-
-class _NumberReader:
-    def __init__(self, params: Mapping[str, Any], scenario_id: str):
-        self.params, self.scenario_id = params, scenario_id
-
-    def __call__(self, key: str, default: float | None = None) -> float:
-        value = self.params.get(key, default)
-        if value is None:
-            raise ParamsError(f"{self.scenario_id}: params lack {key!r} (docs/params.md)")
-        return self._number(key, value)
-
-    def optional(self, key: str) -> float | None:
-        value = self.params.get(key)
-        return None if value is None else self._number(key, value)
-
-    def _number(self, key: str, value: Any) -> float:
-        """The spawn stage is a public API too: hand-made params get one clear error."""
-        numeric = isinstance(value, int | float) and not isinstance(value, bool)
-        if not numeric or not math.isfinite(value):
-            raise ParamsError(f"{self.scenario_id}: {key}={value!r} is not a finite number")
-        return float(value)
 
 
 class SpawnMatcher:
@@ -387,7 +367,7 @@ class SpawnMatcher:
         Raises :class:`NoSpawnFits` when no lane beside the ego is free for it.
         """
         needs = Requirements.from_params(placed)
-        number = _NumberReader(placed, needs.scenario_id)
+        number = NumberReader(placed)
         here = self._ego_key(placed, needs)
         used = {(str(placed.get(f"{actor}_road_id")), placed.get(f"{actor}_lane_id"))
                 for actor in ("ego", *(name for name, _, _ in _placed_actors(placed)))}
@@ -545,7 +525,7 @@ class SpawnMatcher:
         lane_start, offset = self._changer_lane(entry, actor, params)
         if lane_start is None:
             return ()  # the hard filters' sides judge this
-        number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+        number = NumberReader(params)
         v0 = number(f"{actor}_speed_ms")
         begin = max(0.0, offset + v0 * number("maneuver_start_s", 0.0))
         end = begin + VEHICLE_MARGIN_M + lane_change_length_m(
@@ -778,7 +758,7 @@ def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, flo
     ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic), the
     oncoming car ``oncoming_distance_m`` ahead in the nearest lane of the other direction."""
     if params.get("domain") == "urban":
-        number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+        number = NumberReader(params)
         placed: list[tuple[str, str | None, float]] = []
         if params.get("lead_present"):
             placed.append(("lead", None, number("lead_distance_m", 0.0)))
@@ -805,7 +785,7 @@ def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, flo
 def _start_distance(params: Mapping[str, Any], actor: str) -> float:
     """Where ``actor`` stands at t = 0, ahead of the ego (m): its recorded gap minus the
     lead-in drift (``corpus.kinematics.start_gap_m``)."""
-    number = _NumberReader(params, str(params.get("scenario_id", "<no scenario_id>")))
+    number = NumberReader(params)
     return start_gap_m(number(f"{actor}_distance_m", 0.0), number(f"{actor}_speed_ms"),
                        number("ego_speed_ms"), number("maneuver_start_s", 0.0))
 

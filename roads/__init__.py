@@ -13,6 +13,9 @@ Public API:
   ``distance_along_lane(from_road, from_lane, from_s, to_road, to_lane, to_s)`` -> signed
   metres along the lane (``None`` when not reached); ``traffic_lights_carla()``
   (signal id -> CARLA x, y of every dynamic light, what ``pos=x,y`` resolves against).
+- ``road_graph(map_path)`` -> ``RoadGraph``: roads as a graph of road ends (the roads reached
+  along the straightest connections, near-shortest routes, roads near a point), and
+  ``MapCutter(tree).cut(roads)``: the map's XML holding only some roads.
 - Errors: ``RoadError`` (root), ``OpenDriveError``, ``LaneEndsError``, ``UnknownMapError``.
 """
 
@@ -23,8 +26,10 @@ from pathlib import Path
 from scenweave.roads.bundled import BUNDLED_MAPS_DIR, DEFAULT_MAP_PATH, road_network
 from scenweave.roads.errors import LaneEndsError, OpenDriveError, RoadError, UnknownMapError
 from scenweave.roads.lanes import WorldPose
+from scenweave.roads.map_cut import MapCutter
 from scenweave.roads.map_ref import DEFAULT_MAP, MapRef, bundled_maps, resolve_map
 from scenweave.roads.opendrive import OpenDriveMap, load_opendrive
+from scenweave.roads.road_graph import RoadGraph, road_graph
 from scenweave.roads.road_network import LanePoint, RoadNetwork
 from scenweave.roads.signals import is_traffic_light, signal_position
 
@@ -87,8 +92,8 @@ def _carla_xy(pose: WorldPose) -> tuple[float, float]:
 
 __all__ = [
     "BUNDLED_MAPS_DIR", "DEFAULT_MAP", "DEFAULT_MAP_PATH", "LaneEndsError", "LanePoint",
-    "MapRef", "OpenDriveError", "OpenDriveMap", "RoadError", "RoadNetwork", "UnknownMapError",
-    "WorldPose", "advance_along_lane", "bundled_maps", "distance_along_lane",
-    "lane_position_to_world", "load_opendrive", "resolve_map", "road_network",
-    "traffic_lights_carla",
+    "MapCutter", "MapRef", "OpenDriveError", "OpenDriveMap", "RoadError", "RoadGraph",
+    "RoadNetwork", "UnknownMapError", "WorldPose", "advance_along_lane", "bundled_maps",
+    "distance_along_lane", "lane_position_to_world", "load_opendrive", "resolve_map",
+    "road_graph", "road_network", "traffic_lights_carla",
 ]

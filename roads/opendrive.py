@@ -163,7 +163,8 @@ class Connection:
     id: str
     incoming_road: str
     connecting_road: str
-    contact_point: str
+    #: ``start`` or ``end`` of the connecting road; ``None`` when the file does not say
+    contact_point: str | None
     lane_links: tuple[tuple[int, int], ...]
 
 
@@ -372,7 +373,7 @@ def _read_junction(element: ET.Element, where: str) -> Junction:
     connections = tuple(
         Connection(id=_text(c, "id", where), incoming_road=_text(c, "incomingRoad", where),
                    connecting_road=_text(c, "connectingRoad", where),
-                   contact_point=c.get("contactPoint", "start"),
+                   contact_point=c.get("contactPoint"),
                    lane_links=tuple((_int(ll, "from", where), _int(ll, "to", where))
                                     for ll in c.findall("laneLink")))
         for c in element.findall("connection"))

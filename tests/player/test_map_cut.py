@@ -21,6 +21,7 @@ from scenweave.player import Playback, ReplaySettings, find_esmini, maps, replay
 from scenweave.player.errors import PlayerUnavailable
 from scenweave.player.replay import _lights_of
 from scenweave.player.translate import translate
+from scenweave.roads import road_graph
 from scenweave.spawn_db import SpawnMatcher
 
 MAP = roads.DEFAULT_MAP_PATH
@@ -104,7 +105,7 @@ def test_the_cut_copy_loads_cleanly_and_keeps_the_light(scenarios):
     roads = {r.get("id") for r in root.iterfind("road")}
     junctions = {j.get("id") for j in root.iterfind("junction")}
     assert roads == set(cut.roads) and cut.core <= roads
-    assert cut.kept_m < 0.6 * cut.map_m and len(roads) < len(maps.map_index(MAP).roads)
+    assert cut.kept_m < 0.6 * cut.map_m and len(roads) < len(road_graph(MAP).roads)
     for road in root.iterfind("road"):
         for link in road.iterfind("link/*"):
             kind = link.get("elementType")
@@ -210,8 +211,7 @@ def test_cut_copies_are_cached_per_map_file_and_road_set(scenarios, tmp_path):
 
 
 def test_the_whole_map_copy_equals_the_map_but_for_light_values():
-    index = maps.map_index(MAP)
-    whole = etree.fromstring(maps.cut_xml(index, frozenset(index.roads)))
+    whole = etree.parse(str(maps.esmini_map(MAP))).getroot()
     original = etree.parse(str(MAP)).getroot()
     for signal in original.iter("signal"):
         if signal.get("dynamic") == "yes":

@@ -13,6 +13,7 @@ import numpy as np
 
 from scenweave import maneuvers
 from scenweave.ingest.layouts import ClassLayout, HighwayLayouts, load_layouts
+from scenweave.maneuvers.sampling import sample_stream
 
 
 def write_highway_samples(out_dir: Path, seed: int, per_class: int,
@@ -24,16 +25,14 @@ def write_highway_samples(out_dir: Path, seed: int, per_class: int,
     layouts = layouts or load_layouts()
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for offset, layout in enumerate(_seeding_order(layouts)):
+    for layout in _seeding_order(layouts):
         code, sample = layout.code, layout.maneuver.sample
         if sample is None:  # a (plugin) class without a generator has no sample data
             continue
-        rng = np.random.default_rng([seed, offset])
-        columns = sample(rng, per_class, code)
+        columns = sample(sample_stream(seed, code), per_class, code)
         rows = per_class
         if phased and layout.maneuver.sample_phased is not None:
-            extra = layout.maneuver.sample_phased(np.random.default_rng([seed, offset, 1]),
-                                                  phased, code)
+            extra = layout.maneuver.sample_phased(sample_stream(seed, code, 1), phased, code)
             columns = {k: np.concatenate([v, extra[k]]) for k, v in columns.items()}
             rows += phased
         table = np.empty((rows, len(layout.columns)), dtype=object)

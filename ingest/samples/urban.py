@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from scenweave import maneuvers
+from scenweave.maneuvers.sampling import sample_stream
 
 GREEN, ORANGE, RED = 167, 170, 172
 METRES_PER_DEG_LAT = 111_320.0
@@ -36,9 +37,9 @@ class EgoProfile:
 def write_urban_samples(out_dir: Path, seed: int, per_class: int) -> list[Path]:
     """Write ``per_class`` ADScene files for each urban class under ``out_dir/<CODE>/``."""
     paths = []
-    for offset, maneuver in enumerate(maneuvers.seeding_order("urban")):
+    for maneuver in maneuvers.seeding_order("urban"):
         code = maneuver.code
-        rng = np.random.default_rng([seed, 100 + offset])
+        rng = sample_stream(seed, code)
         folder = out_dir / code
         folder.mkdir(parents=True, exist_ok=True)
         used: set[float] = set()

@@ -1,19 +1,20 @@
 """A picture of one replay: what esmini did with a scenario, against what the record says.
 
 ``draw_replay_figure(scenario_dir)`` reads the folder's ``replay.json`` (``player.Playback``),
-``params.json``, ``status.json`` and ``scenario.xosc`` and writes ``replay.png`` beside them:
+``params.json``, ``status.json`` and ``scenario.xosc`` and writes ``replay.svg`` beside them:
 
 - top left, each actor's speed over the replay (lines) with the record's values marked: the
   start speed at t = 0 (circle) and each scripted speed change's target where it should be
   reached (diamond, at start + duration), the bars the judge's tolerance; the manoeuvre window
   (``maneuver_start_s`` .. + ``duration_s``) shaded;
 - bottom left, highway: every other vehicle's gap to the ego along its lane
-  (``judge.replay.gap_along_lane``, sampled every ``GAP_STEP_S`` or coarser on long replays)
-  with the record's gaps marked (``*_distance_m`` at the manoeuvre start, FL also
+  (``judge.replay.gap_along_lane``, measured at the marked times and every ``GAP_ANCHOR_S`` or
+  coarser on long replays, and carried between those by the distances both drove) with the
+  record's gaps marked (``*_distance_m`` at the manoeuvre start, FL also
   ``npc_distance_end_m`` at its end); urban: the distance the ego drove against the stop line,
   the traffic light's colour behind it and the lead's gap if there is one;
 - right, a bird's-eye view in the OpenDRIVE frame: the lanes of the map near the paths (drawn
-  from ``spawn_db``'s road network), each actor's path in its colour from its start (dot) to its
+  from the ``roads`` network), each actor's path in its colour from its start (dot) to its
   end (square), collisions as a red X with their time, the turn's exit and the stop line of the
   record where the class has them.
 
@@ -21,42 +22,47 @@ The title says whether the replay passed; a failed one lists its ``REPLAY_*`` fi
 ``status.json``) under the plots. A folder without ``replay.json`` gets no figure; a playback
 esmini could not play gets a figure saying why. Every figure has the same size
 (``FIGURE_PX``), so a page of them lines up.
+
+This module only computes what is drawn, in figure coordinates (pixels, y down): scales,
+ticks at nice numbers, lines as SVG path data, marks. ``templates/replay_figure.svg`` draws
+it (Jinja2, every value escaped: a record's text is shown, never run).
 """
 
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import math
-import struct
+import re
 import textwrap
-import zlib
-from functools import lru_cache
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from scenweave.corpus.corpus_utils import reference_gap_m
-from scenweave.files.atomic import write_bytes_atomic
+from scenweave.files.atomic import write_text_atomic
 from scenweave.judge.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.run_folder import RECORDED_NAME
 from scenweave.schemas.params import number as number_of
+from scenweave.templating import render
 
-FIGURE_NAME = "replay.png"
-#: the PNG text chunk naming what the figure shows (``figure_source``)
-SOURCE_KEY = "scenweave-source"
-#: figure size (inches) and resolution: FIGURE_PX pixels, the same for every replay
-FIGURE_IN = (10.0, 5.6)
-DPI = 90
-FIGURE_PX = (round(FIGURE_IN[0] * DPI), round(FIGURE_IN[1] * DPI))
-PNG_COLOURS = 64
-#: the gap is sampled this often (s); a long replay with several vehicles is sampled coarser
-#: so that at most MAX_GAP_SAMPLES measurements are made (each follows the lanes, ~1 ms)
-GAP_STEP_S = 0.25
-MAX_GAP_SAMPLES = 160
+FIGURE_NAME = "replay.svg"
+TEMPLATE = "replay_figure.svg"
+#: the figure's size in pixels, the same for every replay
+FIGURE_PX = (900, 504)
+#: the namespace of the ``<metadata>`` element naming what the figure shows (``figure_source``)
+SOURCE_NS = "urn:scenweave:replay-figure"
+_SOURCE_PATTERN = re.compile(r"<sw:source[^>]*>([0-9a-f]{64})</sw:source>")
+#: the gap is measured along the lanes this often (s; each measurement ~1 ms), coarser when
+#: a long replay with several vehicles would need more than MAX_GAP_ANCHORS of them, and at
+#: the record's marked times; between two measurements it follows the distances driven
+GAP_ANCHOR_S = 2.0
+MAX_GAP_ANCHORS = 16
 #: metres of map shown around the paths
 MAP_MARGIN_M = 20.0
 #: at most this many findings are listed under the plots
@@ -67,18 +73,32 @@ OTHER_COLOURS = ("#e07b00", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf
 LIGHT_COLOURS = {"green": "#2ca02c", "yellow": "#f2c200", "red": "#d62728"}
 FAIL_COLOUR = "#cf222e"
 PASS_COLOUR = "#1a7f37"
+MUTED = "#57606a"
+#: the panels' frames (x, y, width, height) in pixels
+SPEED_FRAME = (58.0, 46.0, 422.0, 176.0)
+LOWER_FRAME = (58.0, 234.0, 422.0, 166.0)
+MAP_FRAME = (552.0, 46.0, 336.0, 354.0)
+CAPTION_TOP = 446.0
+#: font sizes (px) and the width of an average character, as a share of the font size
+TITLE_PX, LABEL_PX, TICK_PX, LEGEND_PX, CAPTION_PX = 12.5, 10.0, 8.75, 8.1, 9.4
+CHAR_EM = 0.56
+#: line dashes (``stroke-dasharray``) of matplotlib's "--", "-." and ":"
+DASHED, DASH_DOT, DOTTED = "5 3", "6 2 1.5 2", "1.5 2"
+#: a line keeps one point per this many pixels along it (the rest is too fine to see); the
+#: map's lanes bend gently at its scale (a chord of 6 px misses a 20 px radius by 0.2 px)
+THIN_PX, LANE_THIN_PX = 1.5, 6.0
 
 
 def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
                        status: dict | None = None) -> Path | None:
-    """Write ``replay.png`` into ``scenario_dir`` and return its path; None without a replay.
+    """Write ``replay.svg`` into ``scenario_dir`` and return its path; None without a replay.
 
     ``map_path`` is the OpenDRIVE map the scenario was played on (default: the one its params
     or its ``LogicFile`` name, else Town04); ``status`` the scenario's outcome when its
     ``status.json`` is not written yet (a figure drawn in the worker, before the commit). Never
     raises for a problem of the files read: an unreadable ``replay.json`` or a playback with an
-    engine error gets a figure that says so. The PNG names what it shows (``figure_source``),
-    so a reader can tell a stale figure without trusting file times.
+    engine error gets a figure that says so. The SVG names what it shows (``figure_source``,
+    in its ``<metadata>``), so a reader can tell a stale figure without trusting file times.
     """
     folder = Path(scenario_dir)
     replay_path = folder / REPLAY_NAME
@@ -87,24 +107,23 @@ def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
     facts = _Facts.read(folder)
     if status is not None:
         facts.status = status
-    try:
-        playback = Playback.read(replay_path)
-    except (OSError, ValueError, TypeError, KeyError, AttributeError) as err:
-        png = _message_figure(facts, "replay.json could not be read",
-                              f"{type(err).__name__}: {err}")
+    played, playback = _read_playback(replay_path)
+    if isinstance(playback, Exception):
+        figure = _message_figure(facts, "replay.json could not be read",
+                                 f"{type(playback).__name__}: {playback}")
+    elif playback.engine_error or not playback.times:
+        figure = _message_figure(facts, "esmini could not play the scenario",
+                                 playback.engine_error or "esmini recorded no step",
+                                 playback.log[-6:])
     else:
-        if playback.engine_error or not playback.times:
-            png = _message_figure(facts, "esmini could not play the scenario",
-                                  playback.engine_error or "esmini recorded no step",
-                                  playback.log[-6:])
-        else:
-            try:
-                png = _replay_figure(playback, facts, map_path or facts.map_path)
-            except (KeyError, IndexError, ValueError, TypeError) as err:  # a malformed playback
-                png = _message_figure(facts, "the replay could not be drawn",
-                                      f"{type(err).__name__}: {err}")
+        try:
+            figure = _replay_figure(playback, facts, map_path or facts.map_path)
+        except (KeyError, IndexError, ValueError, TypeError) as err:  # a malformed playback
+            figure = _message_figure(facts, "the replay could not be drawn",
+                                     f"{type(err).__name__}: {err}")
     out = folder / FIGURE_NAME
-    write_bytes_atomic(out, _with_text(png, SOURCE_KEY, figure_source(folder, facts.status)))
+    write_text_atomic(out, render(TEMPLATE, figure=figure, source=_source_of(played, facts.status),
+                                   source_ns=SOURCE_NS))
     return out
 
 
@@ -118,52 +137,47 @@ def is_reported(outcome: dict, index: int) -> bool:
 
 def figure_source(folder: Path, status: dict) -> str:
     """What a figure of ``folder`` shows, as a digest: the playback and the verdict on it."""
+    return _source_of(_played(folder), status)
+
+
+def is_current(folder: Path, status: dict) -> bool:
+    """True when the folder's ``replay.svg`` was drawn from its present replay and verdict."""
+    try:
+        with open(folder / FIGURE_NAME, encoding="utf-8", errors="replace") as handle:
+            head = handle.read(4096)
+    except OSError:
+        return False
+    drawn = _SOURCE_PATTERN.search(head)
+    return drawn is not None and drawn.group(1) == figure_source(folder, status)
+
+
+def _played(folder: Path) -> Any:
+    """``replay.json`` as read (None when it cannot be)."""
+    try:
+        return json.loads((folder / REPLAY_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def _read_playback(path: Path) -> tuple[Any, Playback | Exception]:
+    """``replay.json`` as read (None when it cannot be) and its playback, or why there is
+    none; read once for the figure and for what it shows."""
+    played = None
+    try:
+        played = json.loads(path.read_text(encoding="utf-8"))
+        return played, Playback.from_dict(played)
+    except (OSError, ValueError, TypeError, KeyError, AttributeError) as err:
+        return played, err
+
+
+def _source_of(played: Any, status: dict) -> str:
     replay = status.get("replay") if isinstance(status.get("replay"), dict) else {}
     verdict = {"passed": replay.get("passed"), "codes": replay.get("codes"),
                "errors": (status.get("validation") or {}).get("errors")}
-    try:
-        played = json.loads((folder / REPLAY_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        played = None
     if isinstance(played, dict):  # how long the replay took is no part of what it shows
         played = {k: v for k, v in played.items() if k != "timings_s"}
     shown = json.dumps([played, verdict], sort_keys=True, default=str).encode()
     return hashlib.sha256(shown).hexdigest()
-
-
-def is_current(folder: Path, status: dict) -> bool:
-    """True when the folder's ``replay.png`` was drawn from its present replay and verdict."""
-    try:
-        drawn = _read_text(folder / FIGURE_NAME, SOURCE_KEY)
-    except OSError:
-        return False
-    return drawn == figure_source(folder, status)
-
-
-def _with_text(png: bytes, key: str, value: str) -> bytes:
-    """``png`` with a ``tEXt`` chunk ``key: value`` right after its header chunk."""
-    data = key.encode("latin-1") + b"\0" + value.encode("latin-1")
-    chunk = (struct.pack(">I", len(data)) + b"tEXt" + data
-             + struct.pack(">I", zlib.crc32(b"tEXt" + data)))
-    header_end = 8 + 8 + 13 + 4  # signature, IHDR's length+type, its 13 bytes, its CRC
-    return png[:header_end] + chunk + png[header_end:]
-
-
-def _read_text(path: Path, key: str) -> str | None:
-    """The value of the ``tEXt`` chunk ``key`` before the image data, or None."""
-    with open(path, "rb") as handle:
-        head = handle.read(4096)
-    at = 8
-    while at + 8 <= len(head):
-        length, kind = struct.unpack(">I4s", head[at:at + 8])
-        if kind == b"IDAT":
-            break
-        if kind == b"tEXt":
-            name, _, value = head[at + 8:at + 8 + length].partition(b"\0")
-            if name == key.encode("latin-1"):
-                return value.decode("latin-1")
-        at += 12 + length
-    return None
 
 
 # --- what the folder says --------------------------------------------------------------------
@@ -215,7 +229,7 @@ class _Facts:
         codes = replay.get("codes") or []
         return "replay FAILED" + (f": {', '.join(codes)}" if codes else ""), FAIL_COLOUR
 
-    @property
+    @cached_property
     def recorded(self) -> dict:
         """What a mined record recorded (``recorded.json``, else params ``recorded_series``;
         empty for other records)."""
@@ -266,74 +280,391 @@ def _scenario_doc(path: Path) -> Any:
         return None
 
 
+# --- what the template draws (figure coordinates: pixels, y down) ---------------------------
+
+@dataclass(frozen=True)
+class Stroke:
+    """A line (SVG path data, unfilled)."""
+
+    d: str
+    colour: str
+    width: float
+    dash: str = ""
+    opacity: float = 1.0
+    cls: str = ""
+    kind: str = "stroke"
+
+
+@dataclass(frozen=True)
+class Shape:
+    """A filled outline (a mark: circle, diamond, square, star, X; a shaded span)."""
+
+    d: str
+    fill: str
+    edge: str = "none"
+    width: float = 0.0
+    opacity: float = 1.0
+    cls: str = ""
+    kind: str = "shape"
+
+
+@dataclass(frozen=True)
+class Text:
+    x: float
+    y: float
+    text: str
+    size: float
+    colour: str = "black"
+    anchor: str = "start"
+    vertical: bool = False
+    mono: bool = False
+    cls: str = ""
+
+
+@dataclass
+class Panel:
+    """One plot: what is drawn inside its frame (clipped), over it and its words."""
+
+    name: str
+    frame: tuple[float, float, float, float]
+    grid: list[Stroke] = field(default_factory=list)
+    clipped: list[Stroke | Shape] = field(default_factory=list)
+    over: list[Stroke | Shape] = field(default_factory=list)
+    texts: list[Text] = field(default_factory=list)
+    actors: list[tuple[str, list[Stroke | Shape]]] = field(default_factory=list)
+
+
+@dataclass
+class Figure:
+    """The whole picture: its size, its panels and its words (title, caption, message)."""
+
+    title: str
+    width: int = FIGURE_PX[0]
+    height: int = FIGURE_PX[1]
+    panels: list[Panel] = field(default_factory=list)
+    texts: list[Text] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Scale:
+    """Data ``low``..``high`` onto pixels ``start``..``end`` (``end`` < ``start`` for y)."""
+
+    low: float
+    high: float
+    start: float
+    end: float
+
+    def __call__(self, value: Any) -> Any:
+        return self.start + (value - self.low) * ((self.end - self.start) / (self.high - self.low))
+
+    def ticks(self) -> list[tuple[float, str]]:
+        """(pixel, label) at nice numbers (1, 2, 2.5, 5 × 10^k apart), about one every 60 px."""
+        count = min(8, max(3, round(abs(self.end - self.start) / 60)))
+        return [(self(v), label) for v, label in nice_ticks(self.low, self.high, count)]
+
+
+def nice_ticks(low: float, high: float, count: int) -> list[tuple[float, str]]:
+    """Values in ``low``..``high`` at a nice step giving about ``count`` intervals, labelled
+    with as many decimals as the step needs."""
+    raw = (high - low) / max(count, 1)
+    if not raw > 0 or not math.isfinite(raw):
+        return []
+    magnitude = 10.0 ** math.floor(math.log10(raw))
+    step = next(m * magnitude for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * magnitude >= raw * 0.999)
+    text = f"{step:.10g}"
+    decimals = len(text.split(".")[1]) if "." in text and "e" not in text else 0
+    first = math.ceil(low / step - 1e-9)
+    values = [(first + i) * step for i in range(int((high - first * step) / step + 1e-9) + 1)]
+    return [(v, f"{0.0 if abs(v) < step * 1e-6 else v:.{decimals}f}") for v in values]
+
+
+def _path_data(xs: Any, ys: Any, thin_px: float = THIN_PX) -> str:
+    """SVG path data through the points (pixels), a new piece after every missing (NaN)
+    value; of the points within ``thin_px`` along the line only the first is kept."""
+    xs, ys = _thinned(np.asarray(xs, dtype=float), np.asarray(ys, dtype=float), thin_px)
+    points = np.column_stack([xs, ys])
+    present = np.isfinite(points).all(axis=1).astype(np.int8)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], present, [0]])))
+    return "".join("M" + ("%.1f,%.1f " * (end - start) % tuple(points[start:end].ravel().tolist()))
+                   [:-1] for start, end in zip(edges[::2].tolist(), edges[1::2].tolist(),
+                                               strict=True))
+
+
+def _thinned(xs: np.ndarray, ys: np.ndarray,
+             thin_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """The points with one kept per ``thin_px`` of line, and every piece's ends."""
+    if len(xs) < 3:
+        return xs, ys
+    missing = ~(np.isfinite(xs) & np.isfinite(ys))
+    steps = np.nan_to_num(np.hypot(np.diff(xs), np.diff(ys)), nan=0.0)
+    bucket = np.floor(np.concatenate([[0.0], np.cumsum(steps)]) / thin_px)
+    keep = np.concatenate([[True], bucket[1:] != bucket[:-1]]) | missing
+    keep[1:] |= missing[:-1]
+    keep[:-1] |= missing[1:]
+    keep[-1] = True
+    return xs[keep], ys[keep]
+
+
+def _mark_path(shape: str, x: float, y: float, size: float) -> str:
+    """SVG path data of a mark of ``size`` pixels across, centred on (x, y)."""
+    r = size / 2
+    if shape == "circle":
+        return f"M{x - r:.1f},{y:.1f}a{r:.2f},{r:.2f} 0 1,0 {size:.2f},0" \
+               f"a{r:.2f},{r:.2f} 0 1,0 {-size:.2f},0Z"
+    if shape == "square":
+        return f"M{x - r:.1f},{y - r:.1f}h{size:.1f}v{size:.1f}h{-size:.1f}Z"
+    if shape == "diamond":
+        return f"M{x:.1f},{y - r:.1f}L{x + r:.1f},{y:.1f}L{x:.1f},{y + r:.1f}L{x - r:.1f},{y:.1f}Z"
+    if shape == "star":
+        corners = [(r if i % 2 == 0 else r * 0.4, math.pi / 2 + i * math.pi / 5) for i in range(10)]
+    else:  # "x": a plus of arms r long and r/3.5 thick, turned by 45°
+        b = r / 3.5
+        plus = [(b, r), (b, b), (r, b), (r, -b), (b, -b), (b, -r), (-b, -r), (-b, -b), (-r, -b),
+                (-r, b), (-b, b), (-b, r)]
+        corners = [(math.hypot(px, py), math.atan2(py, px) + math.pi / 4) for px, py in plus]
+    return "M" + " L".join(f"{x + d * math.cos(a):.1f},{y - d * math.sin(a):.1f}"
+                           for d, a in corners) + "Z"
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """One line of a legend: a line (dashed or not), a shaded patch or a mark."""
+
+    label: str
+    colour: str = "black"
+    dash: str = ""
+    mark: str = ""
+    patch: bool = False
+
+
+class _Plot:
+    """A panel being drawn: lines, spans and marks in data units, turned into pixels by
+    ``finish`` once the scales are known (by default: the data's extent, 5 % margin)."""
+
+    def __init__(self, name: str, frame: tuple[float, float, float, float]):
+        self.name, self.frame = name, frame
+        self._todo: list[Callable[[Scale, Scale, Panel], None]] = []
+        self._xs: list[float] = []
+        self._ys: list[float] = []
+        self._points: list[np.ndarray] = []  # pixels the data covers, for the legend's place
+        self.legend: list[_Entry] = []
+        self.legend_columns = 1
+
+    def _extend(self, xs: Any, ys: Any) -> None:
+        for target, values in ((self._xs, xs), (self._ys, ys)):
+            found = np.asarray(values, dtype=float).ravel()
+            found = found[np.isfinite(found)]
+            if len(found):
+                target += [float(found.min()), float(found.max())]
+
+    def line(self, xs: Any, ys: Any, colour: str, width: float, dash: str = "",
+             opacity: float = 1.0, actor: str = "") -> None:
+        xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+        self._extend(xs, ys)
+
+        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
+            px, py = sx(xs), sy(ys)
+            self._points.append(np.column_stack([px, py]))
+            stroke = Stroke(_path_data(px, py), colour, width, dash, opacity)
+            if actor:
+                panel.actors.append((actor, [stroke]))
+            else:
+                panel.clipped.append(stroke)
+        self._todo.append(draw)
+
+    def span(self, x0: float, x1: float, colour: str, opacity: float) -> None:
+        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
+            top, bottom = sy.end, sy.start
+            panel.clipped.append(Shape(f"M{sx(x0):.1f},{top:.1f}H{sx(x1):.1f}V{bottom:.1f}"
+                                       f"H{sx(x0):.1f}Z", colour, opacity=opacity))
+        self._todo.append(draw)
+
+    def hline(self, y: float, colour: str, width: float, dash: str = "") -> None:
+        self._extend([], [y])
+        self._todo.append(lambda sx, sy, panel: panel.clipped.append(Stroke(
+            f"M{sx.start:.1f},{sy(y):.1f}H{sx.end:.1f}", colour, width, dash)))
+
+    def vline(self, x: float, colour: str, width: float, dash: str = "") -> None:
+        self._todo.append(lambda sx, sy, panel: panel.clipped.append(Stroke(
+            f"M{sx(x):.1f},{sy.start:.1f}V{sy.end:.1f}", colour, width, dash)))
+
+    def mark(self, x: float, y: float, shape: str, colour: str, size: float,
+             fill: str | None = None, edge: str | None = None, edge_width: float = 1.2,
+             tolerance: float = 0.0, clip: bool = True, cls: str = "") -> None:
+        """A mark (``fill`` None: the colour), with a bar of ± ``tolerance`` when given."""
+        self._extend([x], [y - tolerance, y + tolerance])
+
+        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
+            px, py = float(sx(x)), float(sy(y))
+            self._points.append(np.array([[px, py]]))
+            drawn: list[Stroke | Shape] = []
+            if tolerance:
+                low, high, cap = sy(y - tolerance), sy(y + tolerance), 2.5
+                drawn.append(Stroke(f"M{px:.1f},{low:.1f}V{high:.1f}M{px - cap:.1f},{low:.1f}"
+                                    f"h{2 * cap}M{px - cap:.1f},{high:.1f}h{2 * cap}", colour,
+                                    1.2))
+            drawn.append(Shape(_mark_path(shape, px, py, size), fill or colour,
+                               edge or colour, edge_width, cls=cls))
+            (panel.clipped if clip else panel.over).extend(drawn)
+        self._todo.append(draw)
+
+    def label(self, x: float, y: float, text: str, colour: str) -> None:
+        """A boxed label beside the point (x, y), toward the middle of the panel."""
+        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
+            px, py = float(sx(x)), float(sy(y))
+            left = px > (sx.start + sx.end) / 2
+            width = len(text) * TICK_PX * CHAR_EM + 4
+            at = px - 9 - width if left else px + 9
+            panel.over.append(Shape(f"M{at:.1f},{py - 17:.1f}h{width:.1f}v12h{-width:.1f}Z",
+                                    "white", opacity=0.8))
+            panel.texts.append(Text(round(at + 2, 1), round(py - 8, 1), text, TICK_PX, colour,
+                                    cls="collision-time"))
+        self._todo.append(draw)
+
+    def note(self, text: str) -> None:
+        """A word in the middle of the panel, instead of a plot."""
+        x, y, width, height = self.frame
+        self._todo.append(lambda sx, sy, panel: panel.texts.append(Text(
+            x + width / 2, y + height / 2, text, LABEL_PX, MUTED, anchor="middle")))
+
+    def auto_scales(self, x_range: tuple[float, float] | None = None) -> tuple[Scale, Scale]:
+        """Scales around the data (``x_range``: the x limits as given), 5 % margin."""
+        x, y, width, height = self.frame
+        low_x, high_x = x_range or _padded(self._xs)
+        low_y, high_y = _padded(self._ys)
+        return Scale(low_x, high_x, x, x + width), Scale(low_y, high_y, y + height, y)
+
+    def finish(self, scales: tuple[Scale, Scale], x_labels: bool = True, x_label: str = "",
+               y_label: str = "", title: str = "", grid: bool = True) -> Panel:
+        sx, sy = scales
+        panel = Panel(self.name, self.frame)
+        for draw in self._todo:
+            draw(sx, sy, panel)
+        _axes(panel, sx, sy, x_labels, x_label, y_label, title)
+        if not grid:
+            panel.grid = []
+        if self.legend:
+            _legend(panel, self.legend, self.legend_columns, self._points)
+        return panel
+
+
+def _padded(values: list[float]) -> tuple[float, float]:
+    if not values:
+        return 0.0, 1.0
+    low, high = min(values), max(values)
+    if high - low < 1e-9:
+        return low - 1.0, high + 1.0
+    margin = (high - low) * 0.05
+    return low - margin, high + margin
+
+
+def _axes(panel: Panel, sx: Scale, sy: Scale, x_labels: bool, x_label: str, y_label: str,
+          title: str) -> None:
+    """The frame's grid, ticks, tick labels and axis names."""
+    x, y, width, height = panel.frame
+    bottom, right = y + height, x + width
+    ticks = []
+    for px, label in sx.ticks():
+        panel.grid.append(Stroke(f"M{px:.1f},{y:.1f}V{bottom:.1f}", "#b0b0b0", 0.5))
+        ticks.append(f"M{px:.1f},{bottom:.1f}v4")
+        if x_labels:
+            panel.texts.append(Text(round(px, 1), bottom + 14, label, TICK_PX, anchor="middle"))
+    widest = 0
+    for py, label in sy.ticks():
+        panel.grid.append(Stroke(f"M{x:.1f},{py:.1f}H{right:.1f}", "#b0b0b0", 0.5))
+        ticks.append(f"M{x:.1f},{py:.1f}h-4")
+        panel.texts.append(Text(x - 6, round(py + 3, 1), label, TICK_PX, anchor="end"))
+        widest = max(widest, len(label))
+    panel.over.append(Stroke("".join(ticks), "black", 0.8))
+    panel.over.append(Stroke(f"M{x},{y}H{right}V{bottom}H{x}Z", "black", 0.8))
+    if x_label:
+        panel.texts.append(Text(x + width / 2, bottom + 28, x_label, LABEL_PX, anchor="middle"))
+    if y_label:
+        panel.texts.append(Text(round(x - 12 - widest * TICK_PX * CHAR_EM, 1), y + height / 2,
+                                y_label, LABEL_PX, anchor="middle", vertical=True))
+    if title:
+        panel.texts.append(Text(x + width / 2, y - 6, title, LABEL_PX, anchor="middle"))
+
+
+def _legend(panel: Panel, entries: list[_Entry], columns: int,
+            points: list[np.ndarray]) -> None:
+    """The legend in the corner (or edge middle) of the frame that hides the fewest drawn
+    points, as matplotlib's ``loc="best"`` does."""
+    rows = math.ceil(len(entries) / columns)
+    column_width = 26 + max(len(e.label) for e in entries) * LEGEND_PX * CHAR_EM
+    width, height = columns * column_width + 4, rows * 11.5 + 6
+    x, y, frame_width, frame_height = panel.frame
+    spots = [(x + frame_width - width - 4, y + 4), (x + 4, y + 4),
+             (x + 4, y + frame_height - height - 4),
+             (x + frame_width - width - 4, y + frame_height - height - 4),
+             (x + (frame_width - width) / 2, y + 4),
+             (x + (frame_width - width) / 2, y + frame_height - height - 4)]
+    every = np.vstack(points) if points else np.empty((0, 2))
+
+    def hidden(spot: tuple[float, float]) -> int:
+        inside = ((every[:, 0] >= spot[0]) & (every[:, 0] <= spot[0] + width)
+                  & (every[:, 1] >= spot[1]) & (every[:, 1] <= spot[1] + height))
+        return int(inside.sum())
+
+    left, top = min(spots, key=hidden)
+    panel.over.append(Shape(f"M{left:.1f},{top:.1f}h{width:.1f}v{height:.1f}h{-width:.1f}Z",
+                            "white", "#cccccc", 0.8, opacity=0.85, cls="legend"))
+    for i, entry in enumerate(entries):
+        ex = left + 4 + (i % columns) * column_width
+        ey = top + 3 + (i // columns) * 11.5 + 5.75
+        if entry.patch:
+            panel.over.append(Shape(f"M{ex:.1f},{ey - 3.5:.1f}h18v7h-18Z", entry.colour,
+                                    opacity=0.3))
+        elif entry.mark:
+            panel.over.append(Shape(_mark_path(entry.mark, ex + 9, ey, 6), "white",
+                                    entry.colour, 1.2))
+        else:
+            panel.over.append(Stroke(f"M{ex:.1f},{ey:.1f}h18", entry.colour, 1.6, entry.dash))
+        panel.texts.append(Text(round(ex + 22, 1), round(ey + 3, 1), entry.label, LEGEND_PX,
+                                cls="legend"))
+
+
 # --- the figure ------------------------------------------------------------------------------
 
-def _new_figure() -> Any:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=FIGURE_IN, dpi=DPI)
-    FigureCanvasAgg(figure)
-    return figure
-
-
-def _png(figure: Any) -> bytes:
-    """The figure as a palette PNG: a chart has few colours, and PNG_COLOURS of them make the
-    file a fifth of a true-colour one (for the report's inline copies) at ~15 ms."""
-    from PIL import Image
-
-    figure.canvas.draw()
-    pixels = np.asarray(figure.canvas.buffer_rgba())[..., :3]
-    image = Image.fromarray(pixels).quantize(colors=PNG_COLOURS,
-                                             method=Image.Quantize.FASTOCTREE)
-    buffer = io.BytesIO()
-    image.save(buffer, format="PNG")
-    return buffer.getvalue()
-
-
-def _title(figure: Any, facts: _Facts) -> None:
+def _title(facts: _Facts) -> Text:
     verdict, colour = facts.verdict()
-    figure.suptitle(f"{facts.scenario_id} · {facts.maneuver_class} · {verdict}", fontsize=10,
-                    color=colour, x=0.01, ha="left", y=0.985)
+    return Text(9, 19, f"{facts.scenario_id} · {facts.maneuver_class} · {verdict}", TITLE_PX,
+                colour, cls="title")
 
 
 def _message_figure(facts: _Facts, headline: str, detail: str,
-                    log: list[str] | None = None) -> bytes:
-    figure = _new_figure()
-    _title(figure, facts)
+                    log: list[str] | None = None) -> Figure:
     lines = [headline, "", *textwrap.wrap(detail, 110)[:8]]
     if log:
         lines += ["", "esmini's last log lines:", *(textwrap.shorten(line, 120) for line in log)]
-    figure.text(0.04, 0.88, "\n".join(lines), va="top", ha="left", fontsize=9,
-                family="monospace", color=FAIL_COLOUR if facts.replay else "black")
-    return _png(figure)
+    colour = FAIL_COLOUR if facts.replay else "black"
+    title = _title(facts)
+    return Figure(title.text, texts=[title, *(Text(36, 64 + 15 * i, line, 11.25, colour,
+                                                    mono=True, cls="message")
+                                              for i, line in enumerate(lines) if line)])
 
 
-def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> bytes:
-    figure = _new_figure()
-    grid = figure.add_gridspec(2, 2, width_ratios=(1.25, 1.0), left=0.065, right=0.985,
-                               top=0.905, bottom=0.2, hspace=0.12, wspace=0.17)
-    speed_axes = figure.add_subplot(grid[0, 0])
-    lower_axes = figure.add_subplot(grid[1, 0], sharex=speed_axes)
-    map_axes = figure.add_subplot(grid[:, 1])
+def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> Figure:
     colours = _colours(playback)
-    _speed_panel(speed_axes, playback, facts, colours)
+    times = (0.0, max(playback.duration_s, 0.1))
+    speed = _Plot("speed", SPEED_FRAME)
+    _speed_panel(speed, playback, facts, colours)
+    lower = _Plot("lower", LOWER_FRAME)
     if facts.params.get("domain") == "urban":
-        _urban_panel(lower_axes, playback, facts, colours, map_path)
+        _urban_panel(lower, playback, facts, colours, map_path)
+        lower_label = "metres"
     else:
-        _gap_panel(lower_axes, playback, facts, colours, map_path)
-    for axes in (speed_axes, lower_axes):
+        _gap_panel(lower, playback, facts, colours, map_path)
+        lower_label = "gap to ego along lane (m)"
+    for plot in (speed, lower):
         for time_s in _first_collisions(playback):
-            axes.axvline(time_s, color=FAIL_COLOUR, linestyle=":", linewidth=1.0)
-        axes.grid(alpha=0.3, linewidth=0.5)
-        axes.tick_params(labelsize=7)
-        axes.set_xlim(0.0, max(playback.duration_s, 0.1))
-    speed_axes.tick_params(labelbottom=False)
-    lower_axes.set_xlabel("time (s)", fontsize=8)
-    _map_panel(map_axes, playback, facts, colours, map_path)
-    _title(figure, facts)
-    _caption(figure, facts, playback.series_errors)
-    return _png(figure)
+            plot.vline(time_s, FAIL_COLOUR, 1.25, DOTTED)
+    title = _title(facts)
+    return Figure(title.text, panels=[
+        speed.finish(speed.auto_scales(times), x_labels=False, y_label="speed (m/s)"),
+        lower.finish(lower.auto_scales(times), x_label="time (s)", y_label=lower_label),
+        _map_panel(playback, facts, colours, map_path),
+    ], texts=[title, *_caption(facts, playback.series_errors)])
 
 
 def _colours(playback: Playback) -> dict[str, str]:
@@ -343,23 +674,23 @@ def _colours(playback: Playback) -> dict[str, str]:
     return colours
 
 
-def _caption(figure: Any, facts: _Facts, series_errors: dict | None = None) -> None:
+def _caption(facts: _Facts, series_errors: dict | None = None) -> list[Text]:
     findings = facts.findings()
     if not findings:
-        text = ("replay as recorded: no REPLAY_* finding" if facts.replay and
-                facts.replay.get("passed") else "")
+        lines = (["replay as recorded: no REPLAY_* finding"] if facts.replay and
+                 facts.replay.get("passed") else [])
     else:
-        shown = [textwrap.shorten(line, 150, placeholder=" …") for line in
+        lines = [textwrap.shorten(line, 150, placeholder=" …") for line in
                  findings[:MAX_CAPTION_LINES]]
         if len(findings) > MAX_CAPTION_LINES:
-            shown[-1] = f"… and {len(findings) - MAX_CAPTION_LINES + 1} more findings " \
+            lines[-1] = f"… and {len(findings) - MAX_CAPTION_LINES + 1} more findings " \
                         "(status.json)"
-        text = "\n".join(shown)
     if series_errors:  # the whole record, sample by sample (judge.replay)
-        text += ("\n" if text else "") + "against the recorded series: " + "; ".join(
-            f"{name} max {e['max']:.2f} / RMS {e['rms']:.2f}" for name, e in series_errors.items())
-    figure.text(0.01, 0.1, text, va="top", ha="left", fontsize=7.5,
-                color=FAIL_COLOUR if findings else PASS_COLOUR)
+        lines.append("against the recorded series: " + "; ".join(
+            f"{name} max {e['max']:.2f} / RMS {e['rms']:.2f}" for name, e in series_errors.items()))
+    colour = FAIL_COLOUR if findings else PASS_COLOUR
+    return [Text(9, CAPTION_TOP + 12 * i, line, CAPTION_PX, colour, cls="caption")
+            for i, line in enumerate(lines)]
 
 
 def _first_collisions(playback: Playback) -> list[float]:
@@ -372,38 +703,29 @@ def _first_collisions(playback: Playback) -> list[float]:
 
 # --- speed -----------------------------------------------------------------------------------
 
-def _speed_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, str]) -> None:
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
+def _speed_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str]) -> None:
     from scenweave.judge.fidelity import placed_actors
 
     start, duration = facts.number("maneuver_start_s"), facts.number("duration_s")
-    handles = []
     if start is not None and duration is not None:
-        axes.axvspan(start, start + duration, color="#888888", alpha=0.13, linewidth=0)
-        handles.append(Patch(color="#888888", alpha=0.3, label="manoeuvre (record)"))
+        plot.span(start, start + duration, "#888888", 0.13)
+        plot.legend.append(_Entry("manoeuvre (record)", "#888888", patch=True))
     for name in playback.entities:
-        axes.plot(playback.times, playback.tracks[name]["speed"], color=colours[name],
-                  linewidth=1.3)
-        handles.append(Line2D([], [], color=colours[name], label=name))
-    handles += _recorded_lines(axes, facts, colours, "speed_ms", lambda v: v)
+        plot.line(playback.times, playback.tracks[name]["speed"], colours[name], 1.6)
+        plot.legend.append(_Entry(name, colours[name]))
+    plot.legend += _recorded_lines(plot, facts, colours, "speed_ms", lambda v: v)
     for name, prefix in placed_actors(facts.params):
         value = facts.number(f"{prefix}_speed_ms")
         if value is not None and name in colours:
-            axes.errorbar(0.0, value, yerr=SPEED_TOL_MS, fmt="o", markersize=5,
-                          markerfacecolor="white", color=colours[name], capsize=2, zorder=5,
-                          clip_on=False)
+            plot.mark(0.0, value, "circle", colours[name], 6.25, fill="white",
+                      tolerance=SPEED_TOL_MS, clip=False)
     for name, target, at_s in _speed_targets(facts):
         if name in colours:
-            axes.errorbar(at_s, target, yerr=SPEED_TOL_MS, fmt="D", markersize=5,
-                          markerfacecolor="white", color=colours[name], capsize=2, zorder=5)
-    handles += [Line2D([], [], marker="o", linestyle="", color="black", markerfacecolor="white",
-                       label="record: start speed"),
-                Line2D([], [], marker="D", linestyle="", color="black", markerfacecolor="white",
-                       label="record: target speed")]
-    axes.set_ylabel("speed (m/s)", fontsize=8)
-    axes.legend(handles=handles, fontsize=6.5, loc="best", ncol=2, framealpha=0.8)
+            plot.mark(at_s, target, "diamond", colours[name], 6.25, fill="white",
+                      tolerance=SPEED_TOL_MS)
+    plot.legend += [_Entry("record: start speed", mark="circle"),
+                    _Entry("record: target speed", mark="diamond")]
+    plot.legend_columns = 2
 
 
 def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
@@ -428,38 +750,48 @@ def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     return found
 
 
-def _recorded_lines(axes: Any, facts: _Facts, colours: dict[str, str], what: str,
-                    convert: Any) -> list[Any]:
+def _recorded_lines(plot: _Plot, facts: _Facts, colours: dict[str, str], what: str,
+                    convert: Callable[[np.ndarray], Any]) -> list[_Entry]:
     """The mined record's own series, dashed, beside the replay's curves (``what``: speed_ms
     or gap_m; ``convert`` turns recorded values into the panel's)."""
-    from matplotlib.lines import Line2D
-
     drawn = []
     for role, entity in (("ego", EGO), ("npc", "npc")):
         curve = facts.recorded_curve(f"{role}_{what}")
         if curve is not None and entity in colours:
-            axes.plot(curve[0], convert(curve[1]), color=colours[entity], linewidth=1.1,
-                      linestyle="--")
+            plot.line(curve[0], convert(curve[1]), colours[entity], 1.4, DASHED)
             drawn.append(entity)
-    if not drawn:
-        return []
-    return [Line2D([], [], color="black", linestyle="--", label="recorded (mined data)")]
+    return [_Entry("recorded (mined data)", dash=DASHED)] if drawn else []
 
 
 # --- gap (highway) ---------------------------------------------------------------------------
 
-def _sample_times(playback: Playback, series: int, marked: list[float]) -> list[float]:
-    """Every GAP_STEP_S (coarser when ``series`` curves would need too many measurements),
-    and the marked times themselves so the record's values meet a measured point."""
+def _anchor_times(playback: Playback, series: int, marked: list[float]) -> list[float]:
+    """When the gap is measured: every GAP_ANCHOR_S (coarser when ``series`` curves would need
+    more than MAX_GAP_ANCHORS measurements), the end, and the marked times themselves so the
+    record's values meet a measured point."""
     span = playback.duration_s
-    step = max(GAP_STEP_S, span * max(1, series) / MAX_GAP_SAMPLES)
+    step = max(GAP_ANCHOR_S, span * max(1, series) / MAX_GAP_ANCHORS)
     times = np.arange(0.0, span + 1e-9, step).tolist()
     if times[-1] < span - 1e-6:
         times.append(span)
     return sorted(set(times) | {t for t in marked if 0.0 <= t <= span})
 
 
-def _gaps(playback: Playback, entity: str, times: list[float], map_path: Any) -> list[float]:
+def _lane_change_times(playback: Playback, entity: str) -> list[float]:
+    """The samples either side of each lane change of ``entity`` or the ego: the gap, measured
+    on another lane from there on, may jump."""
+    from scenweave.judge.replay import lane_changes
+
+    times = playback.times
+    found = []
+    for name in {EGO, entity}:
+        for time_s, _ in lane_changes(playback, name):
+            i = playback.index_at(time_s)
+            found += [times[max(i - 1, 0)], times[i]]
+    return found
+
+
+def _gaps(playback: Playback, entity: str, times: Sequence[float], map_path: Any) -> np.ndarray:
     gaps = []
     for time_s in times:
         try:
@@ -467,7 +799,26 @@ def _gaps(playback: Playback, entity: str, times: list[float], map_path: Any) ->
         except Exception:  # noqa: BLE001 - a picture shows what it can measure
             gap = None
         gaps.append(math.nan if gap is None else gap)
-    return gaps
+    return np.asarray(gaps, dtype=float)
+
+
+def _gap_curve(playback: Playback, entity: str, anchors: list[float],
+               map_path: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(times, gaps) of ``entity``: measured along the lanes at the ``anchors``, and between
+    two measurements the difference of the distances the two drove, shifted linearly to meet
+    both (the gap changes by what one drove more than the other; the shift takes up what
+    lane changes and curves add). Missing where either measurement is."""
+    measured = _gaps(playback, entity, anchors, map_path)
+    played = np.asarray(playback.times, dtype=float)
+    times = np.union1d(played, anchors)
+    drift = np.interp(times, played, _driven(playback, entity) - _driven(playback, EGO))
+    at = np.asarray(anchors, dtype=float)
+    offsets = measured - np.interp(at, times, drift)
+    if len(at) == 1:
+        return times, drift + offsets[0]
+    piece = np.clip(np.searchsorted(at, times, side="right") - 1, 0, len(at) - 2)
+    share = np.clip((times - at[piece]) / (at[piece + 1] - at[piece]), 0.0, 1.0)
+    return times, drift + offsets[piece] * (1 - share) + offsets[piece + 1] * share
 
 
 def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
@@ -485,35 +836,27 @@ def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
     return [(name, gap, at_s) for name, gap, at_s in found if gap is not None]
 
 
-def _gap_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, str],
+def _gap_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
                map_path: Any) -> None:
     others = [e for e in playback.entities if e != EGO]
     if not others:
-        axes.text(0.5, 0.5, "no other vehicle: no gap to show", transform=axes.transAxes,
-                  ha="center", va="center", fontsize=8, color="#57606a")
-        axes.set_ylabel("gap (m)", fontsize=8)
+        plot.note("no other vehicle: no gap to show")
         return
     recorded = _recorded_gaps(facts)
-    times = _sample_times(playback, len(others), [t for _, _, t in recorded])
+    anchors = _anchor_times(playback, len(others), [t for _, _, t in recorded])
     kind = facts.params.get("npc_vehicle_type")
-    mined = _recorded_lines(axes, facts, colours, "gap_m",
+    mined = _recorded_lines(plot, facts, colours, "gap_m",
                             np.vectorize(lambda g: reference_gap_m(g, kind), otypes=[float]))
     for name in others:
-        axes.plot(times, _gaps(playback, name, times, map_path), color=colours[name],
-                  linewidth=1.3, label=name)
+        at = sorted(set(anchors) | set(_lane_change_times(playback, name)))
+        plot.line(*_gap_curve(playback, name, at, map_path), colours[name], 1.6)
+        plot.legend.append(_Entry(name, colours[name]))
     for name, gap, at_s in recorded:
         if name in colours:
-            axes.errorbar(at_s, gap, yerr=GAP_TOL_M, fmt="D", markersize=5,
-                          markerfacecolor="white", color=colours[name], capsize=2, zorder=5)
-    axes.axhline(0.0, color="black", linewidth=0.6)
-    axes.set_ylabel("gap to ego along lane (m)", fontsize=8)
-    from matplotlib.lines import Line2D
-
-    handles, _ = axes.get_legend_handles_labels()
-    handles.append(Line2D([], [], marker="D", linestyle="", color="black",
-                          markerfacecolor="white", label="record: gap"))
-    handles += mined
-    axes.legend(handles=handles, fontsize=6.5, loc="best", framealpha=0.8)
+            plot.mark(at_s, gap, "diamond", colours[name], 6.25, fill="white",
+                      tolerance=GAP_TOL_M)
+    plot.hline(0.0, "black", 0.75)
+    plot.legend += [_Entry("record: gap", mark="diamond"), *mined]
 
 
 # --- distance vs stop line (urban) -----------------------------------------------------------
@@ -538,42 +881,41 @@ def _light_spans(playback: Playback) -> list[tuple[float, float, str]]:
     return spans
 
 
-def _lead_line(axes: Any, playback: Playback, facts: _Facts, colour: str, map_path: Any) -> None:
+def _lead_line(plot: _Plot, playback: Playback, facts: _Facts, colour: str,
+               map_path: Any) -> None:
     """Where the lead is, counted from the ego's start like the ego's distance: its replayed
     gap at t = 0 plus what it drove (one lane measurement, not one per sample: in town the
     lanes branch and a gap that cannot be followed costs a long search)."""
-    gap = _gaps(playback, "lead", [0.0], map_path)[0]
+    gap = float(_gaps(playback, "lead", [0.0], map_path)[0])
     if math.isfinite(gap):
-        axes.plot(playback.times, gap + _driven(playback, "lead"), color=colour, linewidth=1.2,
-                  linestyle="-.", label="lead: gap at start + distance driven")
+        plot.line(playback.times, gap + _driven(playback, "lead"), colour, 1.5, DASH_DOT)
+        plot.legend.append(_Entry("lead: gap at start + distance driven", colour, DASH_DOT))
     recorded = facts.number("lead_distance_m")
     if recorded is not None:
-        axes.errorbar(0.0, recorded, yerr=GAP_TOL_M, fmt="D", markersize=5,
-                      markerfacecolor="white", color=colour, capsize=2, zorder=5,
-                      clip_on=False, label="record: lead gap")
+        plot.mark(0.0, recorded, "diamond", colour, 6.25, fill="white", tolerance=GAP_TOL_M,
+                  clip=False)
+        plot.legend.append(_Entry("record: lead gap", colour, mark="diamond"))
 
 
-def _urban_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, str],
+def _urban_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
                  map_path: Any) -> None:
     for begin, end, colour in _light_spans(playback):
-        axes.axvspan(begin, end, color=LIGHT_COLOURS.get(colour, "#cccccc"), alpha=0.15,
-                     linewidth=0)
-    axes.plot(playback.times, _driven(playback, EGO), color=colours[EGO], linewidth=1.3,
-              label="ego: distance driven")
+        plot.span(begin, end, LIGHT_COLOURS.get(colour, "#cccccc"), 0.15)
+    plot.line(playback.times, _driven(playback, EGO), colours[EGO], 1.6)
+    plot.legend.append(_Entry("ego: distance driven", colours[EGO]))
     stop_line = facts.number("spawn_stop_line_distance_m")
     if stop_line is not None:
-        axes.axhline(stop_line, color="black", linestyle="--", linewidth=0.9,
-                     label=f"stop line (record, {stop_line:.1f} m)")
+        plot.hline(stop_line, "black", 1.1, DASHED)
+        plot.legend.append(_Entry(f"stop line (record, {stop_line:.1f} m)", dash=DASHED))
     if "lead" in playback.tracks:
-        _lead_line(axes, playback, facts, colours["lead"], map_path)
-    axes.set_ylabel("metres", fontsize=8)
-    axes.legend(fontsize=6.5, loc="best", framealpha=0.8)
+        _lead_line(plot, playback, facts, colours["lead"], map_path)
 
 
 # --- bird's-eye view -------------------------------------------------------------------------
 
-def _map_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, str],
-               map_path: Any) -> None:
+def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
+               map_path: Any) -> Panel:
+    plot = _Plot("map", MAP_FRAME)
     points = np.array([(x, y) for name in playback.entities
                        for x, y in zip(playback.tracks[name]["x"], playback.tracks[name]["y"],
                                        strict=False)
@@ -581,52 +923,49 @@ def _map_panel(axes: Any, playback: Playback, facts: _Facts, colours: dict[str, 
     turn_exit = (facts.number("turn_exit_x"), facts.number("turn_exit_y"))
     extra = [turn_exit] if None not in turn_exit else []
     if not len(points):
-        axes.text(0.5, 0.5, "no position recorded", transform=axes.transAxes, ha="center")
-        return
-    every = np.vstack([points, np.array(extra).reshape(-1, 2)])
-    low, high = every.min(axis=0) - MAP_MARGIN_M, every.max(axis=0) + MAP_MARGIN_M
-    _draw_lanes(axes, map_path, (low[0], high[0], low[1], high[1]))
+        x, y, width, height = MAP_FRAME
+        return Panel("map", MAP_FRAME, texts=[Text(x + width / 2, y + height / 2,
+                                                   "no position recorded", LABEL_PX,
+                                                   anchor="middle")])
+    every = np.vstack([points, np.array(extra, dtype=float).reshape(-1, 2)])
+    scales = _equal_scales(every.min(axis=0) - MAP_MARGIN_M, every.max(axis=0) + MAP_MARGIN_M)
+    for name in playback.entities:  # the ego last, on top and thinner: a follower's path
+        track = playback.tracks[name]  # often lies on the ego's
+        ego = name == EGO
+        plot.line(track["x"], track["y"], colours[name], 1.75 if ego else 3.5,
+                  opacity=1.0 if ego else 0.75, actor=name)
     for name in playback.entities:
         track = playback.tracks[name]
-        ego = name == EGO  # on top, thinner: a follower's path often lies on the ego's
-        axes.plot(track["x"], track["y"], color=colours[name], linewidth=1.4 if ego else 2.8,
-                  alpha=1.0 if ego else 0.75, zorder=3 if ego else 2)
-        axes.plot(track["x"][0], track["y"][0], marker="o", markersize=5, color=colours[name],
-                  markeredgecolor="black", markeredgewidth=0.5, zorder=4)
-        axes.plot(track["x"][-1], track["y"][-1], marker="s", markersize=4,
-                  markerfacecolor="white", color=colours[name], zorder=4)
+        plot.mark(track["x"][0], track["y"][0], "circle", colours[name], 6.25, edge="black",
+                  edge_width=0.6)
+        plot.mark(track["x"][-1], track["y"][-1], "square", colours[name], 5.0, fill="white")
     if extra:
-        axes.plot(*turn_exit, marker="*", markersize=10, color="black", linestyle="", zorder=5,
-                  label="record: turn exit")
-    _mark_stop_line(axes, playback, facts)
+        plot.mark(*turn_exit, "star", "black", 12.5)
+        plot.legend.append(_Entry("record: turn exit", mark="star"))
+    _mark_stop_line(plot, playback, facts)
     light = (facts.number("tfl_x_carla"), facts.number("tfl_y_carla"))
     if None not in light:  # CARLA's y points the other way
-        axes.plot(light[0], -light[1], marker="s", markersize=6, color="#ff9900",
-                  markeredgecolor="black", markeredgewidth=0.5, linestyle="", zorder=5,
-                  label="traffic light")
-    _equal_limits(axes, low, high)
-    _mark_collisions(axes, playback)
-    axes.tick_params(labelsize=7)
-    axes.set_xlabel("x (m, OpenDRIVE)", fontsize=8)
-    axes.set_ylabel("y (m)", fontsize=8, labelpad=1)
-    axes.set_title("paths: start ● end ■, collision ✕", fontsize=8)
-    if axes.get_legend_handles_labels()[0]:
-        axes.legend(fontsize=6.5, loc="best", framealpha=0.8)
+        plot.mark(light[0], -light[1], "square", "#ff9900", 7.5, edge="black", edge_width=0.6)
+        plot.legend.append(_Entry("traffic light", "#ff9900", mark="square"))
+    _mark_collisions(plot, playback)
+    panel = plot.finish(scales, x_label="x (m, OpenDRIVE)", y_label="y (m)",
+                        title="paths: start ● end ■, collision ✕", grid=False)
+    panel.clipped[:0] = _lanes(map_path, scales)
+    panel.actors.sort(key=lambda actor: actor[0] == EGO)
+    return panel
 
 
-def _equal_limits(axes: Any, low: np.ndarray, high: np.ndarray) -> None:
-    """Limits around ``low``..``high`` with one metre as long across as up, filling the axes."""
-    box = axes.get_position()
-    width_in, height_in = axes.figure.get_size_inches()
-    ratio = (box.height * height_in) / (box.width * width_in)  # axes height / width
+def _equal_scales(low: np.ndarray, high: np.ndarray) -> tuple[Scale, Scale]:
+    """Scales around ``low``..``high`` with one metre as long across as up, filling the frame."""
+    x, y, width, height = MAP_FRAME
     centre, span = (low + high) / 2, high - low
-    span = np.array([max(span[0], span[1] / ratio), max(span[1], span[0] * ratio)])
-    axes.set_xlim(centre[0] - span[0] / 2, centre[0] + span[0] / 2)
-    axes.set_ylim(centre[1] - span[1] / 2, centre[1] + span[1] / 2)
-    axes.set_aspect("equal", adjustable="box")
+    metres = max(span[0] / width, span[1] / height)  # per pixel
+    half_x, half_y = metres * width / 2, metres * height / 2
+    return (Scale(float(centre[0] - half_x), float(centre[0] + half_x), x, x + width),
+            Scale(float(centre[1] - half_y), float(centre[1] + half_y), y + height, y))
 
 
-def _mark_collisions(axes: Any, playback: Playback) -> None:
+def _mark_collisions(plot: _Plot, playback: Playback) -> None:
     seen: set[tuple[str, str]] = set()
     for time_s, a, b in playback.collisions:
         if (a, b) in seen or a not in playback.tracks or b not in playback.tracks:
@@ -634,17 +973,11 @@ def _mark_collisions(axes: Any, playback: Playback) -> None:
         seen.add((a, b))
         x = (playback.value(a, "x", time_s) + playback.value(b, "x", time_s)) / 2
         y = (playback.value(a, "y", time_s) + playback.value(b, "y", time_s)) / 2
-        axes.plot(x, y, marker="X", markersize=11, color=FAIL_COLOUR, markeredgecolor="white",
-                  markeredgewidth=0.8, zorder=6)
-        left = x > sum(axes.get_xlim()) / 2  # the label toward the middle, not off the edge
-        axes.annotate(f"{a}–{b} {float(time_s):.2f} s", (x, y), textcoords="offset points",
-                      xytext=(-7 if left else 7, 6), ha="right" if left else "left",
-                      fontsize=7, color=FAIL_COLOUR, zorder=6,
-                      bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none",
-                            "alpha": 0.8})
+        plot.mark(x, y, "x", FAIL_COLOUR, 14.0, edge="white", edge_width=1.0, cls="collision")
+        plot.label(x, y, f"{a}–{b} {float(time_s):.2f} s", FAIL_COLOUR)
 
 
-def _mark_stop_line(axes: Any, playback: Playback, facts: _Facts) -> None:
+def _mark_stop_line(plot: _Plot, playback: Playback, facts: _Facts) -> None:
     """The record's stop line across the ego's path, where the ego has driven its distance."""
     stop_line = facts.number("spawn_stop_line_distance_m")
     if stop_line is None or EGO not in playback.tracks:
@@ -660,26 +993,44 @@ def _mark_stop_line(axes: Any, playback: Playback, facts: _Facts) -> None:
         h = track["h"][-1]
         x, y = track["x"][-1] + ahead * math.cos(h), track["y"][-1] + ahead * math.sin(h)
     half = 2.5
-    axes.plot([x - half * math.sin(h), x + half * math.sin(h)],
-              [y + half * math.cos(h), y - half * math.cos(h)], color="black", linewidth=2.2,
-              zorder=5, label="record: stop line")
+    plot.line([x - half * math.sin(h), x + half * math.sin(h)],
+              [y + half * math.cos(h), y - half * math.cos(h)], "black", 2.75)
+    plot.legend.append(_Entry("record: stop line"))
 
 
-def _draw_lanes(axes: Any, map_path: Any, box: tuple[float, float, float, float]) -> None:
-    """Every drivable lane's borders that come into ``box`` (x0, x1, y0, y1)."""
-    from matplotlib.collections import LineCollection
-
+def _lanes(map_path: Any, scales: tuple[Scale, Scale]) -> list[Stroke]:
+    """Every drivable lane's borders that come into the view, one path per kind (on a road,
+    in a junction)."""
+    sx, sy = scales
     try:
         lanes = _lane_borders(_network(map_path))
     except Exception:  # noqa: BLE001 - without the map the paths are still worth a look
-        return
-    x0, x1, y0, y1 = box
-    for in_junction, colour, width in ((False, "#9a9a9a", 0.6), (True, "#cfcfcf", 0.5)):
+        return []
+    x0, x1, y0, y1 = sx.low, sx.high, sy.low, sy.high
+    drawn = []
+    for in_junction, colour, width in ((False, "#9a9a9a", 0.75), (True, "#cfcfcf", 0.6)):
         chosen = [line for bounds, junction, line in lanes if junction == in_junction
                   and bounds[0] <= x1 and bounds[1] >= x0 and bounds[2] <= y1 and bounds[3] >= y0]
         if chosen:
-            axes.add_collection(LineCollection(chosen, colors=colour, linewidths=width,
-                                               zorder=1))
+            gap = np.full((1, 2), np.nan)  # between two lines
+            every = np.vstack([part for line in chosen for part in (line, gap)])
+            drawn.append(Stroke(_path_data(*_cropped(sx(every[:, 0]), sy(every[:, 1]), sx, sy),
+                                           LANE_THIN_PX),
+                                colour, width, cls="lanes"))
+    return drawn
+
+
+def _cropped(xs: np.ndarray, ys: np.ndarray, sx: Scale,
+             sy: Scale) -> tuple[np.ndarray, np.ndarray]:
+    """The points (pixels) in the view, and the first one out where a line leaves it: the
+    others are missing (NaN)."""
+    low_x, high_x = sorted((sx.start, sx.end))
+    low_y, high_y = sorted((sy.start, sy.end))
+    inside = (xs >= low_x) & (xs <= high_x) & (ys >= low_y) & (ys <= high_y)
+    keep = inside.copy()
+    keep[1:] |= inside[:-1]
+    keep[:-1] |= inside[1:]
+    return np.where(keep, xs, np.nan), np.where(keep, ys, np.nan)
 
 
 def _network(map_path: Any) -> Any:

@@ -68,7 +68,7 @@ MAP_HELP = ("Map: a bundled CARLA town (Town01, Town02, Town04, Town06, Town07, 
 def map_option(optional: bool = False, help: str = MAP_HELP
                ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """``--map NAME|FILE.xodr``, passed to the command as ``map_ref``: the
-    ``spawn_db.MapRef`` it names (not given: Town04, or None when ``optional``)."""
+    ``roads.MapRef`` it names (not given: Town04, or None when ``optional``)."""
     def resolve(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
         if value is None and optional:
             return None

@@ -1,4 +1,6 @@
-"""One realistic params dict per manoeuvre class, written by hand from docs/params.md.
+"""One realistic params dict per manoeuvre class: written by hand from docs/params.md for the
+17 classes of the thesis, and for a class added since (built in or a plugin) its first
+sample record (``Maneuver.sample``), ingested and placed on Town04 by the spawn stage.
 
 Spawn keys: highway on Town04's curved road 45 (lanes -1..-4), the ego at s = 100 and every
 NPC where it stands at t = 0: its recorded gap minus the lead-in drift
@@ -9,18 +11,26 @@ the map; urban world coordinates in the OpenSCENARIO frame, written by hand.
 from __future__ import annotations
 
 import copy
+import tempfile
+from pathlib import Path
 from typing import Any
 
-from scenweave import roads
+from scenweave import maneuvers, roads
 from scenweave.corpus.retrieval import class_tags
+from scenweave.ingest import IngestReport, extract_params, iter_raw_records
+from scenweave.ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.spawn_db import SpawnMatcher
 
 TAGS = class_tags()  # checked against docs/params.md
 
 EGO_S = 100.0
 START_S = 2.0
 
-HIGHWAY_CLASSES = [code for code in TAGS if not code.startswith("U")]
-URBAN_CLASSES = [code for code in TAGS if code.startswith("U")]
+HIGHWAY_CLASSES = maneuvers.codes("highway")
+URBAN_CLASSES = maneuvers.codes("urban")
+#: the classes whose example is written by hand below
+HAND_WRITTEN = ("BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "LCF", "LCB", "FLF", "FLB",
+                "FRF", "FRB", "U1_1", "U4_1", "U4_2", "U4_3", "U4_4")
 
 
 def _common(code: str, duration_s: float, start_s: float, ego: float, ego_end: float) -> dict:
@@ -85,7 +95,7 @@ def _highway(code: str) -> dict:
         params |= _npc(22.0, -3.0, distance, -2, 23.0, "car")
         params |= {"npc_distance_end_m": distance * 0.8, "npc_dist_traveled_m": 120.0,
                    "behavior_type": "B2"}
-    else:
+    else:  # FRF, FRB
         params = _common(code, 8.0, START_S, 30.0, 31.0)
         sign = 1.0 if code == "FRF" else -1.0
         slots = {"center": (True, -3, 45.0), "right": (True, -4, 20.0), "left": (False, -2, 0.0)}
@@ -135,7 +145,24 @@ def _urban(code: str) -> dict:
     return params
 
 
-_EXAMPLES = {code: (_urban(code) if code.startswith("U") else _highway(code)) for code in TAGS}
+def _sampled(code: str) -> dict:
+    """The first sample record of ``code`` (seed 7), ingested and placed on Town04."""
+    with tempfile.TemporaryDirectory(prefix="scenweave-example-") as folder:
+        raw = Path(folder)
+        write_highway_samples(raw / "highway", seed=7, per_class=1)
+        write_urban_samples(raw / "urban", seed=7, per_class=1)
+        records = [extract_params(item.record) for item in iter_raw_records(raw, IngestReport())]
+    record = next(params for params in records if params["maneuver_class"] == code)
+    return SpawnMatcher().assign(record, 0)
+
+
+def _example(code: str) -> dict:
+    if code not in HAND_WRITTEN:
+        return _sampled(code)
+    return _urban(code) if maneuvers.get(code).domain == "urban" else _highway(code)
+
+
+_EXAMPLES = {code: _example(code) for code in TAGS}
 
 
 def example_params(code: str) -> dict[str, Any]:

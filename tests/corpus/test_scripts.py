@@ -17,7 +17,7 @@ from lxml import etree
 from scenariogeneration import xosc
 
 from scenweave import corpus, maneuvers
-from scenweave.corpus import CorpusError
+from scenweave.errors import ParamsError
 from tests.corpus.conventions import (
     action_named,
     assert_entities_match,
@@ -119,14 +119,14 @@ def test_write_is_atomic_and_creates_the_folder(tmp_path):
 def test_missing_param_names_the_key_and_the_scenario(tmp_path):
     params = example_params("CINF")
     del params["npc_speed_ms"]
-    with pytest.raises(CorpusError, match=r"CINF_example_row000007.*npc_speed_ms"):
+    with pytest.raises(ParamsError, match=r"CINF_example_row000007.*npc_speed_ms"):
         corpus.generate(params, tmp_path / "x.xosc")
     assert not list(tmp_path.iterdir())
 
 
 def test_bad_direction_is_a_clear_error(tmp_path):
     params = example_params("LCF") | {"lane_change_direction": "up"}
-    with pytest.raises(CorpusError, match="lane_change_direction"):
+    with pytest.raises(ParamsError, match="lane_change_direction"):
         corpus.generate(params, tmp_path / "x.xosc")
 
 
@@ -164,13 +164,13 @@ def test_there_is_a_script_for_every_class():
                                            ("U4_1", "spawn_stop_line_distance_m")])
 def test_unfilled_spawn_key_is_a_clear_error(code, key, tmp_path):
     params = example_params(code) | {key: None}
-    with pytest.raises(CorpusError, match=rf"'{key}' must be a finite number.*spawn_db"):
+    with pytest.raises(ParamsError, match=rf"'{key}' must be a finite number.*spawn_db"):
         corpus.generate(params, tmp_path / "x.xosc")
 
 
 def test_nan_speed_is_refused(tmp_path):
     params = example_params("FLF") | {"npc_end_speed_ms": float("nan")}
-    with pytest.raises(CorpusError, match="npc_end_speed_ms"):
+    with pytest.raises(ParamsError, match="npc_end_speed_ms"):
         corpus.generate(params, tmp_path / "x.xosc")
 
 
@@ -253,5 +253,5 @@ def test_lane_ids_are_written_as_integers(tmp_path):
     _, doc = _write("BRAKE", tmp_path, ego_lane_id=-3.0, ego_road_id=45.0)
     position = doc.find("Storyboard/Init/Actions/Private[@entityRef='hero']//LanePosition")
     assert (position.get("laneId"), position.get("roadId")) == ("-3", "45")
-    with pytest.raises(CorpusError, match="ego_lane_id"):
+    with pytest.raises(ParamsError, match="ego_lane_id"):
         _write("BRAKE", tmp_path, ego_lane_id=-2.5)

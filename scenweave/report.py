@@ -5,15 +5,14 @@ Everything here works on outcome dicts (``status.json`` of each scenario, the ``
 The metrics follow thesis §6.1: success rate (SR, the LLM's own success: ``ok`` or
 ``repaired``), first-attempt rate, latency per scenario and the error taxonomy; a fallback
 still delivers a scenario, so ``delivered_rate`` counts it too. The HTML page is static and
-self-contained: figures are inline PNGs, links are relative to the run folder. It is rendered
-from ``templates/run_report.html`` (Jinja2, every value escaped); this module only computes
-what the page shows.
+self-contained: figures are inline ``data:`` images (the replay figures SVG, the others PNG),
+links are relative to the run folder. It is rendered from ``templates/run_report.html``
+(Jinja2, every value escaped); this module only computes what the page shows.
 """
 
 from __future__ import annotations
 
 import base64
-import functools
 import io
 import json
 import math
@@ -23,16 +22,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import markupsafe
 
 from scenweave.files.atomic import write_text_atomic
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
+from scenweave.templating import render, templates
 
 REPORT_FILE = "report.html"
-REPLAY_JSON, REPLAY_PNG = "replay.json", "replay.png"
+REPLAY_JSON, REPLAY_FIGURE = "replay.json", "replay.svg"
 SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE,
-                  REPLAY_JSON, REPLAY_PNG)
+                  REPLAY_JSON, REPLAY_FIGURE)
 HOUR_S = 3600.0
 #: replay figures embedded in a run's report: every failed replay, up to this many passing
 #: ones per class, at most this many in all
@@ -272,28 +271,17 @@ class Table:
 
 @dataclass(frozen=True)
 class Figure:
-    """A PNG shown inline, with its caption and alternative text."""
+    """A picture shown inline (a ``data:`` URI, so the page stays one file; an SVG shown as an
+    image runs no script), with its caption and alternative text."""
 
-    png: bytes
+    image: bytes
     caption: str
     alt: str
+    media_type: str = "image/png"
 
     @property
-    def png_base64(self) -> str:
-        return base64.b64encode(self.png).decode("ascii")
-
-
-@functools.cache
-def templates() -> jinja2.Environment:
-    """The report templates (``scenweave/templates``), every value HTML-escaped."""
-    return jinja2.Environment(loader=jinja2.PackageLoader("scenweave", "templates"),
-                              autoescape=True, trim_blocks=True, lstrip_blocks=True,
-                              undefined=jinja2.StrictUndefined)
-
-
-def render(template: str, **context: Any) -> str:
-    """A template of ``scenweave/templates`` rendered with ``context``."""
-    return templates().get_template(template).render(**context)
+    def data_uri(self) -> str:
+        return f"data:{self.media_type};base64,{base64.b64encode(self.image).decode('ascii')}"
 
 
 def _macros() -> Any:
@@ -496,26 +484,26 @@ def replay_figure_picks(replayed: list[dict], passing_per_class: int = REPLAY_PA
 
 
 def _replay_figure(run_dir: Path, outcome: dict) -> dict[str, Any]:
-    """One picked replay: its figure (a missing or stale ``replay.png`` is drawn first), or
+    """One picked replay: its figure (a missing or stale ``replay.svg`` is drawn first), or
     why there is none (``problem``); neither without a replay."""
-    png = _replay_png(run_dir / safe_name(outcome["scenario_id"]), outcome)
+    svg = _replay_svg(run_dir / safe_name(outcome["scenario_id"]), outcome)
     replay = outcome["replay"]
     verdict = ("replay passed" if replay.get("passed") else
                "replay failed: " + (", ".join(replay.get("codes") or []) or "?"))
     caption = f"{outcome['scenario_id']} ({outcome.get('maneuver_class', '?')}): {verdict}"
     return {"caption": caption,
-            "figure": Figure(png, caption, f"replay of {outcome['scenario_id']}")
-            if isinstance(png, bytes) else None,
-            "problem": png if isinstance(png, str) else None}
+            "figure": Figure(svg, caption, f"replay of {outcome['scenario_id']}",
+                             "image/svg+xml") if isinstance(svg, bytes) else None,
+            "problem": svg if isinstance(svg, str) else None}
 
 
-def _replay_png(folder: Path, status: dict) -> bytes | str | None:
-    """The folder's ``replay.png`` (drawn when missing or not drawn from the present
+def _replay_svg(folder: Path, status: dict) -> bytes | str | None:
+    """The folder's ``replay.svg`` (drawn when missing or not drawn from the present
     ``replay.json`` and verdict); the reason as text when it cannot be drawn; None without a
     replay."""
     from scenweave.replay_figures import draw_replay_figure, is_current
 
-    source, picture = folder / REPLAY_JSON, folder / REPLAY_PNG
+    source, picture = folder / REPLAY_JSON, folder / REPLAY_FIGURE
     if not source.exists():
         return None
     try:

@@ -25,7 +25,7 @@ from scenweave.progress import progress
               help="Fixed simulation step (s).")
 @click.option("--wall-time", default=30.0, show_default=True, type=click.FloatRange(1),
               help="Seconds one replay may take before its player is killed.")
-@click.option("--figures", is_flag=True, help="Also draw replay.png in each scenario folder.")
+@click.option("--figures", is_flag=True, help="Also draw replay.svg in each scenario folder.")
 @json_option("one result per scenario")
 @click.option("--force", is_flag=True, help="Play a file that fails the parameter checks too "
               "(a hand-edited scenario), and say which checks it fails.")

@@ -89,4 +89,9 @@ def test_the_replay_figure_of_a_mined_record_draws_what_was_recorded(tmp_path, e
     times, speeds = _Facts.read(folder).recorded_curve("npc_speed_ms")
     assert 2.0 <= times[0] < 2.1  # the event starts when the scenario's manoeuvre does
     assert speeds[0] == record["series"]["npc_speed_ms"][0]
-    assert (folder / "replay.png").stat().st_size > 10_000
+    from lxml import etree
+
+    figure = etree.parse(str(folder / "replay.svg")).getroot()
+    dashed = [p for p in figure.iter("{http://www.w3.org/2000/svg}path")
+              if p.get("stroke-dasharray") and len(p.get("d", "")) > 100]
+    assert len(dashed) >= 2, "the recorded speed and gap series, dashed beside the replay's"

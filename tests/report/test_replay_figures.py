@@ -9,20 +9,25 @@ scenarios do in esmini.
 from __future__ import annotations
 
 import base64
-import io
 import json
 import shutil
 from pathlib import Path
 
 import lxml.html
-import numpy as np
 import pytest
-from matplotlib import image as mpimg
+from lxml import etree
 
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
-from scenweave.replay_figures import FIGURE_NAME, FIGURE_PX, draw_replay_figure
+from scenweave.replay_figures import (
+    FAIL_COLOUR,
+    FIGURE_NAME,
+    FIGURE_PX,
+    draw_replay_figure,
+    figure_source,
+    is_current,
+)
 from scenweave.report import (
     REPORT_FILE,
     pct,
@@ -36,8 +41,7 @@ from scenweave.runner import run_batch, summarize
 CLASSES = ("FLF", "LCF", "U4_2")
 #: the scenario made to fail (one with an NPC to collide with) and a clean one to compare
 CRASHED_CLASS = "FLF"
-#: FAIL_COLOUR of the figures, as RGB
-RED = np.array([0xCF, 0x22, 0x2E])
+SVG = "{http://www.w3.org/2000/svg}"
 
 
 @pytest.fixture(scope="module")
@@ -85,38 +89,54 @@ def _outcomes(run: Path) -> list[dict]:
             if (p / "status.json").exists()]
 
 
-def _decoded(png: bytes) -> np.ndarray:
-    return mpimg.imread(io.BytesIO(png), format="png")
+def _svg(path: Path) -> etree._Element:
+    """The figure parsed as XML (it must be well-formed)."""
+    return etree.parse(str(path)).getroot()
 
 
-def _red_pixels(pixels: np.ndarray) -> int:
-    rgb = (pixels[..., :3] * 255).astype(int)
-    return int((np.abs(rgb - RED).max(axis=-1) < 40).sum())
+def _texts(element: etree._Element) -> list[str]:
+    return ["".join(t.itertext()) for t in element.iter(f"{SVG}text")]
 
 
-def _map_area(pixels: np.ndarray) -> np.ndarray:
-    """The bird's-eye view: right of the time plots, below the title, above the caption."""
-    height, width = pixels.shape[:2]
-    return pixels[int(0.1 * height):int(0.8 * height), int(0.6 * width):]
+def _red(element: etree._Element) -> list[etree._Element]:
+    """The elements drawn or written in the figures' red."""
+    return [e for e in element.iter() if FAIL_COLOUR in (e.get("fill"), e.get("stroke"))]
+
+
+def _map(root: etree._Element) -> etree._Element:
+    [panel] = root.findall(f"{SVG}g[@id='map']")
+    return panel
 
 
 def test_every_played_scenario_gets_a_figure_of_the_stated_size(run, crashed):
     for folder in sorted(p for p in run.iterdir() if (p / "replay.json").exists()):
         path = draw_replay_figure(folder)
         assert path == folder / FIGURE_NAME
-        pixels = _decoded(path.read_bytes())
-        assert pixels.shape[:2] == (FIGURE_PX[1], FIGURE_PX[0]), folder.name
-        assert pixels[..., :3].std() > 0.05, f"{folder.name}: a blank picture"
+        root = _svg(path)
+        assert root.tag == f"{SVG}svg"
+        assert (root.get("width"), root.get("height")) == tuple(map(str, FIGURE_PX)), folder.name
+        assert root.get("viewBox") == f"0 0 {FIGURE_PX[0]} {FIGURE_PX[1]}"
+        playback = Playback.read(folder / "replay.json")
+        drawn = {g.get("data-actor"): g for g in _map(root).iter(f"{SVG}g")
+                 if g.get("class") == "actor"}
+        assert set(drawn) == set(playback.entities), folder.name  # every path, named
+        assert all(len(g.find(f"{SVG}path").get("d")) > 100 for g in drawn.values())
+        assert set(playback.entities) <= set(_texts(root))  # the speed legend names them
+        assert {g.get("id") for g in root.findall(f"{SVG}g")} == {"speed", "lower", "map"}
         assert path.stat().st_size < 150_000
+        assert is_current(folder, json.loads((folder / "status.json").read_text()))
 
 
 def test_the_collision_is_marked_on_the_map_in_red(run, crashed):
-    pixels = _decoded(draw_replay_figure(crashed).read_bytes())
-    assert _red_pixels(_map_area(pixels)) > 40  # the X (and its time label)
+    root = _svg(draw_replay_figure(crashed))
+    [mark] = [p for p in _map(root).iter(f"{SVG}path") if p.get("class") == "collision"]
+    assert mark.get("fill") == FAIL_COLOUR
+    assert "hero–npc 3.00 s" in _texts(_map(root))  # the X and its time
+    assert [t for t in _texts(root) if t.startswith("REPLAY_COLLISION at 3.00 s")]
     [other] = [p for p in run.iterdir() if p.name.startswith("LCF")]
     playback = Playback.read(other / "replay.json")
     assert not playback.collisions  # a clean replay: its map has nothing red
-    assert _red_pixels(_map_area(_decoded(draw_replay_figure(other).read_bytes()))) == 0
+    assert _red(_map(_svg(draw_replay_figure(other)))) == []
 
 
 def test_no_replay_no_figure_and_an_engine_error_gets_one(tmp_path):
@@ -127,9 +147,38 @@ def test_no_replay_no_figure_and_an_engine_error_gets_one(tmp_path):
     (tmp_path / "status.json").write_text(json.dumps(
         {"scenario_id": "X", "maneuver_class": "BRAKE",
          "replay": {"played": False, "passed": False, "codes": ["REPLAY_ENGINE"]}}))
-    pixels = _decoded(draw_replay_figure(tmp_path).read_bytes())
-    assert pixels.shape[:2] == (FIGURE_PX[1], FIGURE_PX[0])
-    assert _red_pixels(pixels) > 100  # the failed verdict and esmini's error, in red
+    root = _svg(draw_replay_figure(tmp_path))
+    assert (root.get("width"), root.get("height")) == tuple(map(str, FIGURE_PX))
+    said = {"".join(t.itertext()) for t in _red(root)}  # the failed verdict and esmini's error
+    assert {"X · BRAKE · replay FAILED: REPLAY_ENGINE", "esmini could not play the scenario",
+            "esmini aborted (signal 11)", "Segfault"} <= said
+
+
+def test_a_record_s_text_is_shown_in_the_figure_never_run(run, tmp_path):
+    """A scenario id and a finding message with markup are text in the SVG, escaped: no
+    element of theirs, and the figure still parses and names what it shows."""
+    [source] = [p for p in run.iterdir() if p.name.startswith("LCF")]
+    folder = tmp_path / "odd"
+    shutil.copytree(source, folder)
+    odd_id = 'LCF <script>alert("x")</script> & <b>'
+    params = json.loads((folder / "params.json").read_text())
+    (folder / "params.json").write_text(json.dumps({**params, "scenario_id": odd_id}))
+    status = json.loads((folder / "status.json").read_text())
+    status["replay"] = {**status["replay"], "passed": False, "codes": ["REPLAY_SPEED"]}
+    status["validation"]["errors"] = [{"code": "REPLAY_SPEED", "severity": "error",
+                                       "message": "<script>document.x</script> & more"}]
+    (folder / "status.json").write_text(json.dumps(status))
+    path = draw_replay_figure(folder)
+    root = _svg(path)
+    assert not [e for e in root.iter() if etree.QName(e).localname in ("script", "b")]
+    assert root.find(f"{SVG}title").text.startswith(odd_id)
+    assert "REPLAY_SPEED <script>document.x</script> & more" in _texts(root)
+    raw = path.read_text()
+    assert "<script" not in raw and "&lt;script&gt;alert(&#34;x&#34;)&lt;/script&gt; &amp;" in raw
+    assert is_current(folder, status)
+    status["replay"]["codes"] = ["REPLAY_GAP"]  # another verdict: the figure is stale
+    assert not is_current(folder, status)
+    assert figure_source(folder, status) not in raw
 
 
 def test_the_per_class_table_has_the_replay_pass_rate(crashed, page):
@@ -166,8 +215,9 @@ def test_the_failed_replay_s_figure_is_drawn_and_embedded(crashed, page):
                 for f in page.xpath("//figure")}
     [src] = [src for caption, src in captions.items()
              if caption.startswith(crashed.name) and "REPLAY_COLLISION" in caption]
-    png = base64.b64decode(src.removeprefix("data:image/png;base64,"))
-    assert png == (crashed / FIGURE_NAME).read_bytes()
+    assert src.startswith("data:image/svg+xml;base64,")
+    svg = base64.b64decode(src.removeprefix("data:image/svg+xml;base64,"))
+    assert svg == (crashed / FIGURE_NAME).read_bytes()
     # every replay of this tiny run is shown: the failed one and the passing ones (<= 2 a class)
     replay_captions = [c for c in captions if ": replay " in c]
     assert len(replay_captions) == len(CLASSES)
@@ -176,14 +226,14 @@ def test_the_failed_replay_s_figure_is_drawn_and_embedded(crashed, page):
 
 def test_the_scenario_links_include_the_replay_files(crashed, page):
     links = {a.get("href") for a in page.xpath("//a")}
-    assert {f"{crashed.name}/replay.json", f"{crashed.name}/replay.png"} <= links
+    assert {f"{crashed.name}/replay.json", f"{crashed.name}/{FIGURE_NAME}"} <= links
 
 
 def test_the_report_draws_the_missing_pictures_of_the_replays_it_shows(crashed, tmp_path):
     copy = tmp_path / "run"
     shutil.copytree(crashed.parent, copy)
-    for png in copy.glob(f"*/{FIGURE_NAME}"):
-        png.unlink()
+    for svg in copy.glob(f"*/{FIGURE_NAME}"):
+        svg.unlink()
     write_run_report(copy)
     drawn = {p.parent.name for p in copy.glob(f"*/{FIGURE_NAME}")}
     shown = {o["scenario_id"] for o in replay_figure_picks(_outcomes(copy))}

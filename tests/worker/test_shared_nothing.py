@@ -137,7 +137,7 @@ def test_workers_that_cannot_see_the_submitter_fill_its_run_folder_as_a_local_ru
 
     queued, here = _scenario_files(run), _scenario_files(tmp_path / "local" / "r1")
     assert sorted(queued) == sorted(here)
-    assert any(name.endswith("replay.png") for name in here)  # drawn by the workers too
+    assert any(name.endswith("replay.svg") for name in here)  # drawn by the workers too
     differing = [name for name in here if queued[name] != here[name]]
     assert not differing, f"{len(differing)} files differ from the local run: {differing[:5]}"
     local_summary = json.loads((tmp_path / "local" / "r1" / "summary.json").read_text())

@@ -358,19 +358,22 @@ class Scale:
         return self.start + (value - self.low) * ((self.end - self.start) / (self.high - self.low))
 
     def ticks(self) -> list[tuple[float, str]]:
-        """(pixel, label) at nice numbers (1, 2, 2.5, 5 × 10^k apart), about one every 60 px."""
-        count = min(8, max(3, round(abs(self.end - self.start) / 60)))
+        """(pixel, label) at nice numbers (1, 2, 2.5, 5 × 10^k apart), about one every 80 px
+        across and every 45 px up (a y scale runs up: ``end`` < ``start``)."""
+        every_px = 45 if self.end < self.start else 80
+        count = min(8, max(3, round(abs(self.end - self.start) / every_px)))
         return [(self(v), label) for v, label in nice_ticks(self.low, self.high, count)]
 
 
 def nice_ticks(low: float, high: float, count: int) -> list[tuple[float, str]]:
-    """Values in ``low``..``high`` at a nice step giving about ``count`` intervals, labelled
-    with as many decimals as the step needs."""
+    """Values in ``low``..``high`` at the nice step nearest to giving ``count`` intervals,
+    labelled with as many decimals as the step needs."""
     raw = (high - low) / max(count, 1)
     if not raw > 0 or not math.isfinite(raw):
         return []
     magnitude = 10.0 ** math.floor(math.log10(raw))
-    step = next(m * magnitude for m in (1.0, 2.0, 2.5, 5.0, 10.0) if m * magnitude >= raw * 0.999)
+    step = min((m * magnitude for m in (1.0, 2.0, 2.5, 5.0, 10.0)),
+               key=lambda candidate: abs(math.log(candidate / raw)))
     text = f"{step:.10g}"
     decimals = len(text.split(".")[1]) if "." in text and "e" not in text else 0
     first = math.ceil(low / step - 1e-9)

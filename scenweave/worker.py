@@ -307,7 +307,7 @@ def _queue(connection: Any) -> Any:
 
 # --- the job, in the worker ----------------------------------------------------------------
 
-_matchers: dict[tuple[str, str | None], Any] = {}
+_matchers: dict[tuple[Callable[[str | None], Any], str | None], Any] = {}
 _scratch_root: Path | None = None
 _matcher_factories: Registry[Callable[[str | None], Any]] = Registry(
     "spawn matcher", "SPAWN_MATCHERS", expected="a callable making a matcher from a map name",
@@ -337,12 +337,13 @@ def matcher_factory(factory: str) -> Callable[[str | None], Any]:
 
 def matcher_for(factory: str, map_name: str | None = None) -> Any:
     """The spawn matcher ``factory`` (a registered name or ``module:callable``) makes for
-    ``map_name``, made once per process."""
+    ``map_name``, made once per process (``default`` and the callable it names alike)."""
     from scenweave.roads import DEFAULT_MAP
 
-    key = (factory, map_name or DEFAULT_MAP)
+    make = matcher_factory(factory)
+    key = (make, map_name or DEFAULT_MAP)
     if key not in _matchers:
-        _matchers[key] = matcher_factory(factory)(map_name)
+        _matchers[key] = make(map_name)
     return _matchers[key]
 
 

@@ -111,6 +111,8 @@ def test_an_entry_point_may_add_a_manoeuvre_class(entry_points):
 
 def test_the_matcher_option_takes_a_name_or_module_callable(tmp_path, capsys):
     assert matcher_factory("default") is matcher_factory("scenweave.runner:default_matcher")
+    with pytest.raises(InputError, match="--matcher scenweave.runner:nothing: AttributeError"):
+        matcher_factory("scenweave.runner:nothing")
     with pytest.raises(SystemExit) as exited:
         main(["submit", str(tmp_path), "--queue", "redis://127.0.0.1:1/0", "--matcher", "nope"])
     assert exited.value.code == 2

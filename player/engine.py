@@ -30,7 +30,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import IO, Any, TypedDict
 
 from scenweave.player.locate import find_esmini
 from scenweave.player.playback import Playback, StoryboardChange
@@ -61,7 +61,37 @@ serve()
 
 
 class ObjectState(ctypes.Structure):
-    """esminiLib.hpp's ``SE_ScenarioObjectState``, field for field."""
+    """esminiLib.hpp's ``SE_ScenarioObjectState``, field for field (the annotations tell the
+    type checker what ``_fields_`` makes at run time)."""
+
+    id: int
+    model_id: int
+    ctrl_type: int
+    timestamp: float
+    x: float
+    y: float
+    z: float
+    h: float
+    p: float
+    r: float
+    roadId: int
+    junctionId: int
+    t: float
+    laneId: int
+    laneOffset: float
+    s: float
+    speed: float
+    centerOffsetX: float
+    centerOffsetY: float
+    centerOffsetZ: float
+    width: float
+    length: float
+    height: float
+    objectType: int
+    objectCategory: int
+    wheel_angle: float
+    wheel_rot: float
+    visibilityMask: int
 
     _fields_ = [
         ("id", ctypes.c_int), ("model_id", ctypes.c_int), ("ctrl_type", ctypes.c_int),
@@ -82,10 +112,31 @@ class ObjectState(ctypes.Structure):
 
 STATE_CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_char_p, ctypes.c_int, ctypes.c_int,
                                   ctypes.c_char_p)
-_library: Any = None
+_library: ctypes.CDLL | None = None
 
 
-def _load(library_path: str) -> Any:
+class _Request(TypedDict):
+    """What the caller asks the server: play one scenario (paths as strings)."""
+
+    library: str
+    xosc: str
+    time_step_s: float
+    until_s: float
+    log: str
+    wall_time_s: float
+
+
+class _Answer(TypedDict, total=False):
+    """The server's answer to a ``_Request``: the child's reply (a ``Playback.to_dict`` with
+    the child's ``marks``, or ``engine_error``), or why there is none."""
+
+    reply: dict[str, Any] | None
+    exitcode: int
+    timed_out: bool
+    server_error: str
+
+
+def _load(library_path: str) -> ctypes.CDLL:
     global _library
     if _library is None:
         lib = ctypes.CDLL(library_path)
@@ -107,7 +158,7 @@ def preload() -> None:
 
 # --- the child: one scenario ------------------------------------------------------------------
 def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_s: float,
-                   log_path: str) -> dict:
+                   log_path: str) -> dict[str, Any]:
     """The child's work: init, step to ``until_s`` (or esmini's quit), record everything."""
     lib = _load(library_path)
     changes: list[StoryboardChange] = []
@@ -193,7 +244,7 @@ def serve() -> None:
         _write_frame(replies, _run_child(request) if not broken else {"server_error": broken})
 
 
-def _run_child(request: dict) -> dict:
+def _run_child(request: _Request) -> _Answer:
     """Fork a child playing ``request``; its reply, or why there is none."""
     reading, writing = os.pipe()
     forked = time.perf_counter()
@@ -203,6 +254,7 @@ def _run_child(request: dict) -> dict:
         code = 0
         try:
             _silence_stdio()
+            reply: dict[str, Any]
             try:
                 reply = _step_scenario(request["library"], request["xosc"],
                                        request["time_step_s"], request["until_s"],
@@ -218,7 +270,8 @@ def _run_child(request: dict) -> dict:
         finally:
             os._exit(code)
     os.close(writing)
-    chunks, timed_out = [], False
+    chunks: list[bytes] = []
+    timed_out = False
     deadline = forked + request["wall_time_s"]
     with os.fdopen(reading, "rb", buffering=0) as pipe:
         while True:
@@ -235,23 +288,23 @@ def _run_child(request: dict) -> dict:
             chunks.append(chunk)
     _, status = os.waitpid(pid, 0)
     exitcode = os.waitstatus_to_exitcode(status)
-    reply = None
+    played: dict[str, Any] | None = None
     if not timed_out and exitcode == 0:
         try:
-            reply = pickle.loads(b"".join(chunks))
+            played = pickle.loads(b"".join(chunks))
         except Exception:  # noqa: BLE001 - a torn reply is no reply
-            reply = None
-    return {"reply": reply, "exitcode": exitcode, "timed_out": timed_out}
+            played = None
+    return {"reply": played, "exitcode": exitcode, "timed_out": timed_out}
 
 
-def _write_frame(stream: BinaryIO, obj: Any) -> None:
+def _write_frame(stream: IO[bytes], obj: object) -> None:
     data = pickle.dumps(obj, pickle.HIGHEST_PROTOCOL)
     view = memoryview(struct.pack("<Q", len(data)) + data)
     while view:  # an unbuffered stream may take part of it
         view = view[stream.write(view) or 0:]
 
 
-def _read_frame(stream: BinaryIO) -> Any:
+def _read_frame(stream: IO[bytes]) -> Any:
     header = _read_exact(stream, 8)
     if header is None:
         return None
@@ -259,8 +312,9 @@ def _read_frame(stream: BinaryIO) -> Any:
     return None if data is None else pickle.loads(data)
 
 
-def _read_exact(stream: BinaryIO, size: int) -> bytes | None:
-    parts, left = [], size
+def _read_exact(stream: IO[bytes], size: int) -> bytes | None:
+    parts: list[bytes] = []
+    left = size
     while left:
         chunk = stream.read(left)
         if not chunk:
@@ -279,15 +333,15 @@ class _Server:
 
     def forget(self) -> None:
         """Drop the handle without touching the server (in a forked child of the caller)."""
-        self.process: subprocess.Popen | None = None
+        self.process: subprocess.Popen[bytes] | None = None
         self.ready = False
         self.lock = threading.Lock()
         self.stderr: Path | None = None
 
-    def launch(self) -> None:
-        """Start the server if there is none, without waiting for it."""
+    def launch(self) -> subprocess.Popen[bytes]:
+        """Start the server if there is none, without waiting for it; its process."""
         if self.process is not None and self.process.poll() is None:
-            return
+            return self.process
         self.process, self.ready = None, False
         self.stderr = scratch_folder("esmini") / f"server-{os.getpid()}.log"
         with open(self.stderr, "wb") as errors:
@@ -295,20 +349,22 @@ class _Server:
                 [sys.executable, "-c", SERVER_PROGRAM, str(Path(__file__).resolve().parent)],
                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors, bufsize=0,
                 close_fds=True, start_new_session=True)
+        return self.process
 
-    def ask(self, request: dict, timeout_s: float) -> dict:
+    def ask(self, request: _Request, timeout_s: float) -> _Answer:
         """Send ``request``; the server's reply, or ``{"server_error": why}``."""
         with self.lock:
-            problem = self._start()
-            if problem:
+            process, problem = self._start()
+            if process is None:
                 return {"server_error": problem}
-            process = self.process
+            reply: _Answer | None
             try:
-                _write_frame(process.stdin, request)
-                if not select.select([process.stdout], [], [], timeout_s)[0]:
+                to_server, from_server = _pipes(process)
+                _write_frame(to_server, request)
+                if not select.select([from_server], [], [], timeout_s)[0]:
                     self.stop()
                     return {"server_error": f"the player server did not answer in {timeout_s:g} s"}
-                reply = _read_frame(process.stdout)
+                reply = _read_frame(from_server)
             except (OSError, EOFError, pickle.UnpicklingError) as err:
                 reply, problem = None, f"{type(err).__name__}: {err}"
             if reply is None:
@@ -317,29 +373,33 @@ class _Server:
                 return {"server_error": f"the player server ended ({why})"}
             return reply
 
-    def _start(self) -> str:
-        """Launch the server if needed and wait until it has loaded the library."""
-        self.launch()
+    def _start(self) -> tuple[subprocess.Popen[bytes] | None, str]:
+        """Launch the server if needed and wait until it has loaded the library: its process,
+        or ``None`` and why it did not start."""
+        process = self.launch()
         if self.ready:
-            return ""
-        process = self.process
+            return process, ""
+        hello: dict[str, Any] | None
         try:
-            if not select.select([process.stdout], [], [], SERVER_START_S)[0]:
+            _, from_server = _pipes(process)
+            if not select.select([from_server], [], [], SERVER_START_S)[0]:
                 raise TimeoutError(f"no answer in {SERVER_START_S:g} s")
-            hello = _read_frame(process.stdout)
+            hello = _read_frame(from_server)
         except (OSError, EOFError, TimeoutError, pickle.UnpicklingError) as err:
             hello = {"ready": False, "problem": f"{type(err).__name__}: {err}"}
         if not hello or not hello.get("ready"):
             problem = (hello or {}).get("problem") or self._last_words()
             self.stop()
-            return f"the player server did not start ({problem})"
+            return None, f"the player server did not start ({problem})"
         self.ready = True
-        return ""
+        return process, ""
 
     def _last_words(self) -> str:
+        if self.stderr is None:
+            return "no message"
         try:
             lines = self.stderr.read_text(errors="replace").strip().splitlines()
-        except (OSError, AttributeError):
+        except OSError:
             lines = []
         return lines[-1] if lines else "no message"
 
@@ -348,13 +408,22 @@ class _Server:
         if process is None:
             return
         try:
-            process.stdin.close()
+            if process.stdin is not None:
+                process.stdin.close()
             process.wait(timeout=2)
         except (OSError, subprocess.TimeoutExpired):
             process.kill()
             process.wait()
         finally:
-            process.stdout.close()
+            if process.stdout is not None:
+                process.stdout.close()
+
+
+def _pipes(process: subprocess.Popen[bytes]) -> tuple[IO[bytes], IO[bytes]]:
+    """The server's stdin and stdout (``_Server.launch`` opens both as pipes)."""
+    if process.stdin is None or process.stdout is None:
+        raise OSError("the player server's stdin or stdout is not a pipe")
+    return process.stdin, process.stdout
 
 
 _server = _Server()

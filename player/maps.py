@@ -89,13 +89,16 @@ UNBOUNDED_ACTIONS = {"FollowTrajectoryAction", "SynchronizeAction", "Longitudina
                      "SpeedProfileAction", "RandomRouteAction", "ParameterAction",
                      "VariableAction", "CustomCommandAction", "UserDefinedAction"}
 
-_prepared: dict[tuple, Path] = {}
-_cutters: dict[tuple, MapCutter] = {}
-_cuts: dict[tuple, Path] = {}
+#: one version of a map file: resolved path, mtime (ns) and size
+MapIdentity = tuple[str, int, int]
+
+_prepared: dict[MapIdentity, Path] = {}
+_cutters: dict[MapIdentity, MapCutter] = {}
+_cuts: dict[tuple[MapIdentity, frozenset[str]], Path] = {}
 
 
 # --- the whole map, prepared ------------------------------------------------------------------
-def map_identity(map_path: Path) -> tuple:
+def map_identity(map_path: Path) -> MapIdentity:
     """What names one version of a map file: resolved path, mtime and size."""
     map_path = Path(map_path).resolve()
     stat = map_path.stat()
@@ -115,8 +118,8 @@ def esmini_map(map_path: Path) -> Path:
 def _prepared_tree(map_path: Path) -> etree._ElementTree:
     tree = etree.parse(str(map_path))
     for signal in tree.getroot().iter("signal"):
-        if signal.get("dynamic") == "yes":
-            signal.attrib.pop("value", None)
+        if signal.get("dynamic") == "yes" and "value" in signal.attrib:
+            del signal.attrib["value"]
     return tree
 
 
@@ -145,7 +148,7 @@ class MapCut:
     def whole(self) -> bool:
         return self.roads is None
 
-    def covers(self, tracks: Mapping[str, Mapping[str, list]]) -> bool:
+    def covers(self, tracks: Mapping[str, Mapping[str, list[float]]]) -> bool:
         """Whether every entity stayed on the core roads at every recorded step and never
         drove up to a guarded road end in a lane it does not allow (``tracks``:
         ``Playback.tracks``, esmini's road, lane and ``s``): then the cut map played exactly
@@ -227,13 +230,13 @@ def plan_cut(scenario: etree._Element, map_path: Path, duration_s: float,
     kept_m = sum(index.lengths[r] for r in kept)
     if kept_m > WHOLE_MAP_SHARE * whole_m:
         return whole(f"the scenario reaches {kept_m / whole_m:.0%} of the map")
-    guarded = {}
+    guarded: dict[RoadEnd, frozenset[int]] = {}
     for road in core:
-        for end in (0, 1):
-            if any(other not in kept for other, _ in index.touches[(road, end)]):
-                guarded[(road, end)] = frozenset()
-            elif _counter_connections_lost(index, road, end, kept):
-                guarded[(road, end)] = frozenset(index.lane_options.get((road, end), ()))
+        for side in (0, 1):
+            if any(other not in kept for other, _ in index.touches[(road, side)]):
+                guarded[(road, side)] = frozenset()
+            elif _counter_connections_lost(index, road, side, kept):
+                guarded[(road, side)] = frozenset(index.lane_options.get((road, side), ()))
     return MapCut(frozenset(kept), frozenset(core), guarded,
                   {road: index.lengths[road] for road in core}, kept_m, whole_m)
 
@@ -263,17 +266,20 @@ def _read_scenario(scenario: etree._Element) -> tuple[dict[str, _Entity], list[e
     for obj in scenario.iterfind("Entities/ScenarioObject"):
         performance = obj.find(".//Performance")
         limit = None if performance is None else abs(_number(performance, "maxSpeed"))
-        entities[obj.get("name")] = _Entity(max_speed=limit)
+        name = obj.get("name")
+        if name is None:
+            raise _Unbounded("a ScenarioObject without a name")
+        entities[name] = _Entity(max_speed=limit)
     for action in scenario.iter("PrivateAction"):
         in_init = _ancestor(action, "Init") is not None
         for name in _actors(action, entities):
             _read_private(action, entities[name], in_init)
     for add in scenario.iter("AddEntityAction"):
         owner, position = add.getparent(), add.find("Position")
-        name = owner.get("entityRef") if owner is not None else None
-        if name not in entities or position is None:
+        added = owner.get("entityRef") if owner is not None else None
+        if added is None or added not in entities or position is None:
             raise _Unbounded("an AddEntityAction without entity or position")
-        entities[name].seeds.append((_position_kind(position), False))
+        entities[added].seeds.append((_position_kind(position), False))
     return entities, [_position_kind(p) for p in scenario.iter("Position")]
 
 
@@ -289,9 +295,10 @@ def _actors(action: etree._Element, entities: Mapping[str, _Entity]) -> list[str
         if actors is None or actors.get("selectTriggeringEntities") in ("true", "1"):
             return list(entities)
         names = [ref.get("entityRef") for ref in actors.iterfind("EntityRef")]
-    if any(name not in entities for name in names):
+    known = [name for name in names if name is not None and name in entities]
+    if len(known) != len(names):
         raise _Unbounded(f"actors {names} are not all ScenarioObjects")
-    return names
+    return known
 
 
 def _read_private(action: etree._Element, entity: _Entity, in_init: bool) -> None:
@@ -379,17 +386,18 @@ def _seed_points(index: RoadGraph, kind: etree._Element, entities: Mapping[str, 
         return [(road, s, _direction(h if lawful[0] > 0 else h + math.pi, 0.0))], 0.0
     if tag == "WorldPosition":
         x, y = _number(kind, "x"), _number(kind, "y")
-        h = _number(kind, "h") if kind.get("h") is not None else None
-        found = []
+        facing = _number(kind, "h") if kind.get("h") is not None else None
+        found: list[Start] = []
         for rank, (road, (s, heading)) in enumerate(index.roads_near(x, y, SEED_NEAR_M).items()):
-            direction = (1, -1) if h is None else _direction(h, heading)
+            direction = (1, -1) if facing is None else _direction(facing, heading)
             if len(direction) == 1 and _lawful(index, road, s, x, y, direction[0]):
                 found.append((road, s, direction))
             elif rank == 0:  # the nearest road, however the entity faces on it
                 found.append((road, s, (1, -1)))
         return found, 0.0
     if tag in ("RelativeLanePosition", "RelativeRoadPosition"):
-        ref = entities.get(kind.get("entityRef"))
+        ref_name = kind.get("entityRef")
+        ref = entities.get(ref_name) if ref_name is not None else None
         if ref is None or not ref.seeds or any(_tag(k).startswith("Relative")
                                                for k, _ in ref.seeds):
             raise _Unbounded(f"{tag} relative to an entity without an absolute start")
@@ -496,7 +504,7 @@ def cut_map(map_path: Path, roads: frozenset[str] | None) -> Path:
     return _cuts[key]
 
 
-def _cutter(identity: tuple) -> MapCutter:
+def _cutter(identity: MapIdentity) -> MapCutter:
     """The cutter of the map esmini loads (dynamic signals without ``value``), once per
     process and file version."""
     if identity not in _cutters:
@@ -504,7 +512,7 @@ def _cutter(identity: tuple) -> MapCutter:
     return _cutters[identity]
 
 
-def _digest(key: tuple) -> str:
+def _digest(key: tuple[object, ...]) -> str:
     return hashlib.sha256(repr(key).encode()).hexdigest()[:12]
 
 

@@ -14,7 +14,10 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from scenweave.player.engine import ObjectState
 
 #: recorded per entity and step (esmini's SE_ScenarioObjectState names in brackets)
 TRACK_FIELDS = ("x", "y", "z", "h", "speed", "road", "lane", "s", "lane_offset", "junction")
@@ -32,7 +35,7 @@ class StoryboardChange:
     kind: str
     state: str
 
-    def to_list(self) -> list:
+    def to_list(self) -> list[float | str]:
         return [self.time_s, self.name, self.kind, self.state]
 
 
@@ -78,7 +81,7 @@ class Playback:
         return cls(tracks={name: {f: [] for f in TRACK_FIELDS} for name in names})
 
     # --- recording (in the engine's child process) ---------------------------------------
-    def add_state(self, name: str, state: Any) -> None:
+    def add_state(self, name: str, state: ObjectState) -> None:
         track = self.tracks[name]
         for key, attr in _STATE_FIELDS.items():
             value = getattr(state, attr)
@@ -94,9 +97,9 @@ class Playback:
                                    round(state.centerOffsetX, 4))
 
     def add_collision(self, time_s: float, a: str, b: str) -> None:
-        pair = tuple(sorted((a, b)))
-        if not any(c[0] == time_s and (c[1], c[2]) == pair for c in self.collisions):
-            self.collisions.append((time_s, *pair))
+        first, second = sorted((a, b))
+        if not any(c == (time_s, first, second) for c in self.collisions):
+            self.collisions.append((time_s, first, second))
 
     # --- reading ---------------------------------------------------------------------------
     @property

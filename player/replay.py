@@ -13,14 +13,14 @@ from scenweave.player.errors import PlayerUnavailable
 from scenweave.player.locate import find_esmini
 from scenweave.player.playback import Playback
 from scenweave.player.settings import ReplaySettings
-from scenweave.player.translate import TranslationError, translate
+from scenweave.player.translate import TranslationError, set_map_file, translate
 
 #: the playback's file in a scenario folder
 REPLAY_NAME = "replay.json"
 #: what the translation writes as the map file before the copy to play on is chosen
 _MAP_PLACEHOLDER = Path("map.xodr")
 
-_lights: dict[tuple, dict[str, tuple[float, float]]] = {}
+_lights: dict[maps.MapIdentity, dict[str, tuple[float, float]]] = {}
 
 
 def replay_file(xosc_path: Path, map_path: Path,
@@ -100,7 +100,7 @@ def esmini_input(xosc_path: Path, map_path: Path,
     cut = maps.plan_cut(scenario, map_path, until_s + settings.time_step_s,
                         translated.light_signals.values()) if settings.cut_map else \
         maps.MapCut(None, reason="ReplaySettings.cut_map is off")
-    scenario.find("RoadNetwork/LogicFile").set("filepath", str(maps.cut_map(map_path, cut.roads)))
+    set_map_file(scenario, maps.cut_map(map_path, cut.roads))
     return etree.tostring(scenario, xml_declaration=True, encoding="utf-8"), until_s
 
 
@@ -110,7 +110,7 @@ def _play(scenario: etree._Element, map_path: Path, cut: maps.MapCut, until_s: f
     started = time.perf_counter()
     map_file = maps.cut_map(map_path, cut.roads)
     map_s = time.perf_counter() - started
-    scenario.find("RoadNetwork/LogicFile").set("filepath", str(map_file))
+    set_map_file(scenario, map_file)
     xml = etree.tostring(scenario, xml_declaration=True, encoding="utf-8")
     return play_xml(xml, until_s, settings.time_step_s, settings.wall_time_s), map_s
 
@@ -135,9 +135,9 @@ def scenario_duration_s(xosc_text: bytes, default_s: float) -> float:
 
 
 def _duration(root: etree._Element, default_s: float) -> float:
-    times = [float(c.get("value")) for c in
-             root.iterfind("Storyboard/StopTrigger//SimulationTimeCondition")
-             if _is_number(c.get("value"))]
+    values = (c.get("value") for c in
+              root.iterfind("Storyboard/StopTrigger//SimulationTimeCondition"))
+    times = [float(v) for v in values if v is not None and _is_number(v)]
     return max(times) if times else default_s
 
 

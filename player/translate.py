@@ -54,15 +54,20 @@ def translate(xosc_text: bytes, map_file: Path,
         root = etree.fromstring(xosc_text)
     except etree.XMLSyntaxError as err:
         raise TranslationError(f"the scenario is not XML: {err}") from err
-    logic = root.find("RoadNetwork/LogicFile")
-    if logic is None:
-        raise TranslationError("the scenario has no RoadNetwork/LogicFile")
-    logic.set("filepath", str(map_file))
+    set_map_file(root, map_file)
     translated = Translated(b"")
     for action in root.iter("TrafficSignalStateAction"):
         _translate_light(action, lights_carla, translated)
     translated.xml = etree.tostring(root, xml_declaration=True, encoding="utf-8")
     return translated
+
+
+def set_map_file(scenario: etree._Element, map_file: Path) -> None:
+    """Point the scenario's ``RoadNetwork/LogicFile`` at ``map_file``."""
+    logic = scenario.find("RoadNetwork/LogicFile")
+    if logic is None:
+        raise TranslationError("the scenario has no RoadNetwork/LogicFile")
+    logic.set("filepath", str(map_file))
 
 
 def _translate_light(action: etree._Element, lights_carla: Mapping[str, tuple[float, float]],
@@ -77,7 +82,8 @@ def _translate_light(action: etree._Element, lights_carla: Mapping[str, tuple[fl
     owner = action.getparent()
     while owner is not None and owner.tag != "Action":
         owner = owner.getparent()
-    key = owner.get("name") if owner is not None else name
+    owner_name = owner.get("name") if owner is not None else None
+    key = name if owner_name is None else owner_name  # the schema requires Action's name
     translated.light_actions[key] = state
     translated.light_signals[key] = signal_id
 

@@ -626,18 +626,19 @@ def _init(actors: list[Actor], weather_key: str) -> xosc.Init:
     return init
 
 
-def _flat(events: Iterable[StoryEvent | Iterable[StoryEvent]]) -> Iterator[StoryEvent]:
+def _flat(events: Iterable[object]) -> Iterator[StoryEvent]:
     """The events in order, a speed profile's list of phases (``hero_speed_profile``...)
-    standing for its events."""
+    standing for its events; anything else is a TypeError saying what is expected (the
+    scripts are written by an LLM too)."""
     for item in events:
-        if isinstance(item, StoryEvent):
-            yield item
-        else:
-            yield from item
+        inner = [item] if isinstance(item, StoryEvent) else item
+        if not isinstance(inner, list | tuple) or not all(isinstance(e, StoryEvent) for e in inner):
+            raise TypeError("make_scenario: events are StoryEvents or lists of them (a speed "
+                            f"profile's phases), not {item!r}")
+        yield from inner
 
 
-def _act(tag: str, events: Iterable[StoryEvent | Iterable[StoryEvent]],
-         timeout_s: float) -> xosc.Act:
+def _act(tag: str, events: Iterable[object], timeout_s: float) -> xosc.Act:
     # scenario_runner reads only criteria_* conditions from the Storyboard StopTrigger and ends
     # a scenario through its Acts, so the timeout is stated on the Act as well
     act = xosc.Act(f"{tag}_act", at_time("act_start", 0), at_time("act_stop", timeout_s, "stop"))
@@ -654,7 +655,7 @@ def _act(tag: str, events: Iterable[StoryEvent | Iterable[StoryEvent]],
 
 
 def make_scenario(params: Mapping[str, Any], tag: str, actors: list[Actor],
-                  events: list[StoryEvent | list[StoryEvent]]) -> xosc.Scenario:
+                  events: Iterable[object]) -> xosc.Scenario:
     """The OpenSCENARIO 1.0 scenario for the CARLA map ``params["map"]`` (default Town04):
     entities, Init, one Story, stop trigger.
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 #: how long a light shows yellow before it turns red (s)
 YELLOW_PHASE_S = 3.0
@@ -34,6 +35,36 @@ MAX_PLAYABLE_DECELERATION_MS2 = 10.0
 STANDING_MS = 1e-6
 #: free space kept between the ego and a braking lead, bumper to bumper (m)
 SAFETY_GAP_M = 2.0
+
+
+class Motion(Protocol):
+    """A car's longitudinal motion from t = 0: one ramp (:class:`SpeedProfile`) or a list of
+    phases (``phases.PhasedProfile``); the timing rules below take either."""
+
+    @property
+    def v0(self) -> float: ...
+
+    @property
+    def end_speed(self) -> float: ...
+
+    @property
+    def start_s(self) -> float: ...
+
+    @property
+    def end_s(self) -> float: ...
+
+    @property
+    def duration_s(self) -> float: ...
+
+    def speed(self, t: float) -> float: ...
+
+    def distance(self, t: float) -> float: ...
+
+    def time_to_cover(self, metres: float) -> float: ...
+
+    def breakpoints(self) -> tuple[float, ...]: ...
+
+    def hardest_braking_ms2(self) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -84,6 +115,12 @@ class SpeedProfile:
     def breakpoints(self) -> tuple[float, float]:
         return self.start_s, self.end_s
 
+    def hardest_braking_ms2(self) -> float:
+        """How hard the ramp slows down (m/s^2; infinite for a jump, 0 when it speeds up)."""
+        if self.v0 <= self.v1:
+            return 0.0
+        return math.inf if self.duration_s <= 0 else (self.v0 - self.v1) / self.duration_s
+
 
 def _bisect(reached: Callable[[float], bool], low: float, high: float) -> float:
     """Smallest t in [low, high] with ``reached(t)`` (monotone), to 1e-6 s."""
@@ -110,7 +147,7 @@ def start_gap_m(gap_at_manoeuvre_m: float, npc_speed_ms: float, ego_speed_ms: fl
     return gap_at_manoeuvre_m - (npc_speed_ms - ego_speed_ms) * maneuver_start_s
 
 
-def min_gap_m(lead: SpeedProfile, follower: SpeedProfile, gap_m: float, until_s: float,
+def min_gap_m(lead: Motion, follower: Motion, gap_m: float, until_s: float,
               from_s: float = 0.0) -> float:
     """Smallest distance between two cars in one lane over [``from_s``, ``until_s``].
 
@@ -132,7 +169,7 @@ def min_gap_m(lead: SpeedProfile, follower: SpeedProfile, gap_m: float, until_s:
     return smallest
 
 
-def lead_reaction(ego_speed_ms: float, ego_end_speed_ms: float, lead: SpeedProfile,
+def lead_reaction(ego_speed_ms: float, ego_end_speed_ms: float, lead: Motion,
                   gap_m: float, until_s: float, clearance_m: float,
                   cut_in: bool = False) -> SpeedProfile | None:
     """The ego's reaction to a car that ends up in front of it slower than the ego would drive,
@@ -148,7 +185,7 @@ def lead_reaction(ego_speed_ms: float, ego_end_speed_ms: float, lead: SpeedProfi
                         from_s=lead.start_s if cut_in else 0.0)
 
 
-def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s: float,
+def ego_reaction(ego_speed_ms: float, lead: Motion, gap_m: float, until_s: float,
                  clearance_m: float, from_s: float = 0.0) -> SpeedProfile:
     """The ego's answer to a lead that slows down: go to its end speed after a reaction time.
 
@@ -181,7 +218,7 @@ def ego_reaction(ego_speed_ms: float, lead: SpeedProfile, gap_m: float, until_s:
                         _latest(lambda d: safe(start, d), shortest, longest))
 
 
-def lead_stays_ahead(lead_speed_ms: float, ego: SpeedProfile, gap_m: float, until_s: float,
+def lead_stays_ahead(lead_speed_ms: float, ego: Motion, gap_m: float, until_s: float,
                      clearance_m: float) -> SpeedProfile | None:
     """The lead's speed when an ego faster than it would otherwise catch up before ``until_s``.
 
@@ -235,12 +272,10 @@ def _latest(ok: Callable[[float], bool], low: float, high: float) -> float:
     return math.floor(low * 1000) / 1000
 
 
-def max_deceleration_ms2(lead: SpeedProfile) -> float:
-    """The hardest braking the ego is given behind ``lead``: the lead's or the default."""
-    if lead.v0 > lead.end_speed and lead.duration_s <= 0:
-        return math.inf
-    lead_braking = (lead.v0 - lead.end_speed) / lead.duration_s if lead.duration_s > 0 else 0.0
-    return max(MAX_DECELERATION_MS2, lead_braking)
+def max_deceleration_ms2(lead: Motion) -> float:
+    """The hardest braking the ego is given behind ``lead``: the lead's hardest (of its
+    hardest phase, when it has several) or the default."""
+    return max(MAX_DECELERATION_MS2, lead.hardest_braking_ms2())
 
 
 def stop_at_line(ego_speed_ms: float, brake_time_s: float,
@@ -270,7 +305,7 @@ def red_light_timing(stop: SpeedProfile) -> tuple[str, float]:
             round(max(cue, FIRST_LIGHT_CHANGE_S), 3))
 
 
-def orange_light_yellow_s(ego: SpeedProfile, stop_line_m: float) -> float:
+def orange_light_yellow_s(ego: Motion, stop_line_m: float) -> float:
     """A pass on orange: the light turns yellow as the ego is 5 m before the stop line."""
     reached = ego.time_to_cover(stop_line_m - YELLOW_BEFORE_STOP_LINE_M)
     return round(max(reached, FIRST_LIGHT_CHANGE_S), 3)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, TypedDict
+from typing import Any, Literal, TypedDict, TypeGuard
 
 from scenweave.corpus.kinematics import LANE_CHANGE_MIN_LENGTH_M, SpeedProfile, lane_change_length_m
 
@@ -94,19 +94,19 @@ def parse_phases(value: Any, what: str = "phases") -> tuple[Phase, ...]:
     durations >= 0, targets >= 0, a known shape, in time order without overlap."""
     if not isinstance(value, Sequence) or isinstance(value, str):
         raise PhasesInvalid(f"{what} must be a list of phases, not {value!r}")
-    phases = []
+    phases: list[Phase] = []
     for i, item in enumerate(value):
         if not isinstance(item, Mapping):
             raise PhasesInvalid(f"{what}[{i}] must be an object, not {item!r}")
         numbers = [item.get(k) for k in ("start_s", "duration_s", "target_ms")]
-        if not all(isinstance(n, int | float) and not isinstance(n, bool) and math.isfinite(n)
-                   for n in numbers):
+        if not all(_finite(n) for n in numbers):
             raise PhasesInvalid(f"{what}[{i}] needs finite start_s, duration_s and target_ms, "
                                 f"not {dict(item)!r}")
         shape = item.get("shape", "linear")
         if shape not in SHAPES:
             raise PhasesInvalid(f"{what}[{i}].shape must be one of {list(SHAPES)}, not {shape!r}")
-        phase = Phase(float(numbers[0]), float(numbers[1]), float(numbers[2]), shape)
+        start, duration, target = (float(n) for n in numbers if _finite(n))
+        phase = Phase(start, duration, target, shape)
         if phase.duration_s < 0 or phase.target_ms < 0 or phase.start_s < 0:
             raise PhasesInvalid(f"{what}[{i}]: start, duration and target speed must be >= 0")
         if phases and phase.start_s < phases[-1].end_s - OVERLAP_TOL_S:
@@ -189,6 +189,10 @@ class PhasedProfile:
     def breakpoints(self) -> tuple[float, ...]:
         return tuple(t for phase in self.phases for t in (phase.start_s, phase.end_s))
 
+    def hardest_braking_ms2(self) -> float:
+        """How hard the hardest-braking phase slows down (m/s^2)."""
+        return self.max_acceleration_ms2(braking_only=True)
+
     def max_acceleration_ms2(self, braking_only: bool = False) -> float:
         """The largest mean speed change per second of any phase (m/s^2, either way, or only
         slowing down)."""
@@ -244,3 +248,7 @@ def lane_change_length(params: Mapping[str, Any], actor: str) -> float:
     profile = profile_of(params, actor)
     return max(LANE_CHANGE_MIN_LENGTH_M,
                round(profile.distance(start + duration) - profile.distance(start), 3))
+
+
+def _finite(value: object) -> TypeGuard[int | float]:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)

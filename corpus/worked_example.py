@@ -43,7 +43,8 @@ def _examples() -> dict[str, dict]:
 def example_params(script: Path) -> dict | None:
     """The example params the reference script ``script`` was written for: the corpus's
     stored example, or the one a plugin class brings (``Maneuver.example``); None if none."""
-    found = _examples().get(Path(script).name) if Path(script).parent == CORPUS_DIR else None
+    found: Mapping[str, Any] | None = (_examples().get(Path(script).name)
+                                       if Path(script).parent == CORPUS_DIR else None)
     if found is None:
         found = next((m.example for m in maneuvers.maneuvers() if m.example is not None
                       and script_path(m) == Path(script)), None)

@@ -50,7 +50,7 @@ CORNERS = tuple(k / 100 for k in range(5, 96))
 
 
 #: distances a fit must keep, each with its tolerance (None: no value at that sample)
-Targets = list[tuple[list[float | None], float]]
+Targets = list[tuple[Sequence[float | None], float]]
 
 
 class NoProfile(InputError, ValueError):
@@ -68,21 +68,30 @@ def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], st
     where given (an NPC's: the ego's fitted distance plus the recorded gap's change, so the
     gap holds as well as each car's own motion)."""
     n = len(times)
-    rows = [(t, v, x, r) for t, v, x, r in zip(times, speeds, positions or [0.0] * n,
-                                               relative or [None] * n, strict=False)
-            if t is not None and v is not None]
-    if len(rows) < 2:
+    t: list[float] = []
+    v: list[float] = []
+    at: list[float] = []  # the recorded positions, where every kept sample has one
+    gaps: list[float | None] = []
+    for time, speed, position, gap in zip(times, speeds, positions or [None] * n,
+                                          relative or [None] * n, strict=False):
+        if time is None or speed is None:
+            continue
+        t.append(float(time))
+        v.append(float(speed))
+        gaps.append(gap)
+        if position is not None:
+            at.append(float(position))
+    if len(t) < 2:
         return ()
-    t, v = [float(r[0]) for r in rows], [float(r[1]) for r in rows]
-    if positions is not None and all(r[2] is not None for r in rows):
-        driven = [float(r[2]) - float(rows[0][2]) for r in rows]
+    if positions is not None and len(at) == len(t):
+        driven = [x - at[0] for x in at]
     else:
         driven = [0.0]
         for k in range(1, len(t)):
             driven.append(driven[-1] + (v[k] + v[k - 1]) / 2 * (t[k] - t[k - 1]))
-    targets = [(driven, DISTANCE_TOL_M)]
+    targets: Targets = [(driven, DISTANCE_TOL_M)]
     if relative is not None:
-        targets.append(([r[3] for r in rows], GAP_FIT_TOL_M))
+        targets.append((gaps, GAP_FIT_TOL_M))
     phases: list[Phase] = []
     knot = v_start
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field

@@ -17,7 +17,7 @@ import typing
 from collections.abc import Callable, Mapping
 from functools import cache
 from pathlib import Path
-from typing import Any, Literal, TypedDict
+from typing import Any, Literal, TypedDict, TypeGuard
 
 import fastjsonschema
 
@@ -209,7 +209,7 @@ def check_params(params: Mapping[str, Any]) -> None:
     try:
         _validator()(dict(params))
     except fastjsonschema.JsonSchemaValueException as err:
-        key = err.name.removeprefix("data.").removeprefix("data") or None
+        key = (err.name or "").removeprefix("data.").removeprefix("data") or None
         raise ParamsInvalid(f"params break docs/params.md: {err.message}", key) from err
     for key, value in params.items():
         if isinstance(value, float) and not math.isfinite(value):
@@ -250,7 +250,7 @@ class NumberReader:
         return float(value)
 
 
-def _is_finite_number(value: Any) -> bool:
+def _is_finite_number(value: object) -> TypeGuard[int | float]:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 

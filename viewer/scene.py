@@ -19,7 +19,7 @@ import math
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -121,9 +121,9 @@ def _lights(playback: Playback, params: dict) -> list[dict]:
     spans = [[t, changes[i + 1][0] if i + 1 < len(changes) else playback.duration_s,
               playback.lights[name]] for i, (t, name) in enumerate(changes)]
     positions = {tuple(xy) for xy in playback.light_positions.values()}
-    carla = (number(params, "tfl_x_carla"), number(params, "tfl_y_carla"))
-    if not positions and spans and None not in carla:
-        positions = {(carla[0], -carla[1])}
+    x_carla, y_carla = number(params, "tfl_x_carla"), number(params, "tfl_y_carla")
+    if not positions and spans and x_carla is not None and y_carla is not None:
+        positions = {(x_carla, -y_carla)}
     return [{"x": x, "y": y, "spans": spans} for x, y in sorted(positions)]
 
 
@@ -151,7 +151,7 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
     from scenweave.roads.lanes import lane_border_offsets, section_samples
 
     network = roads.road_network(map_path)
-    found = []
+    found: list[tuple[tuple[float, ...], bool, list[list[float]]]] = []
     for key in network.drivable_lanes():
         road = network.road(key.road_id)
         section = road.sections[key.section]
@@ -236,10 +236,16 @@ def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]
         changes = expected_speed_changes(doc, params)
     except (OSError, etree.XMLSyntaxError, KeyError, TypeError, ValueError, AttributeError):
         return []
-    return [(name.removesuffix("_speed_change"), float(target), float(start) + float(duration))
-            for name, target, duration, start in changes
-            if all(isinstance(v, int | float) and math.isfinite(v)
-                   for v in (target, duration, start))]
+    found: list[tuple[str, float, float]] = []
+    for name, target, duration, start in changes:
+        if _finite(target) and _finite(duration) and _finite(start):
+            found.append((name.removesuffix("_speed_change"), float(target),
+                          float(start) + float(duration)))
+    return found
+
+
+def _finite(value: object) -> TypeGuard[int | float]:
+    return isinstance(value, int | float) and math.isfinite(value)
 
 
 def _recorded(folder: Path, params: dict) -> dict:

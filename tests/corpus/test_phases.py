@@ -9,7 +9,11 @@ import pytest
 from lxml import etree
 
 from scenweave import corpus
-from scenweave.corpus.kinematics import SpeedProfile
+from scenweave.corpus.kinematics import (
+    MAX_DECELERATION_MS2,
+    SpeedProfile,
+    max_deceleration_ms2,
+)
 from scenweave.corpus.phases import (
     Phase,
     PhasedProfile,
@@ -108,3 +112,13 @@ def test_a_lane_change_during_phases_is_as_long_as_the_profile_drives(tmp_path):
     root = etree.parse(str(corpus.generate(params, tmp_path / "c.xosc"))).getroot()
     [dynamics] = root.xpath("//Action[@name='npc_lane_change']//LaneChangeActionDynamics")
     assert float(dynamics.get("value")) == lane_change_length(params, "npc")
+
+
+def test_behind_a_lead_with_phases_the_ego_may_brake_as_hard_as_its_hardest_phase():
+    """A lead that brakes at 12 m/s^2 for 0.5 s within a gentle 6 s profile (its mean is
+    under 2 m/s^2): the ego is allowed its 12 m/s^2, not the mean's default 8 m/s^2."""
+    lead = PhasedProfile(20.0, (Phase(1.0, 0.5, 14.0), Phase(4.0, 3.0, 12.0)))
+    assert lead.hardest_braking_ms2() == pytest.approx(12.0)
+    assert max_deceleration_ms2(lead) == pytest.approx(12.0)
+    assert max_deceleration_ms2(SpeedProfile(20.0, 12.0, 1.0, 6.0)) == MAX_DECELERATION_MS2
+    assert max_deceleration_ms2(SpeedProfile(20.0, 12.0, 1.0, 0.0)) == math.inf

@@ -19,11 +19,6 @@ def detect(recording: Recording, thresholds: dict[str, dict[str, float]]) -> lis
     return sorted(events, key=lambda e: (e.start_s, e.code, e.ego))
 
 
-def _valid(events: Callable[[Scene], Iterator[Event | None]]) -> Callable[[Scene], list[Event]]:
-    return lambda scene: [e for e in events(scene) if e is not None]
-
-
-DETECTORS: tuple[Callable[[Scene], list[Event]], ...] = tuple(
-    _valid(d) for d in (highway.braking_leads, highway.cuts, highway.own_lane_changes,
-                        highway.following, highway.free_rides, lights.light_events,
-                        urban.urban_events))
+DETECTORS: tuple[Callable[[Scene], Iterator[Event]], ...] = (
+    highway.braking_leads, highway.cuts, highway.own_lane_changes, highway.following,
+    highway.free_rides, lights.light_events, urban.urban_events)

@@ -38,7 +38,9 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
             follower = scene.traffic.follower(i, first)
             if follower is None or follower.gap_m > limits["follower_within_m"]:
                 continue
-            yield _brake_event(scene, i, follower, first, last, best, limits)
+            event = _brake_event(scene, i, follower, first, last, best, limits)
+            if event is not None:
+                yield event
 
 
 def braking_phases(t: np.ndarray, speed: np.ndarray, onset_ms2: float,
@@ -67,7 +69,7 @@ def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last:
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
     if ego_speed is None or gap is None:
         return None
-    fields = {
+    fields: dict[str, float | str] = {
         "ego_vel_kmh": ego_speed * KMH, "lead_vel_kmh": v0 * KMH, "duration_s": end - start,
         "delta_vel_kmh": (v1 - v0) * KMH, "npc_distance_m": gap,
         "brake_intensity": min(best_ms2 / limits["max_intensity_deceleration_ms2"], 1.0),
@@ -206,17 +208,20 @@ def cuts(scene: Scene) -> Iterator[Event]:
                                 ("CINB", traffic.leader(change.track, change.after)),
                                 ("COUTF", traffic.follower(change.track, change.before)),
                                 ("COUTB", traffic.leader(change.track, change.before))):
-            if neighbour is not None and neighbour.gap_m <= limit:
-                yield _cut_event(scene, code, change, neighbour.track)
+            if neighbour is None or neighbour.gap_m > limit:
+                continue
+            event = _cut_event(scene, code, change, neighbour.track)
+            if event is not None:
+                yield event
 
 
 def _cut_event(scene: Scene, code: str, change: LaneChange, ego: int) -> Event | None:
     npc = change.track
     ego_start, npc_start = scene.speed(ego, change.start_s), scene.speed(npc, change.start_s)
     npc_end, gap = scene.speed(npc, change.end_s), scene.gap(ego, npc, change.start_s)
-    if None in (ego_start, npc_start, npc_end, gap):
+    if ego_start is None or npc_start is None or npc_end is None or gap is None:
         return None
-    fields = {
+    fields: dict[str, float | str] = {
         "ego_vel_kmh": ego_start * KMH, "cutter_vel_kmh": (npc_start - ego_start) * KMH,
         "delta_vel_kmh": (npc_end - npc_start) * KMH,
         "duration_s": change.duration_s, "npc_distance_m": gap,
@@ -237,9 +242,10 @@ def own_lane_changes(scene: Scene) -> Iterator[Event]:
         start, end = scene.speed(i, change.start_s), scene.speed(i, change.end_s)
         if start is None or end is None:
             continue
-        fields = {"ego_vel_begin_kmh": start * KMH, "ego_vel_end_kmh": end * KMH,
-                  "duration_s": change.duration_s, "other_dir_traffic": "No",
-                  "direction": change.direction}
+        fields: dict[str, float | str] = {
+            "ego_vel_begin_kmh": start * KMH, "ego_vel_end_kmh": end * KMH,
+            "duration_s": change.duration_s, "other_dir_traffic": "No",
+            "direction": change.direction}
         yield make_event(scene, "LCB" if behind else "LCF", i, None, change.start_s,
                          change.end_s, fields)
 
@@ -290,13 +296,13 @@ def follow_event(scene: Scene, code: str, ego: int, npc: int, start: float, end:
                  limits: dict[str, float]) -> Event | None:
     """FLF/FLB over ``start``..``end``: speeds and gaps at both ends (None if either car is
     missing or too slow then)."""
-    speeds = [scene.speed(i, t) for i in (ego, npc) for t in (start, end)]
-    gaps = [scene.gap(ego, npc, t) for t in (start, end)]
-    if None in speeds or None in gaps or min(speeds) < limits["min_speed_ms"]:
+    speeds = [v for i in (ego, npc) for t in (start, end) if (v := scene.speed(i, t)) is not None]
+    gaps = [g for t in (start, end) if (g := scene.gap(ego, npc, t)) is not None]
+    if len(speeds) < 4 or len(gaps) < 2 or min(speeds) < limits["min_speed_ms"]:
         return None
     ego0, ego1, npc0, npc1 = speeds
     gap0, gap1 = abs(gaps[0]), abs(gaps[1])
-    fields = {
+    fields: dict[str, float | str] = {
         "ego_vel_begin_kmh": ego0 * KMH, "ego_vel_end_kmh": ego1 * KMH,
         "lead_vel_begin_kmh": npc0 * KMH, "lead_vel_end_kmh": npc1 * KMH,
         "npc_distance_begin_m": gap0, "npc_distance_end_m": gap1,
@@ -397,6 +403,8 @@ def free_ride_event(scene: Scene, code: str, ego: int, start: float, end: float,
                limits: dict[str, float]) -> Event | None:
     track = scene.tracks[ego]
     k0, k1 = scene.step_at(ego, start), scene.step_at(ego, end)
+    if k0 is None or k1 is None:
+        return None
     lane = scene.traffic.lane_of(track, k0)
     slots = {name: _nearest(scene, ego, start, lane + shift, ahead, limits["slot_range_m"])
              for name, shift in SLOT_LANES}

@@ -34,28 +34,31 @@ def state_at(light: TrafficLight, t: float) -> str | None:
 
 def light_events(scene: Scene) -> Iterator[Event]:
     for light in scene.recording.lights:
-        if light.stop_line_s is None or light.stop_lines:  # lines as segments: mining.urban
+        line_s = light.stop_line_s
+        if line_s is None or light.stop_lines:  # lines as segments: mining.urban
             continue
         for i, track in enumerate(scene.tracks):
             on = np.isin(track.lane.astype(str), list(light.lanes))
             if on.any():
-                yield from _stop_or_pass(scene, i, light, on)
+                yield from _stop_or_pass(scene, i, light, line_s, on)
 
 
-def _stop_or_pass(scene: Scene, i: int, light: TrafficLight, on: np.ndarray) -> Iterator[Event]:
+def _stop_or_pass(scene: Scene, i: int, light: TrafficLight, line_s: float,
+                  on: np.ndarray) -> Iterator[Event]:
+    """``light``'s events of track ``i`` (``line_s``: the light's ``stop_line_s``)."""
     limits = scene.thresholds["light"]
     track, speed = scene.tracks[i], scene.motion[i].speed
     front = track.s + track.length_m / 2
-    to_line = light.stop_line_s - front
+    to_line = line_s - front
     stopped = (speed < limits["stopped_below_ms"]) & on & (to_line >= 0) \
         & (to_line <= limits["stop_before_line_m"])
     for k in np.flatnonzero(stopped)[:1].tolist():
         t = float(track.t[k])
         first = int(np.searchsorted(track.t, t - HISTORY_S))
         if state_at(light, t) in ("red", "yellow") and speed[first] > 2 * limits[
-                "stopped_below_ms"] and _first_in_line(scene, i, k, light):
+                "stopped_below_ms"] and _first_in_line(scene, i, k, line_s):
             last = int(np.searchsorted(track.t, t + AFTER_STOP_S, side="right")) - 1
-            yield _event(scene, "U4_1", i, light, first, last, "red")
+            yield _event(scene, "U4_1", i, line_s, first, last, "red")
     crossed = np.flatnonzero(on[:-1] & (to_line[:-1] > 0) & (to_line[1:] <= 0))
     for k in crossed[:1].tolist():
         t = float(track.t[k + 1])
@@ -65,15 +68,15 @@ def _stop_or_pass(scene: Scene, i: int, light: TrafficLight, on: np.ndarray) -> 
             continue
         first, last = int(start_k[-1]), int(end_k[0])
         if first < k and abs(_turned(track.heading[k + 1:last + 1])) <= STRAIGHT_WITHIN_RAD:
-            yield _event(scene, "U4_3", i, light, first, last, "green")
+            yield _event(scene, "U4_3", i, line_s, first, last, "green")
 
 
-def _first_in_line(scene: Scene, i: int, k: int, light: TrafficLight) -> bool:
+def _first_in_line(scene: Scene, i: int, k: int, line_s: float) -> bool:
     leader = scene.traffic.leader(i, k)
     if leader is None:
         return True
     ahead = scene.tracks[leader.track]
-    return float(ahead.s[leader.step] - ahead.length_m / 2) > light.stop_line_s
+    return float(ahead.s[leader.step] - ahead.length_m / 2) > line_s
 
 
 def _turned(headings: np.ndarray) -> float:
@@ -82,24 +85,25 @@ def _turned(headings: np.ndarray) -> float:
     return float(np.unwrap(headings)[-1] - np.unwrap(headings)[0])
 
 
-def _event(scene: Scene, code: str, i: int, light: TrafficLight, first: int, last: int,
+def _event(scene: Scene, code: str, i: int, line_s: float, first: int, last: int,
            colour: str) -> Event:
     track = scene.tracks[i]
     start, end = float(track.t[first]), float(track.t[last])
-    adscene = adscene_of(scene, code, i, first, last, light, colour)
+    adscene = adscene_of(scene, code, i, first, last, line_s, colour)
     series = scene.series({"ego": i}, i, start, end)
     return Event(code, track.id, None, round(start, 3), round(end, 3), {}, series,
                  adscene=adscene)
 
 
-def adscene_of(scene: Scene, code: str, i: int, first: int, last: int, light: TrafficLight,
+def adscene_of(scene: Scene, code: str, i: int, first: int, last: int, line_s: float,
                colour: str) -> dict:
-    """The event as an ADScene object (MOOVE's urban file format)."""
+    """The event as an ADScene object (MOOVE's urban file format); ``line_s``: the light's
+    stop line along the road (``TrafficLight.stop_line_s``)."""
     track, speed = scene.tracks[i], scene.motion[i].speed
     odometer = track.s[first:last + 1] - track.s[first]
     frames = [frame_of(scene, i, k, float(speed[k]), float(odo))
               for k, odo in zip(range(first, last + 1), odometer, strict=True)]
-    light_at = float(light.stop_line_s - track.s[first])
+    light_at = float(line_s - track.s[first])
     signs = [{"position_longi_from_0": round(light_at, 2), "infrastructure_elements": [
         {"type": "TrafficSignType", "value": CODE_OF_STATE[colour]}]}]
     return adscene_header(scene, code, float(track.t[first]), float(track.t[last]), signs,

@@ -54,6 +54,8 @@ def record_of(event: Event, source: Path, reader: str, number: int) -> dict:
 def urban_record(event: Event, source: Path, reader: str, number: int) -> dict:
     """The urban.v1 record of a light event: its ADScene object through ingest's own
     canonicaliser (RecordIssue where it is no valid scene)."""
+    if event.adscene is None:
+        raise ValueError(f"{event.code} event of {event.ego}: not urban (no ADScene object)")
     name = f"{event.code}/{_slug(source.stem)}-row{number:06d}.json"
     record = canonicalize_scene(event.adscene, name, notes=[])
     record["provenance"] = _provenance(event, source, reader)

@@ -40,6 +40,9 @@ AFTER_STOP_S = 3.0
 HISTORY_S = 15.0
 #: a stop line is found within this of a car's front sideways (beyond its half length)
 LINE_SIDE_M = 1.0
+#: (the light's colour, the movement) -> the class of a car crossing the stop line
+PASS_CODES = {("green", "straight"): "U4_3", ("green", "right"): "U4_4",
+              ("yellow", "straight"): "U4_2", ("yellow", "right"): "U4_2"}
 
 
 @dataclass(frozen=True)
@@ -158,9 +161,10 @@ class UrbanScene:
             return None  # it came to rest within the stop line's tolerance: no pass
         move = self.movement(i, k)
         light = self.light_for(line, move)
-        colour = state_at(light, float(track.t[k])) if light else None
-        code = {("green", "straight"): "U4_3", ("green", "right"): "U4_4",
-                ("yellow", "straight"): "U4_2", ("yellow", "right"): "U4_2"}.get((colour, move))
+        colour = None if light is None else state_at(light, float(track.t[k]))
+        if colour is None:
+            return None
+        code = PASS_CODES.get((colour, move))
         if code is None:
             return None
         before = np.flatnonzero(ahead[:k] >= self.limits["approach_from_m"])
@@ -169,7 +173,7 @@ class UrbanScene:
             return None
         beyond = np.flatnonzero(path >= path[k] + self.limits["after_pass_m"])
         last = int(beyond[0]) if len(beyond) else len(track.t) - 1
-        return self._event(code, i, first, last, float(ahead[first]), colour)
+        return self._event(code, i, first, last, (float(ahead[first]), colour))
 
     def movement(self, i: int, k: int) -> str:
         """``straight``, ``right`` or ``left`` from the heading change over the path from a
@@ -190,7 +194,8 @@ class UrbanScene:
         where none names it)."""
         lights = [ln.light for ln in self.lines if ln.lane == line.lane]
         named = [lt for lt in lights if move in lt.direction.lower()]
-        return (named or [lt for lt in lights if lt.direction.lower() == "all"] or [None])[0]
+        chosen = named or [lt for lt in lights if lt.direction.lower() == "all"]
+        return chosen[0] if chosen else None
 
     def _stop(self, i: int, line: StopLine, ahead: np.ndarray, near: np.ndarray
               ) -> Event | None:
@@ -208,7 +213,7 @@ class UrbanScene:
             if speed[first:k + 1].max() < limits["approach_from_ms"]:
                 return None
             last = int(np.searchsorted(track.t, t + AFTER_STOP_S, side="right")) - 1
-            event = self._event("U4_1", i, first, last, float(ahead[first]), "red")
+            event = self._event("U4_1", i, first, last, (float(ahead[first]), "red"))
             queue = self.queue_ahead(i, k, line, float(ahead[k]))
             if not queue and ahead[k] > limits["stop_before_line_m"]:
                 return None  # at rest far from the line with nobody ahead: not for the light
@@ -254,30 +259,34 @@ class UrbanScene:
             if np.ptp(heading) > limits["in_lane_max_turn_deg"] \
                     or len(np.unique(index[np.isfinite(index)])) > 1:
                 continue
-            yield self._event("U1_1", i, first, last, None, None)
+            yield self._event("U1_1", i, first, last, None)
 
     # --- records ---------------------------------------------------------------------------
 
-    def _event(self, code: str, i: int, first: int, last: int, line_ahead_m: float | None,
-               colour: str | None) -> Event:
+    def _event(self, code: str, i: int, first: int, last: int,
+               seen: tuple[float, str] | None) -> Event:
+        """The event's record; ``seen``: how far the stop line was ahead of the car's front at
+        ``first`` (m) and the colour its light showed (``None``: no light)."""
         track = self.scene.tracks[i]
         start, end = float(track.t[first]), float(track.t[last])
-        light_at = None if line_ahead_m is None else line_ahead_m + track.length_m / 2
-        adscene = self.adscene(code, i, first, last, light_at, colour)
+        light = None if seen is None else (seen[0] + track.length_m / 2, seen[1])
+        adscene = self.adscene(code, i, first, last, light)
         series = self.scene.series({"ego": i}, i, start, end)
         series["ego_speed_ms"] = [round(float(v), 3) for v in self.speeds[i][first:last + 1]]
         return Event(code, track.id, None, round(start, 3), round(end, 3), {}, series,
                      adscene=adscene)
 
-    def adscene(self, code: str, i: int, first: int, last: int, light_at: float | None,
-                colour: str | None) -> dict:
+    def adscene(self, code: str, i: int, first: int, last: int,
+                light: tuple[float, str] | None) -> dict:
+        """The event as an ADScene object; ``light``: where the light stands from the car's
+        centre at ``first`` (m) and its colour (``None``: no light)."""
         path, speed = self.paths[i], self.speeds[i]
         frames = [frame_of(self.scene, i, k, float(speed[k]), float(path[k] - path[first]))
                   for k in range(first, last + 1)]
         track = self.scene.tracks[i]
-        signs = [] if light_at is None else [{"position_longi_from_0": round(light_at, 2),
-                                              "infrastructure_elements": [{
-                                                  "type": "TrafficSignType",
-                                                  "value": CODE_OF_STATE[colour]}]}]
+        signs = [] if light is None else [{"position_longi_from_0": round(light[0], 2),
+                                           "infrastructure_elements": [{
+                                               "type": "TrafficSignType",
+                                               "value": CODE_OF_STATE[light[1]]}]}]
         return adscene_header(self.scene, code, float(track.t[first]), float(track.t[last]),
                               signs, frames)

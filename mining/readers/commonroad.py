@@ -132,7 +132,7 @@ def direction_groups(directions: np.ndarray, lengths: np.ndarray,
     group's axis (the length-weighted mean direction of its members)."""
     group = np.full(len(directions), -1)
     cos_max = np.cos(np.radians(max_angle_deg))
-    axes = []
+    axes: list[np.ndarray] = []
     for seed in np.argsort(-lengths):
         if group[seed] >= 0:
             continue
@@ -267,12 +267,28 @@ def _all_floats(root: etree._Element, path: str) -> np.ndarray:
 
 def _parsed_size(element: etree._Element) -> tuple[float, float] | None:
     if element.find("shape/rectangle") is not None:
-        return (float(element.findtext("shape/rectangle/length")),
-                float(element.findtext("shape/rectangle/width")))
+        return (_required_float(element, "shape/rectangle/length"),
+                _required_float(element, "shape/rectangle/width"))
     if element.find("shape/circle") is not None:
-        diameter = 2 * float(element.findtext("shape/circle/radius"))
+        diameter = 2 * _required_float(element, "shape/circle/radius")
         return diameter, diameter
     return None
+
+
+def _required_float(element: etree._Element, path: str) -> float:
+    """The number under ``path``; ``ValueError`` where it is missing or no number."""
+    text = element.findtext(path)
+    if text is None:
+        raise ValueError(f"{element.tag} {element.get('id')}: no {path}")
+    return float(text)
+
+
+def _state_count(obstacle: etree._Element) -> int:
+    """How many states (the initial one and its trajectory's) an obstacle element holds."""
+    count = obstacle.xpath("count(initialState | trajectory/state)")
+    if not isinstance(count, float):  # XPath's count() is a number
+        raise TypeError(f"XPath count() gave {count!r}")
+    return int(count)
 
 
 def _state_columns(root: etree._Element, counts: list[int]) -> dict[str, np.ndarray] | None:
@@ -294,29 +310,34 @@ def _parsed_raws(root: etree._Element) -> tuple[list[_Raw], Counter[str]] | None
     spends most of a file's reading time on them); ``None`` where the file needs the
     library's full reader."""
     obstacles = root.findall("dynamicObstacle")
-    counts = [int(o.xpath("count(initialState | trajectory/state)")) for o in obstacles]
+    counts = [_state_count(o) for o in obstacles]
     columns = _state_columns(root, counts)
     if columns is None:
         return None
     bounds = np.cumsum(counts)[:-1]
     per_obstacle = zip(*(np.split(columns[n], bounds) for n in STATE_FIELDS), strict=True)
-    raws, skipped = [], Counter()
+    raws: list[_Raw] = []
+    skipped: Counter[str] = Counter()
     for element, (step, x, y, heading, speed) in zip(obstacles, per_obstacle, strict=True):
         type_name = (element.findtext("type") or "unknown").strip()
         kind, size = vehicle_type(type_name), _parsed_size(element)
+        obstacle_id = element.get("id")
         if kind is None:
             skipped[type_name] += 1
         elif size is None:
             return None
+        elif obstacle_id is None:
+            raise ValueError("a dynamicObstacle without id")
         else:
-            raws.append(_Raw(element.get("id"), *size, kind, step, np.column_stack([x, y]),
+            raws.append(_Raw(obstacle_id, *size, kind, step, np.column_stack([x, y]),
                              heading, speed))
     return raws, skipped
 
 
 def _library_raws(scenario: Scenario) -> tuple[list[_Raw], Counter[str]]:
     """Every vehicle's states from the library's scenario objects."""
-    raws, skipped = [], Counter()
+    raws: list[_Raw] = []
+    skipped: Counter[str] = Counter()
     for obstacle in scenario.dynamic_obstacles:
         kind = vehicle_type(obstacle.obstacle_type.value)
         if kind is None:
@@ -345,8 +366,8 @@ def _fill_motion(raw: _Raw, dt: float) -> _Raw:
     """Heading and speed from the motion where the file leaves them out."""
     t = raw.step * dt
     if np.isnan(raw.heading).any():
-        raw.heading = np.where(np.isnan(raw.heading), heading_from_motion(*raw.xy.T, t),
-                               raw.heading)
+        moving = heading_from_motion(raw.xy[:, 0], raw.xy[:, 1], t)
+        raw.heading = np.where(np.isnan(raw.heading), moving, raw.heading)
     if np.isnan(raw.speed).any() and len(t) > 1:
         moved = np.hypot(np.gradient(raw.xy[:, 0], t), np.gradient(raw.xy[:, 1], t))
         raw.speed = np.where(np.isnan(raw.speed), moved, raw.speed)
@@ -504,7 +525,8 @@ def _stop_line(lanelet: Lanelet) -> tuple[str, float, float, float, float]:
     across = ends[1] - ends[0]
     if travel[0] * across[1] - travel[1] * across[0] > 0:  # make it run left to right
         ends = ends[1], ends[0]
-    return (str(lanelet.lanelet_id), *(round(float(v), 4) for v in (*ends[0], *ends[1])))
+    x0, y0, x1, y1 = (round(float(v), 4) for v in (*ends[0], *ends[1]))
+    return str(lanelet.lanelet_id), x0, y0, x1, y1
 
 
 def _movements(light: CrLight) -> str:
@@ -536,9 +558,10 @@ def light_phases(light: CrLight, last_step: int, dt: float) -> tuple[LightPhase,
     for step in range(1, last_step + 2):
         if step <= last_step and colours[step] == colours[start]:
             continue
-        if colours[start] is not None:
+        colour = colours[start]
+        if colour is not None:
             phases.append(LightPhase(round(start * dt, 9), round(min(step, last_step) * dt, 9),
-                                  colours[start]))
+                                  colour))
         start = step
     return tuple(phases)
 
@@ -587,24 +610,36 @@ def _planned_vehicle(problem: etree._Element, last_step: int, dt: float) -> _Raw
     x, y = _number(start, "position/point/x"), _number(start, "position/point/y")
     speed, heading = _number(start, "velocity/exact"), _number(start, "orientation/exact")
     step0 = _number(start, "time/exact") or 0.0
-    if None in (x, y, speed, heading):
+    if x is None or y is None or speed is None or heading is None:
         return None
-    goal = problem.find("goalState")
-    found = [None if goal is None else _number(goal, path) for path in (
-        "position/rectangle/center/x", "position/rectangle/center/y", "time/intervalStart",
-        "time/intervalEnd")]
+    goal = _goal(problem)
     steps = np.arange(step0, last_step + 1, dtype=float)
     t = (steps - step0) * dt
     direction, accel = np.array([np.cos(heading), np.sin(heading)]), 0.0
-    if None not in found and (found[2] + found[3]) / 2 > step0:
-        towards = np.array([found[0] - x, found[1] - y])
-        span_s = ((found[2] + found[3]) / 2 - step0) * dt
+    if goal is not None and goal[2] > step0:
+        goal_x, goal_y, goal_step = goal
+        towards = np.array([goal_x - x, goal_y - y])
+        span_s = (goal_step - step0) * dt
         direction = towards / max(float(np.hypot(*towards)), 1e-9)
         accel = 2 * (float(np.hypot(*towards)) - speed * span_s) / span_s ** 2
     along = speed * t + accel * t ** 2 / 2
     return _Raw(problem.get("id", "planned"), 4.5, 1.8, "car", steps,
                 np.array([x, y]) + along[:, None] * direction, np.full(len(steps), heading),
                 np.clip(speed + accel * t, 0.0, None))
+
+
+def _goal(problem: etree._Element) -> tuple[float, float, float] | None:
+    """The centre of the planning problem's goal area and the middle of its time interval (a
+    step), where the file gives all of them."""
+    goal = problem.find("goalState")
+    if goal is None:
+        return None
+    x = _number(goal, "position/rectangle/center/x")
+    y = _number(goal, "position/rectangle/center/y")
+    first, last = _number(goal, "time/intervalStart"), _number(goal, "time/intervalEnd")
+    if x is None or y is None or first is None or last is None:
+        return None
+    return x, y, (first + last) / 2
 
 
 def _network(root: etree._Element) -> LaneletNetwork:

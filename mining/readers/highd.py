@@ -65,7 +65,7 @@ def sniff(path: Path) -> bool:
 def companion(path: Path) -> bool:
     """A meta file that belongs to a ``NN_tracks.csv`` beside it (read along with that)."""
     match = COMPANION.match(path.name)
-    return bool(match) and _sibling(path, match.group(1), "tracks").exists()
+    return match is not None and _sibling(path, match.group(1), "tracks").exists()
 
 
 def _sibling(path: Path, number: str, kind: str) -> Path:
@@ -140,7 +140,10 @@ def _track(rows: np.ndarray, cols: dict[str, np.ndarray], meta: tuple[float, flo
 def read(path: Path) -> Recording:
     """One highD recording from its tracks file and the two meta files beside it."""
     path = Path(path)
-    number = TRACKS.match(path.name).group(1)
+    named = TRACKS.match(path.name)
+    if named is None:
+        raise ValueError(f"{path.name}: a highD tracks file is named NN_tracks.csv")
+    number = named.group(1)
     warnings: list[str] = []
     fps, upper, lower = _recording(path, number, warnings)
     meta = _meta(path, number, warnings)
@@ -149,7 +152,8 @@ def read(path: Path) -> Recording:
     cols = {k: v[order] for k, v in cols.items()}
     lane_index = _row_lane_index(cols, upper, lower)
     t0 = cols["frame"].min() if len(order) else 0.0
-    tracks, skipped = [], Counter()
+    tracks: list[Track] = []
+    skipped: Counter[str] = Counter()
     for rows in np.split(np.arange(len(order)), np.flatnonzero(np.diff(cols["id"])) + 1):
         track_id = int(cols["id"][rows[0]]) if len(rows) else None
         if track_id is None or len(rows) < 2:

@@ -17,7 +17,7 @@ _EXPORTS = {
     "LLMTimeout": "scenweave.agent.llm.base", "LLMUnavailable": "scenweave.agent.llm.base",
     "AgentOutcome": "scenweave.agent.run", "close_shared": "scenweave.agent.run",
     "run_scenario": "scenweave.agent.run",
-    "LLM_CHOICES": "scenweave.agent.settings", "AgentSettings": "scenweave.agent.settings",
+    "AgentSettings": "scenweave.agent.settings",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -11,7 +11,6 @@ from scenweave.agent.llm.backends import backend_names
 from scenweave.agent.repair import checked_repair
 from scenweave.sandbox import SandboxSettings
 
-LLM_CHOICES = ("ollama", "embedded", "replay", "none")
 DEFAULT_MODELS = {"ollama": "qwen2.5-coder:7b", "embedded": "smollm2-135m-instruct",
                   "replay": "replay", "none": "none"}
 #: SPEC §6: a small embedded model loops on long outputs; cap what it may write. The longest
@@ -66,7 +65,7 @@ class AgentSettings:
     """The run the calls belong to, logged with each (``scenweave logs --run``)."""
 
     def __post_init__(self) -> None:
-        choices = (*backend_names(), "none")  # the built-in ones (LLM_CHOICES), the plugins'
+        choices = (*backend_names(), "none")  # the built-in ones and the plugins'
         if self.llm not in choices:
             raise ValueError(f"llm: {self.llm!r} is not one of {', '.join(choices)}")
         if self.max_attempts < 1:

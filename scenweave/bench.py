@@ -48,7 +48,6 @@ from scenweave.runner import run_batch
 #: the 11 highway classes of the thesis benchmark (BR_BK shares BRAKE's script)
 THESIS_CLASSES = ("BRAKE", "CINF", "CINB", "COUTF", "COUTB", "LCF", "LCB", "FLF", "FLB", "FRF",
                   "FRB")
-LLM_BACKENDS = ("ollama", "embedded", "replay")
 REFERENCE = "reference"
 BENCH_FILE = "bench.json"
 BENCH_HTML = "bench.html"
@@ -121,14 +120,15 @@ def agent_settings_for(llm: str, replay: Any = None,
     def settings(model: str) -> PipelineSettings:
         if model == REFERENCE:
             return PipelineSettings(no_llm=True, replay=replay)
-        if llm not in LLM_BACKENDS:
-            raise BenchError(f"--llm {llm!r}: model {model!r} needs one of "
-                             f"{', '.join(LLM_BACKENDS)}")
         try:
             from scenweave.agent import AgentSettings
+            from scenweave.agent.llm.backends import backend_names
         except ImportError as err:
             raise BenchError(f"model {model!r} needs the agent, which cannot be imported here "
                              f"({err}); benchmark --models {REFERENCE} only") from err
+        if llm not in backend_names():
+            raise BenchError(f"--llm {llm!r}: model {model!r} needs one of "
+                             f"{', '.join(backend_names())}")
         try:
             agent_settings = AgentSettings(model=model, llm=llm, replay=replay, **agent)
         except ValueError as err:  # e.g. an unknown --repair: the message names the option

@@ -16,8 +16,34 @@ import click
 
 from scenweave.pipeline import PipelineSettings
 
-#: the ``--llm`` choices of every command that runs the agent (run, submit, demo, bench)
+#: the built-in ``--llm`` choices of every command that runs the agent (run, submit, demo,
+#: bench); a plugin's backend (``docs/plugins.md``) is a choice too
 LLM_CHOICES = ("auto", "embedded", "ollama", "replay", "none")
+
+
+class LlmChoice(click.Choice):
+    """``--llm``: a built-in choice, or the name of a plugin's backend. The plugins are asked
+    only when a name is not built in, so ``--help`` and the usual names load no plugin."""
+
+    name = "llm"
+
+    def __init__(self) -> None:
+        super().__init__(LLM_CHOICES)
+
+    def get_metavar(self, param: click.Parameter, ctx: click.Context | None = None) -> str:
+        return "[" + "|".join(LLM_CHOICES) + "|PLUGIN]"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> Any:
+        if value in LLM_CHOICES:
+            return value
+        from scenweave.agent.llm.backends import backend_names
+
+        known = backend_names()
+        if value in known:
+            return value
+        choices = ", ".join(dict.fromkeys((*LLM_CHOICES, *known)))
+        self.fail(f"{value!r} is not one of {choices}", param, ctx)
 SANDBOX_CHOICES = ("auto", "docker", "bwrap")
 #: names of the options below, for commands that forward them
 AGENT_OPTION_NAMES = ("llm", "model", "repair", "max_attempts", "sandbox", "ollama_host",
@@ -29,10 +55,11 @@ def _option(decls: list[str], **attrs: Any) -> tuple[list[str], dict]:
 
 
 AGENT_OPTIONS = [
-    _option(["--llm"], type=click.Choice(LLM_CHOICES), default="auto", show_default=True,
+    _option(["--llm"], type=LlmChoice(), default="auto", show_default=True,
             help="LLM backend: auto (the Ollama server when one answers, else the reference "
                  "scripts), embedded (SmolLM2-135M in-process: weak, slow, for trying the "
-                 "agent), ollama, replay (recorded replies) or none (= --no-llm)."),
+                 "agent), ollama, replay (recorded replies), none (= --no-llm), or a "
+                 "plugin's backend (docs/plugins.md)."),
     _option(["--model"], help="Model: an Ollama tag (default qwen2.5-coder:7b) or a GGUF "
                                    "file for --llm embedded (default SmolLM2-135M-Instruct)."),
     _option(["--repair"], default="error-feedback", show_default=True,

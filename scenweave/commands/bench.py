@@ -11,7 +11,7 @@ import click
 from scenweave import exit_codes
 from scenweave.bench import REFERENCE, THESIS_CLASSES, BenchError, BenchSettings, run_bench
 from scenweave.commands.agent_options import (
-    LLM_CHOICES,
+    LlmChoice,
     auto_llm,
     json_option,
     map_option,
@@ -31,7 +31,7 @@ def _names(text: str) -> tuple[str, ...]:
               help="Comma-separated class codes.")
 @click.option("--per-class", default=5, show_default=True, type=click.IntRange(1),
               help="Records per class (the thesis used 5).")
-@click.option("--llm", type=click.Choice(LLM_CHOICES), default="ollama", show_default=True,
+@click.option("--llm", type=LlmChoice(), default="ollama", show_default=True,
               help="LLM backend the agent uses (auto: Ollama when it answers; none: only "
                    "--models reference makes sense).")
 @click.option("--repair", default="error-feedback", show_default=True,

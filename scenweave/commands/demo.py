@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 
 from scenweave.commands.agent_options import (
-    LLM_CHOICES,
+    LlmChoice,
     auto_llm,
     pipeline_settings,
     replay_settings_for,
@@ -34,7 +34,7 @@ PHASED_ROWS = 1
 @click.option("--seed", default=7, show_default=True, help="Seed of the sample data.")
 @click.option("--per-class", default=3, show_default=True, type=click.IntRange(1),
               help="Sample records per class.")
-@click.option("--llm", type=click.Choice(LLM_CHOICES), default="embedded", show_default=True,
+@click.option("--llm", type=LlmChoice(), default="embedded", show_default=True,
               help="LLM of the agent part (the demo shows the agent with the built-in model); "
                    "none skips it, auto uses Ollama when it answers.")
 @click.option("--agent-classes", default="BRAKE,U4_1", show_default=True,

@@ -67,6 +67,19 @@ def test_a_plugins_repair_strategy_and_llm_backend_are_picked_by_name(toy):
         "print('reference')")
 
 
+def test_the_llm_option_takes_a_plugins_backend_and_refuses_an_unknown_name(toy, tmp_path,
+                                                                            capsys):
+    from scenweave.commands.agent_options import LlmChoice
+
+    assert LlmChoice().convert("echo", None, None) == "echo"
+    with pytest.raises(SystemExit) as refused:
+        main(["run", str(tmp_path), "--llm", "nosuch"])
+    assert refused.value.code == 2
+    err = capsys.readouterr().err
+    assert "'nosuch' is not one of auto, embedded, ollama, replay, none" in err
+    assert "echo" in err  # the plugin's backend is listed among the choices
+
+
 def test_the_built_in_ones_stay_and_a_plugin_no_longer_named_takes_its_own_with_it(
         toy, monkeypatch):
     assert {"code_corrections", "error_feedback", "patch", "reference_only"} <= set(

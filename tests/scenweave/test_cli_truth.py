@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 from scenweave import cli as cli_module
 from scenweave.cli import cli
-from scenweave.commands.agent_options import LLM_CHOICES, auto_llm
+from scenweave.commands.agent_options import LLM_CHOICES, LlmChoice, auto_llm
 from scenweave.commands.demo import attempts_line
 from scenweave.commands.logs import reply_preview
 from scenweave.ingest import ingest_directory
@@ -245,6 +245,7 @@ def _command(name: str) -> click.Command:
 def test_every_command_running_the_agent_takes_the_same_llm_choices():
     for name in ("run", "submit", "demo", "bench"):
         [option] = [p for p in _command(name).params if p.name == "llm"]
+        assert isinstance(option.type, LlmChoice), name
         assert tuple(option.type.choices) == LLM_CHOICES, name
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 
 from scenweave.judge.findings import Finding
-from scenweave.judge.scenario_doc import ScenarioDoc
+from scenweave.judge.scenario_doc import ScenarioDoc, source_line
 
 SUPPORTED_ACTIONS = {
     # PrivateAction
@@ -48,20 +48,19 @@ def carla_lint(doc: ScenarioDoc) -> list[Finding]:
     if header is not None and (header.get("revMajor"), header.get("revMinor")) != ("1", "0"):
         found.append(Finding("CARLA_VERSION", f"OpenSCENARIO {header.get('revMajor')}."
                              f"{header.get('revMinor')}: ScenWeave targets 1.0 for CARLA",
-                             "error", header.sourceline))
+                             "error", source_line(header)))
     found += _ego(doc)
     for element in doc.root.iter():
         if element.tag in UNSUPPORTED_ACTIONS or element.tag in UNSUPPORTED_CONDITIONS:
             found.append(Finding("CARLA_UNSUPPORTED", f"<{element.tag}> is not supported by "
-                                 "scenario_runner", "error", element.sourceline))
+                                 "scenario_runner", "error", source_line(element)))
         elif element.tag == "CatalogReference":
             found.append(Finding("CARLA_CATALOG", "catalog references need CARLA's catalogs "
-                                 "next to the file", "warning", element.sourceline))
+                                 "next to the file", "warning", source_line(element)))
     logic = doc.root.find("RoadNetwork/LogicFile")
     if logic is None or not CARLA_TOWN.match(logic.get("filepath") or ""):
         found.append(Finding("CARLA_MAP", "RoadNetwork/LogicFile should name a CARLA town "
-                             "(e.g. Town04)", "warning", None if logic is None else
-                             logic.sourceline))
+                             "(e.g. Town04)", "warning", source_line(logic)))
     return found
 
 
@@ -74,9 +73,9 @@ def _ego(doc: ScenarioDoc) -> list[Finding]:
     role = hero.find(".//Property[@name='type']")
     if role is None or role.get("value") != "ego_vehicle":
         found.append(Finding("CARLA_NO_HERO", "hero lacks Property type=ego_vehicle", "error",
-                             hero.sourceline))
+                             source_line(hero)))
     for vehicle in doc.root.iter("Vehicle"):
         if not (vehicle.get("name") or "").startswith("vehicle."):
             found.append(Finding("CARLA_BLUEPRINT", f"vehicle {vehicle.get('name')!r} is not a "
-                                 "CARLA blueprint (vehicle.*)", "warning", vehicle.sourceline))
+                                 "CARLA blueprint (vehicle.*)", "warning", source_line(vehicle)))
     return found

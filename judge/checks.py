@@ -8,14 +8,17 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
+from typing import Any
 
 from lxml import etree
 
 from scenweave import maneuvers
 from scenweave.corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
-from scenweave.judge.fidelity import SPEED_TOL_MS
+from scenweave.corpus.phases import PhasedProfile
+from scenweave.judge.fidelity import SPEED_TOL_MS, numbers
 from scenweave.judge.findings import Finding
-from scenweave.judge.scenario_doc import ScenarioDoc, number
+from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
 from scenweave.maneuvers import Maneuver
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
@@ -24,10 +27,6 @@ STOPPING_LIGHT_STATES = {"yellow", "orange", "red"}
 LIGHT_NAME = re.compile(r"^pos=(-?\d+(\.\d+)?),(-?\d+(\.\d+)?)$")
 SPEED_TOLERANCE = 1e-6
 TURN_HEADING_TOL_DEG = 45.0
-
-
-def line(element: etree._Element | None) -> int | None:
-    return None if element is None else element.sourceline
 
 
 def detect_domain(doc: ScenarioDoc) -> str:
@@ -41,7 +40,7 @@ def structural(doc: ScenarioDoc, domain: str, maneuver_class: str | None) -> lis
     root = doc.root
     if root.tag != "OpenSCENARIO":
         return [Finding("NO_ROOT", f"root element is <{root.tag}>, not <OpenSCENARIO>", "error",
-                        line(root))]
+                        source_line(root))]
     found: list[Finding] = []
     if root.find(".//Story") is None:
         found.append(Finding("NO_STORY", "no <Story> in the Storyboard", "error"))
@@ -57,7 +56,7 @@ def structural(doc: ScenarioDoc, domain: str, maneuver_class: str | None) -> lis
         groups = root.findall(".//ManeuverGroup")
         if len(groups) > 1 and len(doc.entities) < 2:
             found.append(Finding("NPC_MISSING", f"{len(groups)} ManeuverGroups but only one "
-                                 "ScenarioObject", "error", line(groups[1])))
+                                 "ScenarioObject", "error", source_line(groups[1])))
     elif _meets_a_light(maneuver_class) and root.find(".//TrafficSignalStateAction") is None:
         found.append(Finding("NO_TFL_ACTION", "urban scenario without TrafficSignalStateAction",
                              "error"))
@@ -65,26 +64,25 @@ def structural(doc: ScenarioDoc, domain: str, maneuver_class: str | None) -> lis
 
 
 def _ego_spawn(doc: ScenarioDoc, domain: str) -> list[Finding]:
-    ego = doc.ego_name
-    if ego is None or doc.init_private(ego) is None or doc.spawn_position(ego) is None:
+    position = doc.spawn_position(doc.ego_name) if doc.ego_name is not None else None
+    if position is None:
         return [Finding("NO_TELEPORT", "the ego (hero) has no TeleportAction in Init: it is "
                         "never spawned", "error")]
-    position = doc.spawn_position(ego)
     if domain == "highway":
         if position.tag != "LanePosition":
             return [Finding("NO_LANEPOS", f"highway ego spawns on <{position.tag}>, expected "
-                            "<LanePosition>", "error", line(position))]
+                            "<LanePosition>", "error", source_line(position))]
         return []
     if position.tag != "WorldPosition":
         return [Finding("NO_WORLDPOS", f"urban ego spawns on <{position.tag}>, expected "
-                        "<WorldPosition>", "error", line(position))]
+                        "<WorldPosition>", "error", source_line(position))]
     x, y = number(position, "x") or 0.0, number(position, "y") or 0.0
     if abs(x) < 1e-6 and abs(y) < 1e-6:
         return [Finding("ZERO_SPAWN", "ego WorldPosition is the origin (0, 0)", "error",
-                        line(position))]
+                        source_line(position))]
     if any(abs(x - dx) < 0.05 and abs(y - dy) < 0.05 for dx, dy in DEFAULT_SPAWNS):
         return [Finding("DEFAULT_SPAWN", f"ego WorldPosition ({x}, {y}) is a template default, "
-                        "not a matched spawn point", "error", line(position))]
+                        "not a matched spawn point", "error", source_line(position))]
     return []
 
 
@@ -104,7 +102,7 @@ def _speeds(doc: ScenarioDoc, domain: str) -> list[Finding]:
             private = doc.init_private(entity)
             found.append(Finding("ZERO_SPEED", f"initial speed of {entity} is {speed} m/s"
                                  + ("" if speed < 0 else " and no speed action moves it"),
-                                 "error", line(private)))
+                                 "error", source_line(private)))
     return found
 
 
@@ -125,13 +123,13 @@ def _delays(doc: ScenarioDoc) -> list[Finding]:
             continue
         if delay.startswith("$"):
             found.append(Finding("DELAY_PARAM", f"delay={delay!r} is an unresolved parameter",
-                                 "error", line(condition)))
+                                 "error", source_line(condition)))
             continue
         try:
             float(delay)
         except ValueError:
             found.append(Finding("DELAY_EXPR", f"delay={delay!r} is an expression, not a number",
-                                 "error", line(condition)))
+                                 "error", source_line(condition)))
     return found
 
 
@@ -150,7 +148,7 @@ def _overwrites(doc: ScenarioDoc) -> list[Finding]:
                     "SEM_OVERWRITE", f"event {overwriting[0].get('name')!r} starts at {start} s "
                     f"with priority overwrite alongside {len(events) - 1} other event(s) of "
                     f"Maneuver {maneuver.get('name')!r}: it ends them (use parallel)",
-                    line=line(overwriting[0])))
+                    line=source_line(overwriting[0])))
     return found
 
 
@@ -161,7 +159,8 @@ def _meets_a_light(maneuver_class: str | None) -> bool:
 
 # -- manoeuvre semantics --------------------------------------------------------------------
 
-def semantics(doc: ScenarioDoc, maneuver_class: str | None, params: dict | None) -> list[Finding]:
+def semantics(doc: ScenarioDoc, maneuver_class: str | None,
+              params: Mapping[str, Any] | None) -> list[Finding]:
     """What a scenario of this class must (not) contain (its :class:`Maneuver` says); empty
     when the class is unknown."""
     maneuver = maneuvers.find(maneuver_class)
@@ -178,7 +177,7 @@ def _lane_changes(doc: ScenarioDoc) -> list[tuple[etree._Element, tuple[str, ...
 
 
 def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
-                       params: dict | None) -> list[Finding]:
+                       params: Mapping[str, Any] | None) -> list[Finding]:
     code = maneuver.code
     found = []
     ego = doc.ego_name
@@ -194,7 +193,7 @@ def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
     elif changes:
         found.append(Finding("SEM_UNEXPECTED_LANE_CHANGE",
                              f"{code} has no lane change, the scenario has one",
-                             line=line(changes[0][0])))
+                             line=source_line(changes[0][0])))
     if maneuver.lead_brakes and others:
         braking = params is None or params.get("npc_end_speed_ms", 0) < params.get(
             "npc_speed_ms", 0) - SPEED_TOLERANCE
@@ -207,7 +206,7 @@ def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
     return found
 
 
-def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Finding]:
+def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: Mapping[str, Any]) -> list[Finding]:
     """The ego must not run into the NPC in front: a braking lead (from t = 0) or a cutter
     (from its cut-in on). Both speed profiles come from the file, the gap at t = 0 from where
     the file places the two cars (along the lane, :func:`_start_gap`).
@@ -216,10 +215,11 @@ def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findin
     cause; a collision would only be its consequence).
     """
     ego, lead = doc.speed_profile("hero"), doc.speed_profile("npc")
-    lengths = [doc.vehicle_length(e) for e in ("hero", "npc")]
+    ego_length, lead_length = doc.vehicle_length("hero"), doc.vehicle_length("npc")
     gap = _start_gap(doc, params)
     timeout = doc.stop_time
-    if None in (ego, lead, gap, timeout, *lengths) or _other_start_speeds(params, ego, lead):
+    if ego is None or lead is None or gap is None or timeout is None or ego_length is None \
+            or lead_length is None or _other_start_speeds(params, ego, lead):
         return []
     cut_in = maneuver.ego_reacts == "from_cut_in"
     change = doc.events.get("npc_lane_change")
@@ -227,7 +227,7 @@ def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findin
     if from_s is None:
         return []
     closest = min_gap_m(lead, ego, gap, timeout, from_s)
-    touching = sum(lengths) / 2
+    touching = (ego_length + lead_length) / 2
     if closest < touching:
         what = "the car that cut in ahead" if cut_in else "the braking lead"
         return [Finding("SEM_COLLISION", f"{maneuver.code}: the ego runs into {what}: their "
@@ -236,13 +236,14 @@ def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findin
     return []
 
 
-def _other_start_speeds(params: dict, *profiles: SpeedProfile) -> bool:
+def _other_start_speeds(params: Mapping[str, Any],
+                        *profiles: SpeedProfile | PhasedProfile) -> bool:
     wanted = (params.get("ego_speed_ms"), params.get("npc_speed_ms"))
     return any(want is not None and abs(profile.v0 - want) > SPEED_TOL_MS
                for want, profile in zip(wanted, profiles, strict=True))
 
 
-def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
+def _start_gap(doc: ScenarioDoc, params: Mapping[str, Any]) -> float | None:
     """Distance from the ego to the NPC at t = 0, as the file places them.
 
     Both on LanePositions of the scenario's map: measured along the NPC's lane from beside the ego
@@ -250,17 +251,16 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     minus the lead-in drift), corrected by how far a WorldPosition moves the NPC from its
     spawn along its heading.
     """
-    keys = [params.get(k) for k in ("npc_distance_m", "npc_speed_ms", "ego_speed_ms",
-                                    "maneuver_start_s")]
-    if None in keys:
+    keys = numbers(params, "npc_distance_m", "npc_speed_ms", "ego_speed_ms", "maneuver_start_s")
+    if keys is None:
         return None
     along = doc.lane_gap("npc")
     if along is not None:
         return along
     gap = start_gap_m(*keys)
     position = doc.spawn_position("npc")
-    spawn = [params.get(f"npc_{axis}") for axis in "xyh"]
-    if position is None or position.tag != "WorldPosition" or None in spawn:
+    spawn = numbers(params, "npc_x", "npc_y", "npc_h")
+    if position is None or position.tag != "WorldPosition" or spawn is None:
         return gap
     x, y, h = spawn
     moved = ((number(position, "x") or 0.0) - x) * math.cos(h) \
@@ -268,20 +268,22 @@ def _start_gap(doc: ScenarioDoc, params: dict) -> float | None:
     return gap + moved
 
 
-def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Finding]:
+def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: Mapping[str, Any]) -> list[Finding]:
     """A cut-in starts in the lane next to the ego's and ends in it; a cut-out starts in it.
 
     The ego's lane is followed along the map (``roads.advance_along_lane``) to where the
     NPC stands, so a gap across a road boundary compares the right lane ids.
     """
-    keys = [params.get(k) for k in ("ego_road_id", "ego_lane_id", "ego_s", "npc_distance_m",
-                                    "npc_road_id", "npc_lane_id")]
+    ego_road, npc_road = params.get("ego_road_id"), params.get("npc_road_id")
+    keys = numbers(params, "ego_lane_id", "ego_s", "npc_distance_m", "npc_lane_id")
     change = doc.events.get("npc_lane_change")
-    target = None if change is None else number(change.action.find(".//RelativeTargetLane"),
-                                                 "value")
-    if None in keys or target is None or doc.map_path is None:
+    if change is None:
         return []
-    ego_road, ego_lane, ego_s, distance, npc_road, npc_lane = keys
+    target = number(change.action.find(".//RelativeTargetLane"), "value")
+    if ego_road is None or npc_road is None or keys is None or target is None \
+            or doc.map_path is None:
+        return []
+    ego_lane, ego_s, distance, npc_lane_number = keys
     from scenweave import roads  # here: the map loads once, and only for scenarios that need it
 
     try:
@@ -291,13 +293,13 @@ def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: dict) -> list[Findi
         return []
     if str(road) != str(npc_road):
         return []
-    npc_lane = int(npc_lane)
+    npc_lane = int(npc_lane_number)
     ends_in = npc_lane + int(target) if npc_lane < 0 else npc_lane - int(target)
     code, cut_in = maneuver.code, maneuver.npc_ends_in_ego_lane
     if cut_in and (npc_lane == lane or ends_in != lane):
         return [Finding("SEM_CUT_IN_LANE", f"{code}: the NPC starts in lane {npc_lane} and "
                         f"changes to lane {ends_in}; the ego's lane there is {lane} (a cut-in "
-                        "starts next to it and ends in it)", line=line(change.action))]
+                        "starts next to it and ends in it)", line=source_line(change.action))]
     if not cut_in and npc_lane != lane:
         return [Finding("SEM_CUT_OUT_LANE", f"{code}: the NPC starts in lane {npc_lane}, not "
                         f"in the ego's lane {lane} (a cut-out leaves the ego's lane)")]
@@ -325,7 +327,7 @@ def _light_events(doc: ScenarioDoc) -> list[tuple[float | None, etree._Element]]
 
 
 def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
-                     params: dict | None) -> list[Finding]:
+                     params: Mapping[str, Any] | None) -> list[Finding]:
     code = maneuver.code
     found = []
     lights = _light_events(doc)
@@ -333,7 +335,7 @@ def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
         if not LIGHT_NAME.match(action.get("name") or ""):
             found.append(Finding("URB_LIGHT_NAME", f"TrafficSignalStateAction name "
                                  f"{action.get('name')!r} is not 'pos=x,y': the light cannot be "
-                                 "tied to the map", line=line(action)))
+                                 "tied to the map", line=source_line(action)))
     states = [(t, (a.get("state") or "").lower()) for t, a in lights]
     if maneuver.stops_at_line:
         if not any(s in STOPPING_LIGHT_STATES for _, s in states):
@@ -358,7 +360,7 @@ def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
     return found
 
 
-def _code(params: dict | None) -> str:
+def _code(params: Mapping[str, Any] | None) -> str:
     return str((params or {}).get("maneuver_class") or "the class")
 
 
@@ -377,11 +379,11 @@ def _state_at(states: list[tuple[float | None, str]], t: float) -> str | None:
 
 
 def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
-          params: dict | None) -> list[Finding]:
+          params: Mapping[str, Any] | None) -> list[Finding]:
     """A class that stops at the line: the ego brakes only once the light is no longer green,
     and (with the spawn's stop line in params) comes to rest at or before the stop line."""
     code = _code(params)
-    ego = doc.speed_profile(doc.ego_name)
+    ego = doc.speed_profile(doc.ego_name) if doc.ego_name else None
     if ego is None:
         return []
     found = []
@@ -399,7 +401,7 @@ def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
 
 
 def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
-                 params: dict) -> list[Finding]:
+                 params: Mapping[str, Any]) -> list[Finding]:
     """A class that passes on green or orange: the ego crosses the stop line before the light
     is red; on an orange record, after it turned yellow (else it passes on green)."""
     code = _code(params)
@@ -418,7 +420,7 @@ def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
     return []
 
 
-def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
+def _right_turn(doc: ScenarioDoc, params: Mapping[str, Any] | None) -> list[Finding]:
     """A right turn: the ego is routed somewhere. When params carry the map's exit of the right
     movement (``turn_exit_*``), FIDELITY_TURN compares the target with it: the approach may
     curve before the junction, so where the exit lies seen from the spawn says little.
@@ -441,15 +443,15 @@ def _right_turn(doc: ScenarioDoc, params: dict | None) -> list[Finding]:
     dy = (number(target, "y") or 0.0) - (number(spawn, "y") or 0.0)
     if dx * math.sin(h) - dy * math.cos(h) <= 0:
         return [Finding("URB_TURN_NOT_RIGHT", f"{code}: the ego's target lies to the left of its "
-                        "heading", line=line(target))]
+                        "heading", line=source_line(target))]
     turn = math.degrees(math.remainder((number(target, "h") or 0.0) - h, math.tau))
     if not -90 - TURN_HEADING_TOL_DEG <= turn <= -90 + TURN_HEADING_TOL_DEG:
         return [Finding("URB_TURN_HEADING", f"{code}: the target heading is {turn:+.0f} degrees "
-                        "from the ego's; a right turn ends near -90", line=line(target))]
+                        "from the ego's; a right turn ends near -90", line=source_line(target))]
     stop_line = (params or {}).get("spawn_stop_line_distance_m")
     ahead = dx * math.cos(h) + dy * math.sin(h)
     if stop_line is not None and ahead <= stop_line:
         return [Finding("URB_TURN_BEFORE_LINE", f"{code}: the target is {ahead:.1f} m ahead, "
                         f"before the stop line {stop_line:.1f} m ahead: the ego turns before "
-                        "the junction", line=line(target))]
+                        "the junction", line=source_line(target))]
     return []

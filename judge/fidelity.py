@@ -8,7 +8,9 @@ shown digits (an LLM writing 8.33 for 8.3333) but not a changed value.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from lxml import etree
 
@@ -32,7 +34,7 @@ from scenweave.corpus.phases import (
     profile_of,
 )
 from scenweave.judge.findings import Finding
-from scenweave.judge.scenario_doc import ScenarioDoc, number
+from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
 from scenweave.maneuvers import Maneuver
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.schemas.params import number as number_of
@@ -50,15 +52,26 @@ FOG_BELOW_M = 1000.0
 NO_CLASS = Maneuver(code="", tag="", domain="urban", name="", script="")
 
 
-def class_of(params: dict) -> Maneuver:
+def class_of(params: Mapping[str, Any]) -> Maneuver:
     """The params' class definition (``NO_CLASS`` for a code nobody registered)."""
     return maneuvers.find(params.get("maneuver_class")) or NO_CLASS
+
+
+def numbers(params: Mapping[str, Any], *keys: str) -> tuple[float, ...] | None:
+    """``schemas.params.number`` of each key, in order; None when any is missing."""
+    found = []
+    for key in keys:
+        value = number_of(params, key)
+        if value is None:
+            return None
+        found.append(value)
+    return tuple(found)
 
 
 @dataclass
 class _Check:
     doc: ScenarioDoc
-    params: dict
+    params: Mapping[str, Any]
     found: list[Finding]
 
     def close(self, code: str, what: str, got: float | None, want: float | None, tol: float,
@@ -67,10 +80,10 @@ class _Check:
             return
         if got is None or not math.isfinite(got) or abs(got - want) > tol:
             self.found.append(Finding(code, f"{what} is {got}, params say {want:.6g}", "error",
-                                      None if element is None else element.sourceline))
+                                      source_line(element)))
 
 
-def fidelity(doc: ScenarioDoc, params: dict) -> list[Finding]:
+def fidelity(doc: ScenarioDoc, params: Mapping[str, Any]) -> list[Finding]:
     """FIDELITY_* findings: every value the scenario takes from ``params`` must match it."""
     check = _Check(doc, params, [])
     _map(check)
@@ -92,7 +105,7 @@ def _map(check: _Check) -> None:
     if not want:
         return
     logic = check.doc.root.find("RoadNetwork/LogicFile")
-    line = None if logic is None else logic.sourceline
+    line = source_line(logic)
     if check.doc.logic_file != want:
         check.found.append(Finding("FIDELITY_MAP", f"RoadNetwork/LogicFile names "
                                    f"{check.doc.logic_file!r}, params say map {want!r}",
@@ -127,7 +140,7 @@ def _weather(check: _Check) -> None:
                                        f"{seen[what]!r}, weather_key {weather!r} says {value!r}"))
 
 
-def placed_actors(params: dict) -> list[tuple[str, str]]:
+def placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str]]:
     """(entity, params prefix) of every actor the scenario must place, ego first."""
     actors = [("hero", "ego")]
     if params.get("domain") == "highway":
@@ -155,10 +168,16 @@ def _spawns(check: _Check) -> None:
             _world_position(check, code, entity, _pose(params, prefix), position)
 
 
-def _pose(params: dict, prefix: str) -> tuple[float, ...] | None:
+Pose = tuple[float, float, float, float]
+
+
+def _pose(params: Mapping[str, Any], prefix: str) -> Pose | None:
     """``(x, y, z, h)`` the spawn stage gave ``prefix``, or None when a key is missing."""
-    pose = [number_of(params, f"{prefix}_{axis}") for axis in "xyzh"]
-    return None if None in pose else tuple(pose)
+    pose = numbers(params, *(f"{prefix}_{axis}" for axis in "xyzh"))
+    if pose is None:
+        return None
+    x, y, z, h = pose
+    return x, y, z, h
 
 
 def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._Element) -> None:
@@ -168,9 +187,9 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
     NPC's lane id is not found there, walking back that far along the NPC's lane must reach
     the ego's ``s``."""
     params = check.params
-    keys = [number_of(params, k) for k in (f"{prefix}_distance_m", f"{prefix}_speed_ms",
-                                        "ego_speed_ms", "maneuver_start_s")]
-    if None in keys:
+    keys = numbers(params, f"{prefix}_distance_m", f"{prefix}_speed_ms", "ego_speed_ms",
+                   "maneuver_start_s")
+    if keys is None:
         return
     distance = keys[0]
     gap = start_gap_m(*keys)
@@ -180,7 +199,7 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
         if abs(along - gap) > POSITION_TOL_M:
             check.found.append(Finding(
                 "FIDELITY_GAP", f"{entity} starts {along:.2f} m ahead of the ego along its "
-                f"lane, params say {gap:.2f} m at t = 0 {why}", "error", position.sourceline))
+                f"lane, params say {gap:.2f} m at t = 0 {why}", "error", source_line(position)))
         return
     walked = _walk_back(check.doc, position, gap)
     ego_road, ego_s = params.get("ego_road_id"), number_of(params, "ego_s")
@@ -191,20 +210,20 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
         check.found.append(Finding(
             "FIDELITY_GAP", f"{entity} is not {gap:.2f} m ahead of the ego along its lane at "
             f"t = 0 {why}: {gap:.2f} m back along its lane is road {road} s={back_s:.2f}, the "
-            f"ego starts at road {ego_road} s={ego_s:g}", "error", position.sourceline))
+            f"ego starts at road {ego_road} s={ego_s:g}", "error", source_line(position)))
 
 
 def _walk_back(doc: ScenarioDoc, position: etree._Element, metres: float
                ) -> tuple[str, float] | None:
     """(road, s) ``metres`` back along the lane of a LanePosition, None off the map."""
-    lane, s = number(position, "laneId"), number(position, "s")
-    if lane is None or s is None or doc.map_path is None:
+    road_id, lane, s = position.get("roadId"), number(position, "laneId"), number(position, "s")
+    if road_id is None or lane is None or s is None or doc.map_path is None:
         return None
     from scenweave import roads  # here: the map loads once, and only for scenarios that need it
 
     try:
-        road, _, back_s = roads.advance_along_lane(position.get("roadId"), int(lane), s,
-                                                   -metres, map_path=doc.map_path)
+        road, _, back_s = roads.advance_along_lane(road_id, int(lane), s, -metres,
+                                                   map_path=doc.map_path)
     except roads.RoadError:
         return None
     return str(road), back_s
@@ -215,24 +234,24 @@ def _lane_position(check: _Check, code: str, entity: str, prefix: str,
     params = check.params
     if position.tag != "LanePosition":
         check.found.append(Finding(code, f"{entity} is placed by <{position.tag}>, params give "
-                                   "a lane position", "error", position.sourceline))
+                                   "a lane position", "error", source_line(position)))
         return
     for attribute, key in (("roadId", "road_id"), ("laneId", "lane_id")):
         want = params.get(f"{prefix}_{key}")
         if want is not None and str(position.get(attribute)) != str(int(want)):
             check.found.append(Finding(code, f"{entity} {attribute} is {position.get(attribute)},"
-                                       f" params say {int(want)}", "error", position.sourceline))
+                                       f" params say {int(want)}", "error", source_line(position)))
     check.close(code, f"{entity} s", number(position, "s"), params.get(f"{prefix}_s"),
                 POSITION_TOL_M, position)
 
 
-def _world_position(check: _Check, code: str, entity: str, want: tuple[float, ...] | None,
+def _world_position(check: _Check, code: str, entity: str, want: Pose | None,
                     position: etree._Element) -> None:
     if want is None:
         return
     if position.tag != "WorldPosition":
         check.found.append(Finding(code, f"{entity} is placed by <{position.tag}>, params give "
-                                   "a world position", "error", position.sourceline))
+                                   "a world position", "error", source_line(position)))
         return
     for axis, value in zip("xyz", want, strict=False):
         check.close(code, f"{entity} {axis}", number(position, axis), value, POSITION_TOL_M,
@@ -255,12 +274,13 @@ def _init_speeds(check: _Check) -> None:
 SpeedChange = tuple[str, float | None, float | None, float | None]
 
 
-def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
+def expected_speed_changes(doc: ScenarioDoc, params: Mapping[str, Any]) -> list[SpeedChange]:
     """(action name, end speed, duration, start) of every speed change the class must contain."""
     maneuver = class_of(params)
     recorded_ego = params.get("ego_phases") is not None and not _single_ramp(params, "ego")
     hero = _stop_at_line(params) if maneuver.stops_at_line else _npc_reaction(doc, params) \
         if maneuver.ego_reacts and not recorded_ego else None
+    changes: list[SpeedChange]
     if hero is not None:
         changes = [("hero_speed_change", hero.end_speed, hero.duration_s, hero.start_s)]
     elif maneuver.stops_at_line:  # without the spawn's stop line only the target is known
@@ -275,7 +295,7 @@ def expected_speed_changes(doc: ScenarioDoc, params: dict) -> list[SpeedChange]:
     return changes
 
 
-def _phase_changes(params: dict, entity: str, prefix: str) -> list[SpeedChange]:
+def _phase_changes(params: Mapping[str, Any], entity: str, prefix: str) -> list[SpeedChange]:
     """One speed change per phase of ``prefix`` (``corpus.phases``): ``<entity>_speed_change``,
     then ``_2``, ``_3``...; the single ramp when params give no phases."""
     duration, start = params.get("duration_s"), params.get("maneuver_start_s")
@@ -289,35 +309,33 @@ def _phase_changes(params: dict, entity: str, prefix: str) -> list[SpeedChange]:
              p.duration_s, p.start_s) for i, p in enumerate(phases)]
 
 
-def _single_ramp(params: dict, prefix: str) -> bool:
+def _single_ramp(params: Mapping[str, Any], prefix: str) -> bool:
     try:
         return is_single_ramp(params, prefix)
     except (PhasesInvalid, KeyError):
         return True
 
 
-def _stop_at_line(params: dict) -> SpeedProfile | None:
+def _stop_at_line(params: Mapping[str, Any]) -> SpeedProfile | None:
     """A stop at the light: the ego's braking that ends before the spawn's stop line
     (conventions)."""
-    keys = [number_of(params, k) for k in ("ego_speed_ms", "brake_time_s",
-                                        "spawn_stop_line_distance_m")]
-    return None if None in keys else stop_at_line(*keys)
+    keys = numbers(params, "ego_speed_ms", "brake_time_s", "spawn_stop_line_distance_m")
+    return None if keys is None else stop_at_line(*keys)
 
 
-def _npc_reaction(doc: ScenarioDoc, params: dict) -> SpeedProfile | None:
+def _npc_reaction(doc: ScenarioDoc, params: Mapping[str, Any]) -> SpeedProfile | None:
     """A reacting class (BRAKE, CINF): the ego slows to the NPC's end speed after a reaction
     time, if the NPC (braking lead, cutter) ends slower than the ego's recorded end speed
     (conventions)."""
-    keys = [number_of(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms",
-                                        "npc_end_speed_ms", "duration_s", "maneuver_start_s",
-                                        "npc_distance_m", "timeout_s")]
-    lengths = [doc.vehicle_length(entity) for entity in ("hero", "npc")]
-    if None in keys or None in lengths:
+    keys = numbers(params, "ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms", "npc_end_speed_ms",
+                   "duration_s", "maneuver_start_s", "npc_distance_m", "timeout_s")
+    ego_length, npc_length = doc.vehicle_length("hero"), doc.vehicle_length("npc")
+    if keys is None or ego_length is None or npc_length is None:
         return None
     ego, ego_end, lead, lead_end, duration, start, distance, timeout = keys
     profile = SpeedProfile(lead, lead_end, start, duration) if _single_ramp(params, "npc") \
         else profile_of(params, "npc")
-    clearance = sum(lengths) / 2 + SAFETY_GAP_M
+    clearance = (ego_length + npc_length) / 2 + SAFETY_GAP_M
     return lead_reaction(ego, ego_end, profile, start_gap_m(distance, lead, ego, start), timeout,
                          clearance, cut_in=class_of(params).ego_reacts == "from_cut_in")
 
@@ -350,17 +368,16 @@ def _lane_change(check: _Check, actor: str) -> None:
         check.found.append(Finding("FIDELITY_MISSING", f"no action {name!r}"))
         return
     target = event.action.find(".//RelativeTargetLane")
-    want = {"left": 1.0, "right": -1.0}.get(params.get("lane_change_direction"))
+    direction = params.get("lane_change_direction")
+    want = 1.0 if direction == "left" else -1.0 if direction == "right" else None
     got = number(target, "value")
     if want is not None and got != want:
         check.found.append(Finding("FIDELITY_DIRECTION", f"{name} goes {got} lanes, params say "
-                                   f"{params.get('lane_change_direction')} ({want:+.0f})",
-                                   "error", None if target is None else target.sourceline))
+                                   f"{direction} ({want:+.0f})", "error", source_line(target)))
     prefix = "ego" if actor == "hero" else "npc"
-    v0, v1 = params.get(f"{prefix}_speed_ms"), params.get(f"{prefix}_end_speed_ms")
-    duration = params.get("duration_s")
-    if None not in (v0, v1, duration):
-        length = lane_change_length_m(v0, v1, duration) if _single_ramp(params, prefix) \
+    ramp = numbers(params, f"{prefix}_speed_ms", f"{prefix}_end_speed_ms", "duration_s")
+    if ramp is not None:
+        length = lane_change_length_m(*ramp) if _single_ramp(params, prefix) \
             else lane_change_length(params, prefix)
         dynamics = event.action.find(".//LaneChangeActionDynamics")
         check.close("FIDELITY_DURATION", f"{name} length (duration x speed)",
@@ -378,7 +395,7 @@ def _lights(check: _Check) -> None:
     wanted = f"pos={x:.3f},{y:.3f}" if x is not None and y is not None else None
     events = check.doc.events
     initial, yellow = _light_plan(params)
-    timing = {"traffic_light_initial": (0.0, initial)}
+    timing: dict[str, tuple[float | None, str]] = {"traffic_light_initial": (0.0, initial)}
     if class_of(params).stops_at_line or params.get("tfl_state") == "orange":
         timing["traffic_light_yellow"] = (yellow, "yellow")
         timing["traffic_light_red"] = (None if yellow is None else yellow + YELLOW_PHASE_S, "red")
@@ -392,11 +409,11 @@ def _lights(check: _Check) -> None:
             check.found.append(Finding("FIDELITY_LIGHT", f"{name} controls "
                                        f"{None if light is None else light.get('name')!r}, "
                                        f"params say {wanted!r}", "error",
-                                       event.action.sourceline))
+                                       source_line(event.action)))
         if light is not None and (light.get("state") or "").lower() != state:
             check.found.append(Finding("FIDELITY_LIGHT", f"{name} shows {light.get('state')!r}, "
                                        f"the scenario needs {state!r} then", "error",
-                                       light.sourceline))
+                                       source_line(light)))
         check.close("FIDELITY_TRIGGER", f"{name} time", event.start_s, start, TIME_TOL_S,
                     event.action)
 
@@ -426,15 +443,16 @@ def _turn_exit(check: _Check) -> None:
                 TURN_EXIT_HEADING_TOL_RAD, target)
 
 
-def _light_plan(params: dict) -> tuple[str, float | None]:
+def _light_plan(params: Mapping[str, Any]) -> tuple[str, float | None]:
     """(state at t = 0, time the light turns yellow) the class's light follows (conventions)."""
     if class_of(params).stops_at_line:
         stop = _stop_at_line(params)
         return ("green", None) if stop is None else red_light_timing(stop)
-    keys = [number_of(params, k) for k in ("ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s",
-                                        "duration_s", "spawn_stop_line_distance_m")]
-    if None in keys:
+    keys = numbers(params, "ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s", "duration_s",
+                   "spawn_stop_line_distance_m")
+    if keys is None:
         return "green", None
-    *profile, stop_line = keys
-    ego = SpeedProfile(*profile) if _single_ramp(params, "ego") else profile_of(params, "ego")
+    v0, v1, start, duration, stop_line = keys
+    ego = SpeedProfile(v0, v1, start, duration) if _single_ramp(params, "ego") \
+        else profile_of(params, "ego")
     return "green", orange_light_yellow_s(ego, stop_line)

@@ -10,9 +10,10 @@ from scenweave.judge.findings import Finding
 
 def run_asam_qc(path: Path | str) -> list[Finding]:
     """Every issue the ASAM checker bundle reports for ``path`` (ASAM_QC findings)."""
-    from qc_baselib import Configuration, Result
-    from qc_openscenario import constants
-    from qc_openscenario.main import run_checks
+    # the ASAM checker packages ship neither type hints (py.typed) nor stubs
+    from qc_baselib import Configuration, Result  # type: ignore[import-untyped]
+    from qc_openscenario import constants  # type: ignore[import-untyped]
+    from qc_openscenario.main import run_checks  # type: ignore[import-untyped]
 
     config = Configuration()
     config.set_config_param("InputFile", str(path))
@@ -26,7 +27,7 @@ def run_asam_qc(path: Path | str) -> list[Finding]:
         run_checks(config, result)
     finally:
         logging.getLogger().setLevel(quiet)
-    findings = []
+    findings: list[Finding] = []
     for checker in result.get_checker_ids(constants.BUNDLE_NAME):
         for issue in result.get_issues(constants.BUNDLE_NAME, checker):
             findings.append(Finding("ASAM_QC", f"{checker}: {issue.description}",

@@ -10,14 +10,19 @@ under "Replay".
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
-from scenweave.judge.fidelity import class_of, expected_speed_changes, placed_actors
+from scenweave.judge.fidelity import class_of, expected_speed_changes, numbers, placed_actors
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.schemas.params import number as number_of
+
+if TYPE_CHECKING:  # the player loads esmini's bindings: only the type is needed here
+    from scenweave.player.playback import Playback
 
 #: a speed of the replay may differ this much from the record (m/s)
 SPEED_TOL_MS = 0.5
@@ -55,17 +60,27 @@ ROLE_ENTITIES = {"ego": "hero", "npc": "npc", "center": "npc_center", "right": "
                  "left": "npc_left"}
 
 
+#: a map file as ``roads`` takes it (None: the bundled Town04)
+MapPath = str | Path | None
+#: (road id, lane id, s) of a lane position
+LanePosition = tuple[int | str, int, float]
+
+
+def _finding(code: str, message: str, time_s: float | None = None) -> Finding:
+    when = "" if time_s is None else f"at {time_s:.2f} s: "
+    return Finding(code, when + message)
+
+
 @dataclass
 class _Judge:
-    playback: object  # player.Playback (duck-typed: schemas does not import the player)
-    params: dict
+    playback: Playback
+    params: Mapping[str, Any]
     doc: ScenarioDoc
-    map_path: object
+    map_path: MapPath
     found: list[Finding]
 
     def fail(self, code: str, message: str, time_s: float | None = None) -> None:
-        when = "" if time_s is None else f"at {time_s:.2f} s: "
-        self.found.append(Finding(code, when + message))
+        self.found.append(_finding(code, message, time_s))
 
     def speed(self, entity: str, time_s: float) -> float:
         return self.playback.value(entity, "speed", time_s)
@@ -76,7 +91,8 @@ class _Judge:
         return times[1] - times[0] if len(times) > 1 else 0.0
 
 
-def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> list[Finding]:
+def judge_replay(playback: Playback, params: Mapping[str, Any], doc: ScenarioDoc,
+                 map_path: MapPath = None) -> list[Finding]:
     """REPLAY_* findings of one playback against the params the scenario was made from."""
     judge = _Judge(playback, params, doc, map_path, [])
     if playback.engine_error:
@@ -95,14 +111,12 @@ def judge_replay(playback, params: dict, doc: ScenarioDoc, map_path=None) -> lis
     return judge.found
 
 
-def judge_collisions_only(playback) -> list[Finding]:
+def judge_collisions_only(playback: Playback) -> list[Finding]:
     """What can be judged without the record: the engine played it, and nothing collided."""
-    judge = _Judge(playback, {}, None, None, [])
     if playback.engine_error:
-        judge.fail("REPLAY_ENGINE", f"esmini could not play the scenario: {playback.engine_error}")
-    else:
-        _collisions(judge)
-    return judge.found
+        return [_finding("REPLAY_ENGINE",
+                         f"esmini could not play the scenario: {playback.engine_error}")]
+    return _collision_findings(playback)
 
 
 # --- the checks ------------------------------------------------------------------------------
@@ -121,7 +135,7 @@ def _start_poses(judge: _Judge) -> None:
     for entity in judge.playback.entities:
         track = judge.playback.tracks[entity]
         lane = _planned_lane(judge.params, planned.get(entity)) or \
-            (track["road"][0], track["lane"][0], track["s"][0])
+            (int(track["road"][0]), int(track["lane"][0]), track["s"][0])
         try:
             pose = network.lane_to_world(*lane)
             drivable = network.is_drivable(*lane)
@@ -143,11 +157,12 @@ def _start_poses(judge: _Judge) -> None:
                        f"deg off its lane's direction of traffic {where}", 0.0)
 
 
-def _planned_lane(params: dict, prefix: str | None) -> tuple | None:
+def _planned_lane(params: Mapping[str, Any], prefix: str | None) -> LanePosition | None:
+    """The lane position the spawn stage chose for ``prefix``, None when params lack it."""
     if prefix is None:
         return None
-    lane = tuple(params.get(f"{prefix}_{key}") for key in ("road_id", "lane_id", "s"))
-    return None if None in lane else lane
+    road, lane, s = (params.get(f"{prefix}_{key}") for key in ("road_id", "lane_id", "s"))
+    return None if road is None or lane is None or s is None else (road, lane, s)
 
 
 def _actors_present(judge: _Judge) -> None:
@@ -172,8 +187,8 @@ def _speed_changes(judge: _Judge) -> None:
     """Each scripted speed change starts on time and reaches its target in its duration."""
     for name, target, duration, start in expected_speed_changes(judge.doc, judge.params):
         entity = name.removesuffix("_speed_change")
-        if None in (target, duration, start) or entity not in judge.playback.tracks \
-                or _has_speed_series(judge.params, entity):
+        if target is None or duration is None or start is None \
+                or entity not in judge.playback.tracks or _has_speed_series(judge.params, entity):
             continue  # a recorded speed curve is compared sample by sample (_series)
         # events fire on the first step past their time: the change ends one step late, and
         # the next one (keeping the distance after the record) may start right then
@@ -189,8 +204,7 @@ def _speed_changes(judge: _Judge) -> None:
             continue  # a later phase starts from a change still under way: no onset to see
         # a linear change moves the speed by ONSET_MS this long after it starts
         seen_after = duration * ONSET_MS / abs(target - v0) if duration > 0 else 0.0
-        onset = _first_time(judge.playback, entity, start - 0.5,
-                            lambda v, v0=v0: abs(v - v0) > ONSET_MS)
+        onset = _first_time(judge.playback, entity, start - 0.5, _differs_from(v0, ONSET_MS))
         if onset is None or not start - 0.1 <= onset - seen_after <= start + ONSET_TOL_S:
             judge.fail("REPLAY_SPEED_ONSET", f"{entity}'s speed change ({name}) "
                        + ("never starts" if onset is None else
@@ -224,9 +238,10 @@ def _lane_changes(judge: _Judge) -> None:
     params = judge.params
     maneuver = class_of(params)
     actor = maneuver.lane_change
-    start, duration = number_of(params, "maneuver_start_s"), number_of(params, "duration_s")
-    if actor is None or actor not in judge.playback.tracks or None in (start, duration):
+    timing = numbers(params, "maneuver_start_s", "duration_s")
+    if actor is None or actor not in judge.playback.tracks or timing is None:
         return
+    _, duration = timing
     changes = lane_changes(judge.playback, actor)
     direction = params.get("lane_change_direction")
     if len(changes) != 1:
@@ -269,9 +284,9 @@ def _events_fired(judge: _Judge) -> None:
 def _lights(judge: _Judge) -> None:
     """The light shows what the class needs when the ego reaches the stop line (or stops)."""
     params = judge.params
-    if not judge.playback.lights or number_of(params, "spawn_stop_line_distance_m") is None:
-        return
     stop_line = number_of(params, "spawn_stop_line_distance_m")
+    if not judge.playback.lights or stop_line is None:
+        return
     reached = _time_travelled(judge.playback, "hero", stop_line)
     if class_of(params).stops_at_line:
         stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
@@ -280,10 +295,12 @@ def _lights(judge: _Judge) -> None:
         if colour not in ("yellow", "red"):
             judge.fail("REPLAY_LIGHT", f"the light is {colour} when the ego stops; a stop at "
                        "red happens on yellow or red", stopped)
-        early = _first_time(judge.playback, "hero", 0.0,
-                            lambda v: v < number_of(params, "ego_speed_ms") - ONSET_MS)
-        if early is not None and light_state(judge.playback, early) == "green":
-            judge.fail("REPLAY_LIGHT", "the ego brakes while its light is green", early)
+        ego_speed = number_of(params, "ego_speed_ms")
+        if ego_speed is not None:  # braking: ONSET_MS slower than the record's start speed
+            braking_below = ego_speed - ONSET_MS
+            early = _first_time(judge.playback, "hero", 0.0, lambda v: v < braking_below)
+            if early is not None and light_state(judge.playback, early) == "green":
+                judge.fail("REPLAY_LIGHT", "the ego brakes while its light is green", early)
     elif reached is not None:
         colour = light_state(judge.playback, reached)
         allowed = {"green", "yellow"} if params.get("tfl_state") == "orange" else {"green"}
@@ -325,8 +342,8 @@ def _right_turn(judge: _Judge) -> None:
     if class_of(params).turn != "right":
         return
     track = judge.playback.tracks["hero"]
-    exit_pose = [number_of(params, f"turn_exit_{k}") for k in "xyh"]
-    if None in exit_pose:
+    exit_pose = numbers(params, *(f"turn_exit_{k}" for k in "xyh"))
+    if exit_pose is None:
         turned = heading_change(judge.playback, "hero")
         if turned > -RIGHT_TURN_MIN_RAD:
             judge.fail("REPLAY_TURN", f"the ego turns {math.degrees(turned):+.0f} deg (right "
@@ -347,15 +364,22 @@ def _right_turn(judge: _Judge) -> None:
 
 
 def _collisions(judge: _Judge) -> None:
+    judge.found += _collision_findings(judge.playback)
+
+
+def _collision_findings(playback: Playback) -> list[Finding]:
+    """One REPLAY_COLLISION per pair of entities that collide, at the first time."""
     seen: set[tuple[str, str]] = set()
-    for time_s, a, b in judge.playback.collisions:
+    found = []
+    for time_s, a, b in playback.collisions:
         if (a, b) not in seen:
             seen.add((a, b))
-            judge.fail("REPLAY_COLLISION", f"{a} and {b} collide; the record has no collision",
-                       time_s)
+            found.append(_finding("REPLAY_COLLISION",
+                                  f"{a} and {b} collide; the record has no collision", time_s))
+    return found
 
 
-def _has_speed_series(params: dict, entity: str) -> bool:
+def _has_speed_series(params: Mapping[str, Any], entity: str) -> bool:
     series = params.get("recorded_series")
     role = {e: r for r, e in ROLE_ENTITIES.items()}.get(entity)
     return isinstance(series, dict) and role is not None and bool(series.get(f"{role}_speed_ms"))
@@ -382,7 +406,7 @@ class SeriesError:
                 "samples": len(errors), "worst_at_s": round(self.worst[0], 3)}
 
 
-def series_errors(playback, params: dict) -> list[SeriesError]:
+def series_errors(playback: Playback, params: Mapping[str, Any]) -> list[SeriesError]:
     """Each actor's played speed and gap change against the record's series at every recorded
     sample (scenario time = ``maneuver_start_s`` + the series' ``t``), and a lane change's
     played start and end against the record's; empty without series."""
@@ -426,7 +450,7 @@ def _same_bumpers(gaps: list[tuple[float, float]]) -> list[list[tuple[float, flo
     return runs
 
 
-def _gap_changes(playback, entity: str,
+def _gap_changes(playback: Playback, entity: str,
                  gaps: list[tuple[float, float]]) -> list[tuple[float, float, float]]:
     """The recorded gap's change since its first sample against the played one: what
     ``entity`` drove minus what the ego drove meanwhile (both along their lanes)."""
@@ -436,14 +460,15 @@ def _gap_changes(playback, entity: str,
              - travelled(playback, "hero", at) - base) for at, gap in gaps]
 
 
-def _lane_change_timing(playback, params: dict) -> list[SeriesError]:
+def _lane_change_timing(playback: Playback, params: Mapping[str, Any]) -> list[SeriesError]:
     """The recorded lane change runs from ``maneuver_start_s`` for ``duration_s`` (mined:
     measured from the lateral motion); the played one from leaving the old lane's centre to
     settling in the new one's."""
     actor = class_of(params).lane_change
-    start, duration = number_of(params, "maneuver_start_s"), number_of(params, "duration_s")
-    if actor is None or actor not in playback.tracks or None in (start, duration):
+    timing = numbers(params, "maneuver_start_s", "duration_s")
+    if actor is None or actor not in playback.tracks or timing is None:
         return []
+    start, duration = timing
     changes = lane_changes(playback, actor)
     if len(changes) != 1:
         return []  # _lane_changes names it
@@ -475,7 +500,7 @@ def _series(judge: _Judge) -> None:
 
 # --- measurements on a playback (shared with the pictures) -----------------------------------
 
-def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
+def gap_along_lane(playback: Playback, entity: str, time_s: float, map_path: MapPath = None,
                    ego: str = "hero") -> float | None:
     """Metres from the ego's reference point to ``entity``'s, along ``entity``'s lane, at
     ``time_s`` (positive ahead). The ego's position is carried sideways onto that lane at its
@@ -485,10 +510,10 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
 
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[ego], playback.tracks[entity]
-    road, s = ta["road"][i], playback.value(ego, "s", time_s)
-    end = (tb["road"][i], tb["lane"][i], playback.value(entity, "s", time_s))
-    for lane in _lanes_beside(road, ta["lane"][i], tb["lane"][i] if tb["road"][i] == road
-                              else None, s, map_path):
+    road, s = int(ta["road"][i]), playback.value(ego, "s", time_s)
+    end = (int(tb["road"][i]), int(tb["lane"][i]), playback.value(entity, "s", time_s))
+    for lane in _lanes_beside(road, int(ta["lane"][i]), end[1] if end[0] == road else None, s,
+                              map_path):
         try:
             along = roads.distance_along_lane(road, lane, s, *end, map_path=map_path)
         except roads.RoadError:
@@ -498,8 +523,8 @@ def gap_along_lane(playback, entity: str, time_s: float, map_path=None,
     return None
 
 
-def _lanes_beside(road, ego_lane: int, shared_lane: int | None, s: float,
-                  map_path) -> list[int]:
+def _lanes_beside(road: int | str, ego_lane: int, shared_lane: int | None, s: float,
+                  map_path: MapPath) -> list[int]:
     """Lane ids on the ego's road to measure from: the other's own (same road), the ego's,
     and the same-direction lanes left and right of it."""
     from scenweave import roads
@@ -515,7 +540,7 @@ def _lanes_beside(road, ego_lane: int, shared_lane: int | None, s: float,
     return list(dict.fromkeys(lanes))
 
 
-def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
+def lane_changes(playback: Playback, entity: str) -> list[tuple[float, str]]:
     """``(time, 'left'|'right')`` each time ``entity`` crosses into another lane.
 
     A crossing is a step where the lane id changes and the offset from the lane centre jumps
@@ -538,14 +563,15 @@ def lane_changes(playback, entity: str) -> list[tuple[float, str]]:
     return found
 
 
-def lane_change_duration(playback, entity: str, crossed_s: float) -> float | None:
+def lane_change_duration(playback: Playback, entity: str, crossed_s: float) -> float | None:
     """How long the change around ``crossed_s`` took: from leaving the old lane's centre
     (lateral offset above 0.1 m) to settling in the new one's."""
     began, ended = lane_change_span(playback, entity, crossed_s)
     return None if ended is None else ended - began
 
 
-def lane_change_span(playback, entity: str, crossed_s: float) -> tuple[float, float | None]:
+def lane_change_span(playback: Playback, entity: str,
+                     crossed_s: float) -> tuple[float, float | None]:
     """When the change around ``crossed_s`` left the old lane's centre (lateral offset above
     0.1 m) and settled in the new one's (None: not before the replay ends)."""
     track, i = playback.tracks[entity], playback.index_at(crossed_s)
@@ -560,7 +586,7 @@ def lane_change_span(playback, entity: str, crossed_s: float) -> tuple[float, fl
     return playback.times[begin], playback.times[end]
 
 
-def travelled(playback, entity: str, time_s: float) -> float:
+def travelled(playback: Playback, entity: str, time_s: float) -> float:
     """Metres ``entity`` drove from t = 0 to ``time_s`` (trapezoid over its speed)."""
     speeds, total = playback.tracks[entity]["speed"], 0.0
     for i in range(1, len(playback.times)):
@@ -570,7 +596,7 @@ def travelled(playback, entity: str, time_s: float) -> float:
     return total
 
 
-def heading_change(playback, entity: str, until: int | None = None) -> float:
+def heading_change(playback: Playback, entity: str, until: int | None = None) -> float:
     """Total turn of ``entity`` over the replay, or up to sample ``until`` (rad,
     counter-clockwise positive)."""
     headings = playback.tracks[entity]["h"][:None if until is None else until + 1]
@@ -578,7 +604,7 @@ def heading_change(playback, entity: str, until: int | None = None) -> float:
                                                                 strict=False))
 
 
-def light_state(playback, time_s: float) -> str | None:
+def light_state(playback: Playback, time_s: float) -> str | None:
     """The colour of the scenario's light at ``time_s``: the last light action started."""
     started = playback.fired("action")
     shown = [(t, playback.lights[name]) for name, t in started.items() if name in playback.lights]
@@ -586,7 +612,7 @@ def light_state(playback, time_s: float) -> str | None:
     return shown[-1][1] if shown else None
 
 
-def _time_travelled(playback, entity: str, metres: float) -> float | None:
+def _time_travelled(playback: Playback, entity: str, metres: float) -> float | None:
     speeds, total = playback.tracks[entity]["speed"], 0.0
     for i in range(1, len(playback.times)):
         total += (speeds[i] + speeds[i - 1]) / 2 * (playback.times[i] - playback.times[i - 1])
@@ -595,7 +621,13 @@ def _time_travelled(playback, entity: str, metres: float) -> float | None:
     return None
 
 
-def _first_time(playback, entity: str, from_s: float, test) -> float | None:
+def _differs_from(speed: float, by: float) -> Callable[[float], bool]:
+    """A test of a speed: more than ``by`` away from ``speed``."""
+    return lambda v: abs(v - speed) > by
+
+
+def _first_time(playback: Playback, entity: str, from_s: float,
+                test: Callable[[float], bool]) -> float | None:
     speeds = playback.tracks[entity]["speed"]
     for t, v in zip(playback.times, speeds, strict=True):
         if t >= from_s - 1e-9 and test(v):
@@ -603,7 +635,8 @@ def _first_time(playback, entity: str, from_s: float, test) -> float | None:
     return None
 
 
-def _same_lane(playback, a: str, b: str, time_s: float, map_path) -> bool | None:
+def _same_lane(playback: Playback, a: str, b: str, time_s: float,
+               map_path: MapPath) -> bool | None:
     """Whether ``b`` drives in ``a``'s lane at ``time_s``: ``a``'s lane, followed along the map
     either way (across lane sections, where lane ids are renumbered, and road ends), reaches
     ``b``. None when it does not and they are on different roads (e.g. overlapping junction
@@ -613,8 +646,8 @@ def _same_lane(playback, a: str, b: str, time_s: float, map_path) -> bool | None
     i = playback.index_at(time_s)
     ta, tb = playback.tracks[a], playback.tracks[b]
     try:
-        along = roads.distance_along_lane(ta["road"][i], ta["lane"][i], ta["s"][i],
-                                          tb["road"][i], tb["lane"][i], tb["s"][i],
+        along = roads.distance_along_lane(int(ta["road"][i]), int(ta["lane"][i]), ta["s"][i],
+                                          int(tb["road"][i]), int(tb["lane"][i]), tb["s"][i],
                                           map_path=map_path)
     except roads.RoadError:
         along = None

@@ -60,7 +60,9 @@ class ScenarioDoc:
 
     @cached_property
     def entities(self) -> list[str]:
-        return [e.get("name") for e in self.root.findall("Entities/ScenarioObject")]
+        """The names of the ScenarioObjects, in file order ("" for one without a name, which
+        the XSD check reports)."""
+        return [e.get("name", "") for e in self.root.findall("Entities/ScenarioObject")]
 
     @cached_property
     def ego_name(self) -> str | None:
@@ -105,13 +107,15 @@ class ScenarioDoc:
                              "value")
             dynamics = event.action.find(".//SpeedActionDynamics")
             value = _number(dynamics, "value")
-            if entity not in event.actors or None in (target, value, event.start_s):
+            start = event.start_s
+            if entity not in event.actors or dynamics is None or target is None \
+                    or value is None or start is None:
                 continue
             dimension = dynamics.get("dynamicsDimension")
             duration = value if dimension == "time" else abs(target - v0) / value \
                 if dimension == "rate" and value > 0 else None
             if duration is not None:
-                changes.append(SpeedProfile(v0, target, event.start_s, duration))
+                changes.append(SpeedProfile(v0, target, start, duration))
         if len(changes) > 1:  # a phased profile (corpus.phases): every change in turn
             return _chained(v0, sorted(changes, key=lambda c: c.start_s))
         return changes[0] if changes else SpeedProfile(v0, v0, 0, 0)
@@ -133,16 +137,17 @@ class ScenarioDoc:
         other = self.spawn_position(entity)
         if ego is None or other is None or {ego.tag, other.tag} != {"LanePosition"}:
             return None
-        values = [_number(ego, "s"), _number(other, "laneId"), _number(other, "s")]
-        if None in values or self.map_path is None:
+        ego_road, ego_s = ego.get("roadId"), _number(ego, "s")
+        other_road, lane, other_s = other.get("roadId"), _number(other, "laneId"), \
+            _number(other, "s")
+        if ego_road is None or ego_s is None or other_road is None or lane is None \
+                or other_s is None or self.map_path is None:
             return None
-        ego_s, lane, other_s = values
         from scenweave import roads  # here: the map loads once, only for scenarios needing it
 
         try:
-            return roads.distance_along_lane(ego.get("roadId"), int(lane), ego_s,
-                                             other.get("roadId"), int(lane), other_s,
-                                             map_path=self.map_path)
+            return roads.distance_along_lane(ego_road, int(lane), ego_s, other_road, int(lane),
+                                             other_s, map_path=self.map_path)
         except roads.RoadError:  # not a lane position of the map
             return None
 
@@ -151,12 +156,12 @@ class ScenarioDoc:
         """Events by the name of their (single) action; unnamed actions by event name."""
         found: dict[str, Event] = {}
         for group in self.root.iter("ManeuverGroup"):
-            actors = tuple(r.get("entityRef") for r in group.findall("Actors/EntityRef"))
+            actors = tuple(r.get("entityRef", "") for r in group.findall("Actors/EntityRef"))
             for event in group.iter("Event"):
                 action = event.find("Action")
                 if action is None:
                     continue
-                key = action.get("name") or event.get("name")
+                key = action.get("name") or event.get("name") or ""
                 found[key] = Event(key, action, actors, _start_time(event))
         return found
 
@@ -199,12 +204,23 @@ def _start_time(event: etree._Element) -> float | None:
 
 
 def _number(element: etree._Element | None, attribute: str) -> float | None:
-    if element is None:
+    text = None if element is None else element.get(attribute)
+    if text is None:
         return None
     try:
-        return float(element.get(attribute))
-    except (TypeError, ValueError):
+        return float(text)
+    except ValueError:
         return None
+
+
+def source_line(element: etree._Element | None) -> int | None:
+    """The line ``element`` starts on in the file (None without an element, or for one built
+    in memory)."""
+    if element is None:
+        return None
+    # lxml-stubs 0.5.1 declare ``sourceline = ...`` (so EllipsisType); lxml's is int | None
+    line: int | None = element.sourceline  # type: ignore[assignment]
+    return line
 
 
 def number(element: etree._Element | None, attribute: str) -> float | None:

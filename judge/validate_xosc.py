@@ -7,7 +7,9 @@ changed), and every check runs on the one parsed tree, so a validation costs mil
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from lxml import etree
 
@@ -16,17 +18,20 @@ from scenweave.judge.autofix import apply_fixes
 from scenweave.judge.carla_lint import carla_lint
 from scenweave.judge.checks import detect_domain, semantics, structural
 from scenweave.judge.fidelity import fidelity
-from scenweave.judge.findings import Finding, ValidationResult
+from scenweave.judge.findings import Finding, ReplaySummary, ValidationResult
 from scenweave.judge.replay import judge_replay
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.schemas.xsd import osc_1_0_schema
 
+if TYPE_CHECKING:  # the player loads esmini's bindings: imported only when a file is played
+    from scenweave.player import ReplaySettings
+
 DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
 
 
-def validate_xosc(path: Path | str, params: dict | None = None, *,
-                  fix: bool = True, replay=None, map_path: Path | None = None
-                  ) -> ValidationResult:
+def validate_xosc(path: Path | str, params: Mapping[str, Any] | None = None, *,
+                  fix: bool = True, replay: ReplaySettings | None = None,
+                  map_path: Path | None = None) -> ValidationResult:
     """Validate one ``.xosc`` (fixing it in place first unless ``fix=False``).
 
     With ``params`` the scenario's values are checked against them (parameter fidelity) and
@@ -59,7 +64,8 @@ def validate_xosc(path: Path | str, params: dict | None = None, *,
 
 
 def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._ElementTree,
-                      params: dict, settings, map_path: Path | None) -> None:
+                      params: Mapping[str, Any], settings: ReplaySettings,
+                      map_path: Path | None) -> None:
     from scenweave import player
 
     doc = ScenarioDoc(tree, params.get("map"))
@@ -74,14 +80,15 @@ def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._Element
     result.errors += findings
     result.valid = not any(f.severity == "error" for f in result.errors)
     result.playback = playback
-    result.replay = {"played": not playback.engine_error, "passed": not findings,
-                     "codes": sorted({f.code for f in findings}),
-                     "timings_s": playback.timings_s,
-                     **({"series_errors": playback.series_errors}
-                        if playback.series_errors else {})}
+    summary: ReplaySummary = {"played": not playback.engine_error, "passed": not findings,
+                              "codes": sorted({f.code for f in findings}),
+                              "timings_s": playback.timings_s}
+    if playback.series_errors:
+        summary["series_errors"] = playback.series_errors
+    result.replay = summary
 
 
-def validate_tree(tree: etree._ElementTree, params: dict | None = None,
+def validate_tree(tree: etree._ElementTree, params: Mapping[str, Any] | None = None,
                   fixes: list[str] | None = None) -> ValidationResult:
     """Every check on a parsed scenario (``validate_xosc`` without the file and the fixes)."""
     doc = ScenarioDoc(tree, (params or {}).get("map"))
@@ -114,4 +121,6 @@ def xsd_findings(tree: etree._ElementTree) -> list[Finding]:
     schema = osc_1_0_schema()
     if schema.validate(tree):
         return []
-    return [Finding("XSD_INVALID", e.message, "error", e.line) for e in schema.error_log]
+    # lxml-stubs 0.5.1 declare the error log as an empty class; lxml's iterates over its entries
+    return [Finding("XSD_INVALID", entry.message, "error", entry.line)
+            for entry in schema.error_log]  # type: ignore[attr-defined]

@@ -86,7 +86,11 @@ def compare(faithful: Path, variant: Path, reference: Path | None = None) -> Var
     return found
 
 
-def _marks(root: etree._Element, actors: list[str]) -> tuple:
+#: each recorded actor's (model, start lanes), and the names of the vehicles added
+Marks = tuple[list[tuple[str, list[str]]], list[str]]
+
+
+def _marks(root: etree._Element, actors: list[str]) -> Marks:
     """What a variant is asked to change itself: each recorded actor's model and start lane,
     and which vehicles it adds."""
     return ([(_canonical(_vehicle(root, name)), _start_lanes(root, name)) for name in actors],
@@ -94,7 +98,7 @@ def _marks(root: etree._Element, actors: list[str]) -> tuple:
 
 
 def _names(root: etree._Element) -> list[str]:
-    return [o.get("name") for o in root.findall(".//Entities/ScenarioObject")]
+    return [o.get("name", "") for o in root.findall(".//Entities/ScenarioObject")]
 
 
 def _added_parts(names: list[str]) -> list[tuple[str, str]]:
@@ -114,8 +118,9 @@ def _differs(one: etree._Element, other: etree._Element, path: str) -> bool:
 def _start_lanes(root: etree._Element, actor: str) -> list[str]:
     """The lane ``actor`` starts in: its ``LanePosition``'s lane id, or where the scenario
     places it by world coordinates (urban), the whole position."""
-    lanes = root.xpath(f"{_start_path(actor)}//LanePosition/@laneId")
-    return lanes or [_canonical(p) for p in root.xpath(f"{_start_path(actor)}//WorldPosition")]
+    lanes = _xpath_strings(root, f"{_start_path(actor)}//LanePosition/@laneId")
+    return lanes or [_canonical(p) for p in
+                     _xpath_elements(root, f"{_start_path(actor)}//WorldPosition")]
 
 
 def _start_path(actor: str) -> str:
@@ -139,7 +144,21 @@ def _vehicle(root: etree._Element, name: str) -> etree._Element | None:
 
 
 def _canonical_all(root: etree._Element, path: str) -> list[str]:
-    return [_canonical(element) for element in root.xpath(path)]
+    return [_canonical(element) for element in _xpath_elements(root, path)]
+
+
+def _xpath_elements(root: etree._Element, path: str) -> list[etree._Element]:
+    """The elements an XPath that selects elements finds."""
+    found = root.xpath(path)
+    return [item for item in found if isinstance(item, etree._Element)] \
+        if isinstance(found, list) else []
+
+
+def _xpath_strings(root: etree._Element, path: str) -> list[str]:
+    """The values an XPath that selects attributes (or text) finds."""
+    found = root.xpath(path)
+    return [str(item) for item in found if isinstance(item, str)] \
+        if isinstance(found, list) else []
 
 
 def _canonical(element: etree._Element | None) -> str:

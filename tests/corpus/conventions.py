@@ -3,13 +3,39 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import pytest
 from lxml import etree
 
+from scenweave import maneuvers
+from scenweave.maneuvers import Maneuver
+
+
+def _classes_where(has: Callable[[Maneuver], object]) -> set[str]:
+    """The registered classes whose definition says so: a class added with the same
+    behaviours is held to the same conventions."""
+    return {m.code for m in maneuvers.maneuvers() if has(m)}
+
+
 #: the ego reacts to a braking lead (from t = 0) or a cutter ahead (from its cut-in)
-REACTING_CLASSES = {"BRAKE", "BR_BK", "CINF"}
-SINGLE_NPC_CLASSES = {"BRAKE", "BR_BK", "CINF", "CINB", "COUTF", "COUTB", "FLF", "FLB"}
+REACTING_CLASSES = _classes_where(lambda m: m.ego_reacts is not None)
+SINGLE_NPC_CLASSES = _classes_where(lambda m: m.npc_speed_change)
+NPC_LANE_CHANGE_CLASSES = _classes_where(lambda m: m.lane_change == "npc")
+EGO_LANE_CHANGE_CLASSES = _classes_where(lambda m: m.lane_change == "hero")
+SLOT_CLASSES = _classes_where(lambda m: m.surrounding_slots)
+LIGHT_CLASSES = _classes_where(lambda m: m.light is not None)
+
+
+def follower_prefix(code: str) -> str | None:
+    """Whose car shares the ego's lane after the record with nobody reacting (FL, CINB, the FR
+    centre slot): it or the ego keeps its distance (``keep_distance_after_record``)."""
+    m = maneuvers.get(code)
+    if m.ego_reacts is not None:
+        return None
+    if m.same_lane is not None and m.same_lane.span == "all_along":
+        return m.same_lane.prefix
+    return "npc" if m.npc_ends_in_ego_lane else None
 REACTION_S, YELLOW_PHASE_S, FIRST_LIGHT_CHANGE_S = 1.0, 3.0, 0.5
 BLUEPRINTS = {"car": "vehicle.audi.a2", "truck": "vehicle.carlamotors.carlacola",
               "van": "vehicle.mercedes.sprinter", "motorcycle": "vehicle.yamaha.yzf"}
@@ -73,25 +99,25 @@ def expected_events(p: dict) -> dict[str, tuple]:
 
     if code in SINGLE_NPC_CLASSES:
         events["npc_speed_change"] = ("speed", p["npc_end_speed_ms"], dur, start)
-    if code in ("CINF", "CINB", "COUTF", "COUTB"):
+    if code in NPC_LANE_CHANGE_CLASSES:
         events["npc_lane_change"] = lane_change("npc", p["npc_speed_ms"], p["npc_end_speed_ms"])
-    if code in ("LCF", "LCB"):
+    if code in EGO_LANE_CHANGE_CLASSES:
         events["hero_lane_change"] = lane_change("hero", p["ego_speed_ms"], p["ego_end_speed_ms"])
-    if code in ("FRF", "FRB"):
+    if code in SLOT_CLASSES:
         for slot in ("center", "right", "left"):
             if p[f"{slot}_present"]:
                 events[f"npc_{slot}_speed_change"] = ("speed", p[f"{slot}_end_speed_ms"], dur,
                                                       start)
-    if code == "U4_1":
+    if maneuvers.get(code).stops_at_line:
         brake_start, brake_duration = stop_at_line(p)
         events["hero_speed_change"] = ("speed", 0.0, brake_duration, brake_start)
-    initial, yellow = light_plan(p) if code.startswith("U4") else ("green", None)
-    if code in ("U4_1", "U4_2", "U4_3", "U4_4"):
+    initial, yellow = light_plan(p) if code in LIGHT_CLASSES else ("green", None)
+    if code in LIGHT_CLASSES:
         events["traffic_light_initial"] = ("light", initial, 0.0)
     if yellow is not None:
         events["traffic_light_yellow"] = ("light", "yellow", yellow)
         events["traffic_light_red"] = ("light", "red", yellow + YELLOW_PHASE_S)
-    if code == "U4_4":
+    if maneuvers.get(code).turn == "right":
         events["hero_turn_right"] = ("route", start)
     return events
 
@@ -124,16 +150,15 @@ def optional_events(p: dict) -> dict[str, tuple]:
     (whether they are needed is the replay's to judge: a collision)."""
     code, end = p["maneuver_class"], p["maneuver_start_s"] + p["duration_s"]
     optional = {}
-    if code.startswith("U") and p.get("lead_present"):
+    if p["domain"] == "urban" and p.get("lead_present"):
         # the lead keeps ahead of the ego driving as the scenario drives it: at most its
         # fastest, which for a stop at the line (U4_1) is its start speed
-        fastest = p["ego_speed_ms"] if code == "U4_1" else max(p["ego_speed_ms"],
-                                                                p["ego_end_speed_ms"])
+        fastest = (p["ego_speed_ms"] if maneuvers.get(code).stops_at_line
+                   else max(p["ego_speed_ms"], p["ego_end_speed_ms"]))
         optional["lead_speed_change"] = ("speed", fastest, None, 0.0)
-    followers = {"FLF": "npc", "FLB": "npc", "CINB": "npc", "FRF": "npc_center",
-                 "FRB": "npc_center"}
-    if code in followers and (code not in ("FRF", "FRB") or p.get("center_present")):
-        npc, prefix = followers[code], "npc" if followers[code] == "npc" else "center"
+    prefix = follower_prefix(code)
+    if prefix is not None and (prefix == "npc" or p.get(f"{prefix}_present")):
+        npc = "npc" if prefix == "npc" else f"npc_{prefix}"
         optional["hero_keeps_distance"] = ("speed", p[f"{prefix}_end_speed_ms"], None, end)
         optional[f"{npc}_keeps_distance"] = ("speed", p["ego_end_speed_ms"], None, end)
     return optional

@@ -14,16 +14,32 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from scenweave.player.engine import ObjectState
+from typing import Any, Protocol
 
 #: recorded per entity and step (esmini's SE_ScenarioObjectState names in brackets)
 TRACK_FIELDS = ("x", "y", "z", "h", "speed", "road", "lane", "s", "lane_offset", "junction")
 _STATE_FIELDS = {"x": "x", "y": "y", "z": "z", "h": "h", "speed": "speed", "road": "roadId",
                  "lane": "laneId", "s": "s", "lane_offset": "laneOffset", "junction": "junctionId"}
 NO_JUNCTION = 0xFFFFFFFF
+
+
+class EntityState(Protocol):
+    """What a playback records of an entity at a step: esmini's ``SE_ScenarioObjectState``
+    (``engine.ObjectState``) by its field names."""
+
+    x: float
+    y: float
+    z: float
+    h: float
+    speed: float
+    roadId: int
+    laneId: int
+    s: float
+    laneOffset: float
+    junctionId: int
+    length: float
+    width: float
+    centerOffsetX: float
 
 
 @dataclass(frozen=True)
@@ -81,7 +97,7 @@ class Playback:
         return cls(tracks={name: {f: [] for f in TRACK_FIELDS} for name in names})
 
     # --- recording (in the engine's child process) ---------------------------------------
-    def add_state(self, name: str, state: ObjectState) -> None:
+    def add_state(self, name: str, state: EntityState) -> None:
         track = self.tracks[name]
         for key, attr in _STATE_FIELDS.items():
             value = getattr(state, attr)

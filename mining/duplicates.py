@@ -14,9 +14,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 from scenweave.mining.scene import Event
-from scenweave.mining.tracks import Recording
+from scenweave.mining.tracks import Floats, Recording
 
 #: two files' clocks agree when a shared vehicle's recorded speeds match this well (m/s) over
 #: at least :data:`MIN_MATCHED_STEPS` steps, at one time shift only
@@ -32,6 +33,9 @@ OVERLAP_S = 0.05
 #: the vehicles a recording shares with another must agree on the time shift this well (s)
 SAME_SHIFT_S = 0.15
 
+#: a vehicle's frame numbers (time over the recording's step)
+Frames = npt.NDArray[np.int_]
+
 
 @dataclass(frozen=True)
 class _Seen:
@@ -39,7 +43,7 @@ class _Seen:
     recorded speeds and positions."""
 
     dt: float
-    vehicles: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
+    vehicles: dict[str, tuple[Frames, Floats, Floats]]
 
 
 @dataclass
@@ -88,8 +92,7 @@ def _shift(mine: _Seen, theirs: _Seen) -> float | None:
     return middle * mine.dt
 
 
-def _step_shift(mine: tuple[np.ndarray, np.ndarray],
-                theirs: tuple[np.ndarray, np.ndarray]) -> int | None:
+def _step_shift(mine: tuple[Frames, Floats], theirs: tuple[Frames, Floats]) -> int | None:
     """The one step shift ``d`` at which the vehicle's speeds in both files agree (``theirs``
     at frame ``f + d`` = ``mine`` at ``f``) over at least :data:`MIN_MATCHED_STEPS` steps in
     which they vary by :data:`MIN_SPEED_RANGE_MS` or more."""

@@ -16,7 +16,7 @@ import numpy as np
 
 from scenweave.mining.motion import best_second_deceleration, runs, trusted_steps
 from scenweave.mining.scene import KMH, Event, Scene, make_event, vehicle
-from scenweave.mining.tracks import Track
+from scenweave.mining.tracks import Floats, Steps, Track
 from scenweave.mining.traffic import Neighbour
 
 # -- braking leads (BRAKE, BR_BK) ----------------------------------------------------------
@@ -43,7 +43,7 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
                 yield event
 
 
-def braking_phases(t: np.ndarray, speed: np.ndarray, onset_ms2: float,
+def braking_phases(t: Floats, speed: Floats, onset_ms2: float,
                    merge_within_s: float) -> list[tuple[int, int]]:
     """``(first, last)`` of each stretch in which the speed keeps falling (faster than
     ``onset_ms2``); stretches apart by at most ``merge_within_s`` are one braking phase."""
@@ -117,7 +117,7 @@ def lane_changes(scene: Scene) -> Iterator[LaneChange]:
                 yield change
 
 
-def _held_changes(t: np.ndarray, lanes: np.ndarray, hold_s: float) -> list[tuple[int, int]]:
+def _held_changes(t: Floats, lanes: Floats, hold_s: float) -> list[tuple[int, int]]:
     """``(before, after)`` steps of each change between lanes held for ``hold_s`` (a track's
     first or last lane may be held for less where the track starts or ends): runs shorter
     than ``hold_s`` between two held lanes are the crossing itself, not lanes."""
@@ -132,7 +132,7 @@ def _held_changes(t: np.ndarray, lanes: np.ndarray, hold_s: float) -> list[tuple
     return changes
 
 
-def runs_of_values(values: np.ndarray) -> list[tuple[int, int]]:
+def runs_of_values(values: Floats) -> list[tuple[int, int]]:
     """``(first, last)`` of each run of equal values."""
     if not len(values):
         return []
@@ -142,7 +142,7 @@ def runs_of_values(values: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(starts.tolist(), ends.tolist(), strict=True))
 
 
-def _crossing(lanes: np.ndarray, last_old: int, first_new: int) -> int:
+def _crossing(lanes: Floats, last_old: int, first_new: int) -> int:
     """The first step of the last stretch of the new lane before ``first_new`` (the
     flicker's end): the car is over the line then."""
     k = first_new
@@ -186,7 +186,7 @@ def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float
                       min(start + duration, float(track.t[-1])), duration, abs(moved))
 
 
-def _when(t: np.ndarray, done: np.ndarray, window: np.ndarray, step: int,
+def _when(t: Floats, done: Floats, window: Steps, step: int,
           share: float) -> float:
     """When the share of the way done passes ``share`` between ``step`` and the next step
     (linear in between)."""
@@ -265,7 +265,7 @@ def following(scene: Scene) -> Iterator[Event]:
             yield from _episodes(scene, code, i, ids, limits)
 
 
-def _episodes(scene: Scene, code: str, ego: int, ids: np.ndarray,
+def _episodes(scene: Scene, code: str, ego: int, ids: Steps,
               limits: dict[str, float]) -> Iterator[Event]:
     track = scene.tracks[ego]
     for other in set(ids[ids >= 0].tolist()):

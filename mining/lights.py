@@ -16,7 +16,7 @@ import numpy as np
 
 from scenweave.ingest.codes import TRAFFIC_LIGHT_STATES
 from scenweave.mining.scene import KMH, Event, Scene
-from scenweave.mining.tracks import TrafficLight
+from scenweave.mining.tracks import Floats, Mask, TrafficLight
 
 CODE_OF_STATE = {state: code for code, state in TRAFFIC_LIGHT_STATES.items()} | {
     "yellow": next(c for c, state in TRAFFIC_LIGHT_STATES.items() if state == "orange")}
@@ -44,7 +44,7 @@ def light_events(scene: Scene) -> Iterator[Event]:
 
 
 def _stop_or_pass(scene: Scene, i: int, light: TrafficLight, line_s: float,
-                  on: np.ndarray) -> Iterator[Event]:
+                  on: Mask) -> Iterator[Event]:
     """``light``'s events of track ``i`` (``line_s``: the light's ``stop_line_s``)."""
     limits = scene.thresholds["light"]
     track, speed = scene.tracks[i], scene.motion[i].speed
@@ -79,7 +79,7 @@ def _first_in_line(scene: Scene, i: int, k: int, line_s: float) -> bool:
     return float(ahead.s[leader.step] - ahead.length_m / 2) > line_s
 
 
-def _turned(headings: np.ndarray) -> float:
+def _turned(headings: Floats) -> float:
     if len(headings) < 2:
         return 0.0
     return float(np.unwrap(headings)[-1] - np.unwrap(headings)[0])

@@ -9,15 +9,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from scenweave.mining.tracks import Track
+from scenweave.mining.tracks import Floats, Mask, Track
 
 
 @dataclass(frozen=True)
 class Motion:
     """A track's smoothed longitudinal motion, one value per step."""
 
-    speed: np.ndarray
-    acceleration: np.ndarray
+    speed: Floats
+    acceleration: Floats
 
 
 def smooth_motion(track: Track, window_s: float) -> Motion:
@@ -35,11 +35,11 @@ def smooth_motion(track: Track, window_s: float) -> Motion:
     return Motion(np.clip(speed, 0.0, None), accel)
 
 
-def _step(t: np.ndarray) -> float:
+def _step(t: Floats) -> float:
     return float(np.median(np.diff(t))) if len(t) > 1 else 0.0
 
 
-def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+def runs(mask: Mask) -> list[tuple[int, int]]:
     """``(first, last)`` step index of each run of True in ``mask``."""
     edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
@@ -53,8 +53,8 @@ MIN_TRACKS_FOR_BENDS = 8
 COURSE_KNOT_M = 20.0
 
 
-def best_second_deceleration(t: np.ndarray, speed: np.ndarray, first: int, last: int,
-                             trusted: np.ndarray) -> float:
+def best_second_deceleration(t: Floats, speed: Floats, first: int, last: int,
+                             trusted: Mask) -> float:
     """The most speed lost within one second between steps ``first`` and ``last`` (m/s^2):
     a brake shorter than a second counts with what it lost in it. Only ``trusted`` steps
     (where the smoothing window lies inside the track) are compared, so a fit at a track's
@@ -70,13 +70,13 @@ def best_second_deceleration(t: np.ndarray, speed: np.ndarray, first: int, last:
     return best
 
 
-def trusted_steps(t: np.ndarray, window_s: float) -> np.ndarray:
+def trusted_steps(t: Floats, window_s: float) -> Mask:
     """Steps at least half a smoothing window from either end of the track."""
     half = window_s / 2 - 1e-6
     return (t - t[0] >= half) & (t[-1] - t >= half) if len(t) else np.zeros(0, bool)
 
 
-def road_axis(tracks: list[Track]) -> np.ndarray | None:
+def road_axis(tracks: list[Track]) -> Floats | None:
     """The unit vector along which ``s`` runs, fitted over every position of the recording
     (``s = axis . (x, y)`` on a road of one direction); None where no single axis fits."""
     xy = np.concatenate([np.column_stack([tr.x, tr.y]) for tr in tracks]) if tracks else None
@@ -90,7 +90,7 @@ def road_axis(tracks: list[Track]) -> np.ndarray | None:
     return axis[:2] / np.hypot(*axis[:2])
 
 
-def lateral_offsets(tracks: list[Track]) -> list[np.ndarray]:
+def lateral_offsets(tracks: list[Track]) -> list[Floats]:
     """Each track's lateral position (m, + to the left of the direction of travel) measured
     from the road's own course: a gentle bend moves every lane alike, so one smooth curve in
     ``s`` plus a lane width per lane index is fitted through every car's position (cars off
@@ -111,8 +111,8 @@ def lateral_offsets(tracks: list[Track]) -> list[np.ndarray]:
     return [v - course(tr.s) for v, tr in zip(lat, tracks, strict=True)]
 
 
-def _road_course(s: np.ndarray, lat: np.ndarray, lane: np.ndarray, bends: bool,
-                 rounds: int = 4) -> Callable[[np.ndarray], np.ndarray]:
+def _road_course(s: Floats, lat: Floats, lane: Floats, bends: bool,
+                 rounds: int = 4) -> Callable[[Floats], Floats]:
     """``lat ~ course(s) - width * lane``: the course a broken line with a knot every
     :data:`COURSE_KNOT_M` (``bends``) or one constant, refitted without the points further
     off than twice the median residual; returns the course."""
@@ -132,7 +132,7 @@ def _road_course(s: np.ndarray, lat: np.ndarray, lane: np.ndarray, bends: bool,
     return lambda at: _hats(np.asarray(at, dtype=float), knots) @ coefficients[:-1]
 
 
-def _hats(s: np.ndarray, knots: np.ndarray) -> np.ndarray:
+def _hats(s: Floats, knots: Floats) -> Floats:
     """Piecewise-linear basis: one column per knot, 1 at it, falling to 0 at its
     neighbours (flat beyond the ends); a single knot is a constant."""
     if len(knots) == 1:
@@ -141,6 +141,6 @@ def _hats(s: np.ndarray, knots: np.ndarray) -> np.ndarray:
     return np.column_stack(columns)
 
 
-def _lane_numbers(track: Track) -> np.ndarray:
+def _lane_numbers(track: Track) -> Floats:
     index = np.asarray(track.lane_index, dtype=float)
     return index if len(index) == len(track.t) else np.full(len(track.t), np.nan)

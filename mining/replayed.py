@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from scenweave.mining.tracks import Recording, Track
+from scenweave.mining.tracks import Floats, Recording, Track
 from scenweave.player import Playback
 
 #: lanes are about this wide on the CARLA highways; it only scales the lateral positions
@@ -31,7 +31,7 @@ def recording_from_playback(playback: Playback, source: str) -> Recording:
     return Recording(source=source, dt=dt, tracks=tracks, reader="esmini-replay")
 
 
-def _centres(playback: Playback, name: str) -> np.ndarray:
+def _centres(playback: Playback, name: str) -> Floats:
     """The box centre of ``name`` at every step (esmini reports the reference point)."""
     track, box = playback.tracks[name], playback.boxes.get(name)
     ahead = box.center_ahead if box else 0.0
@@ -40,8 +40,8 @@ def _centres(playback: Playback, name: str) -> np.ndarray:
                             np.asarray(track["y"]) + ahead * np.sin(h)])
 
 
-def _track(playback: Playback, name: str, xy: np.ndarray, times: np.ndarray,
-           ego_path: np.ndarray | None) -> Track:
+def _track(playback: Playback, name: str, xy: Floats, times: Floats,
+           ego_path: Floats | None) -> Track:
     own = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
     start = _along(ego_path, xy[0]) if ego_path is not None else 0.0
     lanes = np.asarray(playback.tracks[name]["lane"], dtype=float)
@@ -57,7 +57,7 @@ def _track(playback: Playback, name: str, xy: np.ndarray, times: np.ndarray,
                  lateral=-(np.abs(lanes) - 1) * LANE_WIDTH_M + np.sign(lanes) * -offsets)
 
 
-def _along(path: np.ndarray, point: np.ndarray) -> float:
+def _along(path: Floats, point: Floats) -> float:
     """The signed distance along ``path`` (from its start) of ``point``'s projection; before
     the start, negative."""
     lengths = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from scenweave.mining.motion import Motion, lateral_offsets, smooth_motion
-from scenweave.mining.tracks import Recording, Track
+from scenweave.mining.tracks import Floats, Recording, Steps, Track
 from scenweave.mining.traffic import Traffic
 
 KMH = 3.6
@@ -42,7 +42,7 @@ class Scene:
     traffic: Traffic = field(init=False)
     motion: list[Motion] = field(init=False)
     #: each track's lateral position (m, + left) from the road's course (``mining.motion``)
-    lateral: list[np.ndarray] = field(init=False)
+    lateral: list[Floats] = field(init=False)
 
     def __post_init__(self) -> None:
         self.traffic = Traffic(self.recording)
@@ -98,7 +98,7 @@ class Scene:
                 found[f"{role}_gap_m"] = self._values(gaps, np.arange(len(times)))
         return found
 
-    def _steps_at(self, i: int, times: np.ndarray) -> np.ndarray:
+    def _steps_at(self, i: int, times: Floats) -> Steps:
         """Track ``i``'s step nearest each of ``times`` (-1 where it was not seen then)."""
         t = self.tracks[i].t
         if not len(t):
@@ -110,7 +110,7 @@ class Scene:
         return np.where(seen, k, -1)
 
     @staticmethod
-    def _values(values: np.ndarray, steps: np.ndarray) -> list[float | None]:
+    def _values(values: Floats, steps: Steps) -> list[float | None]:
         """``values`` at ``steps``, rounded; None where a step is -1 or a value unknown."""
         values = np.asarray(values, dtype=float)
         if not len(values):

@@ -11,6 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
+
+#: numbers, one per step of a track (times, positions, speeds; NaN where unknown)
+Floats = npt.NDArray[np.float64]
+#: yes or no, one per step of a track
+Mask = npt.NDArray[np.bool_]
+#: step (row) numbers
+Steps = npt.NDArray[np.intp]
 
 
 @dataclass(frozen=True)
@@ -25,24 +33,24 @@ class Track:
     #: "car", "truck", "van", "motorcycle" (the CARLA blueprint families ScenWeave knows)
     vehicle_type: str
     #: per step: time (s), position in the file's frame (m), heading (rad), speed (m/s)
-    t: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    heading: np.ndarray
-    speed: np.ndarray
+    t: Floats
+    x: Floats
+    y: Floats
+    heading: Floats
+    speed: Floats
     #: per step: position along the road in the direction of travel (m)
-    s: np.ndarray
+    s: Floats
     #: per step: the lane, as the file names it (a lane index or a lanelet id), as strings
     lane: np.ndarray
     #: per step: the lane's index counted from the road's left edge in the direction of
     #: travel (1 = leftmost); a higher index is further right. NaN where unknown.
-    lane_index: np.ndarray = field(default_factory=lambda: np.empty(0))
+    lane_index: Floats = field(default_factory=lambda: np.empty(0))
     #: per step: the frame ``s`` is measured in (urban maps: a direction group); two cars'
     #: ``s`` compare only where their frames are equal. Empty: one frame for the recording.
     road: np.ndarray = field(default_factory=lambda: np.empty(0))
     #: per step: lateral position across the road (m, + to the left), where the reader knows
     #: it better than the positions tell (a replay's lane and lane offset); else empty
-    lateral: np.ndarray = field(default_factory=lambda: np.empty(0))
+    lateral: Floats = field(default_factory=lambda: np.empty(0))
 
     def __post_init__(self) -> None:
         n = len(self.t)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenweave.mining.tracks import Recording, Track
+from scenweave.mining.tracks import Floats, Recording, Track
 
 #: lane keys of different roads lie this far apart (beyond every lane name's code)
 ROAD_STRIDE = 1e10
@@ -63,7 +63,7 @@ class Traffic:
         keys = self._keys.get(id(track))
         return float((self._lane_and_road(track, own=False) if keys is None else keys)[step])
 
-    def _lane_and_road(self, track: Track, own: bool) -> np.ndarray:
+    def _lane_and_road(self, track: Track, own: bool) -> Floats:
         """Lane keys with the road's number; ``own``: a road of the car's own (``"id/..."``,
         where its ``s`` is comparable with nobody's) counts, else only its direction."""
         keys = _lane_keys(track)
@@ -111,13 +111,13 @@ class Traffic:
         gap = centre_gap - (me.length_m + other.length_m) / 2
         return Neighbour(int(self._owner[row]), other_step, gap)
 
-    def _rows(self, i: int, track: Track) -> np.ndarray:
+    def _rows(self, i: int, track: Track) -> Floats:
         frames = np.round(track.t / self.dt)
         lanes = self._lane_and_road(track, own=True)  # a car off its road's frame: alone
         return np.vstack([frames, lanes, track.s, np.full(len(track.t), i)])
 
 
-def _lane_keys(track: Track) -> np.ndarray:
+def _lane_keys(track: Track) -> Floats:
     """A number per step naming the lane: the lane index where every step has one, else a
     stable code of the lane's name."""
     index = np.asarray(track.lane_index, dtype=float)

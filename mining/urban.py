@@ -30,7 +30,7 @@ from scipy.signal import savgol_filter
 from scenweave.mining.lights import CODE_OF_STATE, adscene_header, frame_of, state_at
 from scenweave.mining.motion import runs
 from scenweave.mining.scene import Event, Scene
-from scenweave.mining.tracks import TrafficLight
+from scenweave.mining.tracks import Floats, Mask, TrafficLight
 
 #: a movement's heading change (deg): right below -RIGHT_DEG, straight within STRAIGHT_DEG
 RIGHT_DEG, STRAIGHT_DEG = 30.0, 20.0
@@ -51,15 +51,15 @@ class StopLine:
 
     light: TrafficLight
     lane: str
-    middle: np.ndarray
+    middle: Floats
     half_m: float
-    along: np.ndarray
+    along: Floats
 
-    def ahead_m(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    def ahead_m(self, x: Floats, y: Floats) -> Floats:
         """How far the line is ahead of points (m, negative once past)."""
         return (self.middle[0] - x) * self.along[0] + (self.middle[1] - y) * self.along[1]
 
-    def beside_m(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    def beside_m(self, x: Floats, y: Floats) -> Floats:
         return np.abs(-(x - self.middle[0]) * self.along[1] + (y - self.middle[1]) * self.along[0])
 
 
@@ -92,13 +92,13 @@ def urban_events(scene: Scene) -> Iterator[Event]:
             yield from urban.in_lane(i)
 
 
-def path_length(scene: Scene, i: int) -> np.ndarray:
+def path_length(scene: Scene, i: int) -> Floats:
     track = scene.tracks[i]
     steps = np.hypot(np.diff(track.x), np.diff(track.y))
     return np.concatenate([[0.0], np.cumsum(steps)])
 
 
-def path_speed(scene: Scene, i: int, path: np.ndarray) -> np.ndarray:
+def path_speed(scene: Scene, i: int, path: Floats) -> Floats:
     """Speed along the path, smoothed as ``mining.motion`` smooths ``s``."""
     track = scene.tracks[i]
     dt = scene.recording.dt
@@ -114,14 +114,14 @@ class UrbanScene:
 
     scene: Scene
     lines: list[StopLine]
-    paths: list[np.ndarray]
-    speeds: list[np.ndarray]
+    paths: list[Floats]
+    speeds: list[Floats]
 
     @property
     def limits(self) -> dict[str, float]:
         return self.scene.thresholds["urban"]
 
-    def front(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+    def front(self, i: int) -> tuple[Floats, Floats]:
         track = self.scene.tracks[i]
         half = track.length_m / 2
         return track.x + half * np.cos(track.heading), track.y + half * np.sin(track.heading)
@@ -154,7 +154,7 @@ class UrbanScene:
             if event is not None:
                 yield event
 
-    def _crossing(self, i: int, line: StopLine, k: int, ahead: np.ndarray) -> Event | None:
+    def _crossing(self, i: int, line: StopLine, k: int, ahead: Floats) -> Event | None:
         track, path = self.scene.tracks[i], self.paths[i]
         if ahead[k:].min() > -self.limits["stop_past_line_m"] \
                 and self.speeds[i][-1] < self.limits["stopped_below_ms"]:
@@ -197,7 +197,7 @@ class UrbanScene:
         chosen = named or [lt for lt in lights if lt.direction.lower() == "all"]
         return chosen[0] if chosen else None
 
-    def _stop(self, i: int, line: StopLine, ahead: np.ndarray, near: np.ndarray
+    def _stop(self, i: int, line: StopLine, ahead: Floats, near: Mask
               ) -> Event | None:
         limits, track, speed = self.limits, self.scene.tracks[i], self.speeds[i]
         reach = max(limits["stop_before_line_m"], limits["queue_within_m"])

@@ -11,15 +11,28 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Protocol
 
 from scenweave.mining.readers import commonroad, highd, ngsim_csv
 from scenweave.mining.tracks import Recording
 
+
+class Reader(Protocol):
+    """What a reader module offers: its format's name, whether a file is in its format, and
+    the file read."""
+
+    NAME: str
+
+    def sniff(self, path: Path) -> bool: ...
+
+    def read(self, path: Path) -> Recording: ...
+
+
 #: in the order they are asked whether a file is theirs
-READERS = (commonroad, highd, ngsim_csv)
+READERS: tuple[Reader, ...] = (commonroad, highd, ngsim_csv)
 
 
-def reader_for(path: Path):
+def reader_for(path: Path) -> Reader | None:
     """The reader module whose ``sniff`` recognises ``path``, else ``None``."""
     return next((reader for reader in READERS if reader.sniff(path)), None)
 

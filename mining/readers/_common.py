@@ -9,8 +9,12 @@ from collections import Counter
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
+import numpy.typing as npt
+
+from scenweave.mining.tracks import Floats, Mask, Steps
 
 FOOT_M = 0.3048
 
@@ -45,13 +49,13 @@ def skipped_warning(skipped: Counter[str]) -> list[str]:
     return [f"skipped road users that are not vehicles: {counts}"]
 
 
-def heading_from_motion(x: np.ndarray, y: np.ndarray, t: np.ndarray,
-                        still_mps: float = STILL_MPS) -> np.ndarray:
+def heading_from_motion(x: Floats, y: Floats, t: Floats,
+                        still_mps: float = STILL_MPS) -> Floats:
     """Heading (rad) of one vehicle's motion: :func:`segment_headings` for one segment."""
     return segment_headings(x, y, t, np.array([0]), still_mps)
 
 
-def segment_gradient(v: np.ndarray, t: np.ndarray, starts: np.ndarray) -> np.ndarray:
+def segment_gradient(v: Floats, t: Floats, starts: Steps) -> Floats:
     """dv/dt within each segment of rows (``starts``: the first row of each, ascending), as
     ``np.gradient`` per segment: central differences inside, one-sided at the ends."""
     n = len(v)
@@ -66,8 +70,8 @@ def segment_gradient(v: np.ndarray, t: np.ndarray, starts: np.ndarray) -> np.nda
         return np.where(span > 0, (v[hi] - v[lo]) / span, 0.0)
 
 
-def segment_headings(x: np.ndarray, y: np.ndarray, t: np.ndarray, starts: np.ndarray,
-                     still_mps: float = STILL_MPS) -> np.ndarray:
+def segment_headings(x: Floats, y: Floats, t: Floats, starts: Steps,
+                     still_mps: float = STILL_MPS) -> Floats:
     """Heading (rad) of the motion of each segment of rows (one vehicle each); where it stands
     still its last moving heading is held (its first one before it moves); NaN for a
     segment that never moves."""
@@ -86,7 +90,10 @@ def segment_headings(x: np.ndarray, y: np.ndarray, t: np.ndarray, starts: np.nda
     return np.where(use >= 0, heading[np.maximum(use, 0)], np.nan)
 
 
-def hold_last(values: np.ndarray, valid: np.ndarray) -> np.ndarray:
+Item = TypeVar("Item", bound=np.generic)
+
+
+def hold_last(values: npt.NDArray[Item], valid: Mask) -> npt.NDArray[Item]:
     """``values`` where ``valid``, elsewhere the last valid value before (the first valid one
     for the steps before it)."""
     idx = np.where(valid, np.arange(len(values)), -1)
@@ -239,7 +246,7 @@ def _complete_rows(rows: list[tuple[int, list[str]]], width: int, source: str,
 
 
 def _parse_numbers(rows: list[tuple[int, list[str]]], columns: list[int], source: str,
-                   bad: list[str]) -> tuple[np.ndarray, list[tuple[int, list[str]]]]:
+                   bad: list[str]) -> tuple[Floats, list[tuple[int, list[str]]]]:
     """The numeric columns of ``rows`` in one vectorised conversion; only when that fails is
     each row tried on its own, to name and drop the bad ones."""
     text = [[fields[i].strip() for i in columns] for _, fields in rows]

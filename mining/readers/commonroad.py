@@ -47,6 +47,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 from commonroad.common.file_reader import CommonRoadFileReader
 from commonroad.scenario.lanelet import Lanelet, LaneletNetwork
@@ -63,7 +64,15 @@ from scenweave.mining.readers._common import (
     sort_tracks,
     vehicle_type,
 )
-from scenweave.mining.tracks import LightPhase, Recording, Track, TrafficLight
+from scenweave.mining.tracks import (
+    Floats,
+    LightPhase,
+    Mask,
+    Recording,
+    Steps,
+    Track,
+    TrafficLight,
+)
 
 NAME = "commonroad"
 GROUP_ANGLE_DEG = 45.0
@@ -85,6 +94,8 @@ MIN_LANE_CHANGE_M = 1.5
 LANE_CHANGE_WINDOW_S = 3.0
 #: a car heading further than this off its lane is turning into or out of it
 ACROSS_LANE_DEG = 25.0
+#: shapely geometries, one per lanelet
+Shapes = npt.NDArray[np.object_]
 COLOURS = {
     TrafficLightState.GREEN: "green", TrafficLightState.YELLOW: "yellow",
     TrafficLightState.RED: "red", TrafficLightState.RED_YELLOW: "red",
@@ -118,21 +129,21 @@ def _quiet_library() -> Iterator[None]:
 
 # --- the lanelet map ------------------------------------------------------------------------
 
-def _direction(centre: np.ndarray) -> np.ndarray:
+def _direction(centre: Floats) -> Floats:
     """Unit vector from a centre line's start to its end."""
     d = centre[-1] - centre[0]
     norm = np.hypot(*d)
     return d / norm if norm > 0 else np.array([1.0, 0.0])
 
 
-def direction_groups(directions: np.ndarray, lengths: np.ndarray,
-                     max_angle_deg: float = GROUP_ANGLE_DEG) -> tuple[np.ndarray, np.ndarray]:
+def direction_groups(directions: Floats, lengths: Floats,
+                     max_angle_deg: float = GROUP_ANGLE_DEG) -> tuple[Steps, Floats]:
     """Group unit ``directions`` (n, 2): the longest ungrouped lanelet seeds a group that takes
     every ungrouped one within ``max_angle_deg`` of it. Returns each lanelet's group and each
     group's axis (the length-weighted mean direction of its members)."""
     group = np.full(len(directions), -1)
     cos_max = np.cos(np.radians(max_angle_deg))
-    axes: list[np.ndarray] = []
+    axes: list[Floats] = []
     for seed in np.argsort(-lengths):
         if group[seed] >= 0:
             continue
@@ -174,12 +185,12 @@ class LaneMap:
     """A file's lanelets, ready for vectorised queries (built once per file)."""
 
     ids: list[int]
-    polygons: np.ndarray
-    centres: np.ndarray
+    polygons: Shapes
+    centres: Shapes
     tree: shapely.STRtree
-    group: np.ndarray
-    axes: np.ndarray
-    lane_index: np.ndarray
+    group: Steps
+    axes: Floats
+    lane_index: Floats
     #: a town's map (junctions or traffic lights): lane indexes are held without lateral motion
     urban: bool = False
     junctions: frozenset[str] = frozenset()
@@ -199,7 +210,7 @@ class LaneMap:
                    tree=shapely.STRtree(polygons), group=group, axes=axes,
                    lane_index=np.array([index[ll.lanelet_id] for ll in lanelets], dtype=float))
 
-    def locate(self, xy: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    def locate(self, xy: Floats, heading: Floats) -> Steps:
         """The row of the lanelet each point is on (-1: off the map)."""
         points = shapely.points(xy)
         found = np.full(len(xy), -1)
@@ -218,7 +229,7 @@ class LaneMap:
             found[missing[q[first]]] = near[first]
         return found
 
-    def _cost(self, points: np.ndarray, lane: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    def _cost(self, points: Shapes, lane: Steps, heading: Floats) -> Floats:
         """Distance to the lanelet's centre line, plus a penalty where it runs against the
         car's heading there."""
         centres = self.centres[lane]
@@ -231,7 +242,7 @@ class LaneMap:
         wrong = np.nan_to_num(off, nan=0.0) > np.radians(WRONG_WAY_DEG)
         return shapely.distance(points, centres) + WRONG_WAY_COST_M * wrong
 
-    def s(self, xy: np.ndarray, group: np.ndarray) -> np.ndarray:
+    def s(self, xy: Floats, group: Steps) -> Floats:
         """Position along each point's direction group's axis."""
         return np.einsum("ij,ij->i", xy, self.axes[group])
 
@@ -246,10 +257,10 @@ class _Raw:
     length: float
     width: float
     kind: str
-    step: np.ndarray
-    xy: np.ndarray
-    heading: np.ndarray
-    speed: np.ndarray
+    step: Floats
+    xy: Floats
+    heading: Floats
+    speed: Floats
 
 
 #: what the fast path reads of each state, under the state element
@@ -257,7 +268,7 @@ STATE_FIELDS = {"step": "time/exact", "x": "position/point/x", "y": "position/po
                 "heading": "orientation/exact", "speed": "velocity/exact"}
 
 
-def _all_floats(root: etree._Element, path: str) -> np.ndarray:
+def _all_floats(root: etree._Element, path: str) -> Floats:
     """The number under ``path`` of every obstacle state in the file, in document order (an
     obstacle's initial state, then its trajectory)."""
     query = " | ".join(f"dynamicObstacle/{state}/{path}/text()"
@@ -291,7 +302,7 @@ def _state_count(obstacle: etree._Element) -> int:
     return int(count)
 
 
-def _state_columns(root: etree._Element, counts: list[int]) -> dict[str, np.ndarray] | None:
+def _state_columns(root: etree._Element, counts: list[int]) -> dict[str, Floats] | None:
     """Each of :data:`STATE_FIELDS` for all states, or ``None`` where some state lacks a
     field (an uncertain value, a shape for a position) that others have."""
     total = sum(counts)
@@ -374,7 +385,7 @@ def _fill_motion(raw: _Raw, dt: float) -> _Raw:
     return raw
 
 
-def _step_groups(lane_map: LaneMap, row: np.ndarray, heading: np.ndarray) -> np.ndarray:
+def _step_groups(lane_map: LaneMap, row: Steps, heading: Floats) -> Steps:
     """Each step's direction group: its lanelet's, held over off-map steps; a track never on
     the map takes the group its mean heading points along."""
     on_map = row >= 0
@@ -384,8 +395,7 @@ def _step_groups(lane_map: LaneMap, row: np.ndarray, heading: np.ndarray) -> np.
     return np.full(len(row), int(np.argmax(lane_map.axes @ np.nan_to_num(mean))))
 
 
-def continuous_s(xy: np.ndarray, group: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray,
-                                                                              np.ndarray]:
+def continuous_s(xy: Floats, group: Steps, axes: Floats) -> tuple[Floats, Floats]:
     """Position along the road that never jumps: the projection on each step's direction
     group axis, except that a step into another group, or one more than
     :data:`ALONG_AXIS_DEG` off its axis (inside a junction, where a lanelet's group need not
@@ -404,8 +414,7 @@ def continuous_s(xy: np.ndarray, group: np.ndarray, axes: np.ndarray) -> tuple[n
     return s, s - projected
 
 
-def lane_directions(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
-                    group: np.ndarray) -> np.ndarray:
+def lane_directions(lane_map: LaneMap, xy: Floats, row: Steps, group: Steps) -> Floats:
     """The unit direction of the lane where the car is, per step: the tangent of its
     lanelet's centre line there (its group's axis off the map)."""
     along = lane_map.axes[group].copy()
@@ -422,7 +431,7 @@ def lane_directions(lane_map: LaneMap, xy: np.ndarray, row: np.ndarray,
     return along
 
 
-def lane_lateral(xy: np.ndarray, along: np.ndarray) -> np.ndarray:
+def lane_lateral(xy: Floats, along: Floats) -> Floats:
     """How far the car moved across its lane since its first step (m, + to the left): each
     step's motion across the lane's direction ``along`` (:func:`lane_directions`), summed.
     A car following its lane, through a bend or a turn, or from one lanelet into the next,
@@ -432,8 +441,7 @@ def lane_lateral(xy: np.ndarray, along: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(moved)])
 
 
-def across_lane(heading: np.ndarray, along: np.ndarray,
-                max_deg: float = ACROSS_LANE_DEG) -> np.ndarray:
+def across_lane(heading: Floats, along: Floats, max_deg: float = ACROSS_LANE_DEG) -> Mask:
     """Steps where the car heads more than ``max_deg`` off its lane: it is turning into or
     out of the road, which is no lane change."""
     lane_heading = np.arctan2(along[:, 1], along[:, 0])
@@ -441,9 +449,9 @@ def across_lane(heading: np.ndarray, along: np.ndarray,
     return np.nan_to_num(off, nan=0.0) > np.radians(max_deg)
 
 
-def held_lane_index(index: np.ndarray, lateral: np.ndarray, group: np.ndarray,
-                    in_junction: np.ndarray | None = None, window: int = 30,
-                    min_move_m: float = MIN_LANE_CHANGE_M) -> np.ndarray:
+def held_lane_index(index: Floats, lateral: Floats, group: Steps,
+                    in_junction: Mask | None = None, window: int = 30,
+                    min_move_m: float = MIN_LANE_CHANGE_M) -> Floats:
     """The lane index, changed only where the car moved at least ``min_move_m`` across the
     road within the last ``window`` steps, never inside a junction: at lanelet boundaries,
     merges, turns and across junctions (where lanes are added or shifted) the index of the
@@ -464,7 +472,7 @@ def held_lane_index(index: np.ndarray, lateral: np.ndarray, group: np.ndarray,
     return held
 
 
-def _track(raw: _Raw, row: np.ndarray, lane_map: LaneMap, dt: float) -> Track:
+def _track(raw: _Raw, row: Steps, lane_map: LaneMap, dt: float) -> Track:
     lane_ids = np.array([str(lane_map.ids[r]) if r >= 0 else "" for r in row])
     index = np.where(row >= 0, lane_map.lane_index[row], np.nan)
     group = _step_groups(lane_map, row, raw.heading)
@@ -505,7 +513,7 @@ def _tracks(raws: list[_Raw], lane_map: LaneMap, dt: float, warnings: list[str]
 
 # --- traffic lights -------------------------------------------------------------------------
 
-def _stop_point(lanelet: Lanelet) -> np.ndarray:
+def _stop_point(lanelet: Lanelet) -> Floats:
     line = lanelet.stop_line
     if line is not None and line.start is not None and line.end is not None:
         return (np.asarray(line.start, float) + np.asarray(line.end, float)) / 2

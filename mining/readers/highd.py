@@ -34,7 +34,7 @@ from scenweave.mining.readers._common import (
     split_line,
     vehicle_type,
 )
-from scenweave.mining.tracks import Recording, Track
+from scenweave.mining.tracks import Floats, Recording, Steps, Track
 
 NAME = "highd"
 TRACKS = re.compile(r"^(\d+)_tracks\.csv$", re.IGNORECASE)
@@ -72,12 +72,11 @@ def _sibling(path: Path, number: str, kind: str) -> Path:
     return path.with_name(f"{number}_{kind}.csv")
 
 
-def _markings(text: str) -> np.ndarray:
+def _markings(text: str) -> Floats:
     return np.sort(np.array([float(v) for v in text.split(";") if v.strip()], dtype=float))
 
 
-def lane_order(lane_y: dict[int, float], upper: np.ndarray, lower: np.ndarray
-               ) -> dict[int, float]:
+def lane_order(lane_y: dict[int, float], upper: Floats, lower: Floats) -> dict[int, float]:
     """laneId -> index from the left of travel (1 = next to the median), from the typical
     centre y of each lane's vehicles between the markings; NaN for a lane outside them."""
     order = {}
@@ -92,8 +91,7 @@ def lane_order(lane_y: dict[int, float], upper: np.ndarray, lower: np.ndarray
     return order
 
 
-def _row_lane_index(cols: dict[str, np.ndarray], upper: np.ndarray, lower: np.ndarray
-                    ) -> np.ndarray:
+def _row_lane_index(cols: dict[str, np.ndarray], upper: Floats, lower: Floats) -> Floats:
     """Every row's lane index, from its laneId's place between the markings."""
     lanes = cols["laneid"].astype(int)
     ids = np.unique(lanes)
@@ -113,7 +111,7 @@ def _meta(path: Path, number: str, warnings: list[str]) -> dict[int, tuple[float
 
 
 def _recording(path: Path, number: str, warnings: list[str]
-               ) -> tuple[float, np.ndarray, np.ndarray]:
+               ) -> tuple[float, Floats, Floats]:
     """Frame rate and the sorted upper and lower lane markings (y, m)."""
     cols = load_table(_sibling(path, number, "recordingMeta"), RECORDING_SPEC, warnings)
     if not len(cols["framerate"]):
@@ -122,8 +120,8 @@ def _recording(path: Path, number: str, warnings: list[str]
             _markings(cols["lowerlanemarkings"][0]))
 
 
-def _track(rows: np.ndarray, cols: dict[str, np.ndarray], meta: tuple[float, float, str, int],
-           t: np.ndarray, lane_index: np.ndarray) -> Track:
+def _track(rows: Steps, cols: dict[str, np.ndarray], meta: tuple[float, float, str, int],
+           t: Floats, lane_index: Floats) -> Track:
     length, width, kind, direction = meta
     x = cols["x"][rows] + cols["width"][rows] / 2
     y = cols["y"][rows] + cols["height"][rows] / 2

@@ -39,7 +39,7 @@ from scenweave.mining.readers._common import (
     sort_tracks,
     split_line,
 )
-from scenweave.mining.tracks import Recording, Track
+from scenweave.mining.tracks import Floats, Mask, Recording, Steps, Track
 
 NAME = "ngsim-csv"
 
@@ -77,7 +77,7 @@ def sniff(path: Path) -> bool:
     return {"vehicleid", "frameid", "localy"} <= set(names)
 
 
-def _frame_s(cols: dict[str, np.ndarray], order: np.ndarray) -> float:
+def _frame_s(cols: dict[str, np.ndarray], order: Steps) -> float:
     """The time step: from Global_Time (ms) over consecutive frames where the file has it."""
     if "globaltime" not in cols:
         return FRAME_S
@@ -89,14 +89,14 @@ def _frame_s(cols: dict[str, np.ndarray], order: np.ndarray) -> float:
     return round(float(np.median(np.diff(ms)[step])) / 1000.0, 4) or FRAME_S
 
 
-def _segment_starts(vid: np.ndarray, frame: np.ndarray) -> np.ndarray:
+def _segment_starts(vid: Floats, frame: Floats) -> Steps:
     """First row (rows sorted by vehicle, frame) of each run of contiguous frames of one id."""
     breaks = (np.diff(vid) != 0) | (np.diff(frame) != 1)
     return np.r_[0, np.flatnonzero(breaks) + 1]
 
 
-def _travel_axes(cols: dict[str, np.ndarray], starts: np.ndarray, ends: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def _travel_axes(cols: dict[str, np.ndarray], starts: Steps, ends: Steps
+                 ) -> tuple[Mask, Floats]:
     """Per row: whether its vehicle travels along Local_X (else Local_Y), and the sign of
     travel on that axis. Decided per Direction code (one group without the column) from the
     summed motion of the group's vehicles."""
@@ -113,7 +113,7 @@ def _travel_axes(cols: dict[str, np.ndarray], starts: np.ndarray, ends: np.ndarr
     return along_x, sign
 
 
-def _segment_ids(vid: np.ndarray, starts: np.ndarray) -> list[str]:
+def _segment_ids(vid: Floats, starts: Steps) -> list[str]:
     """``"12"`` for a vehicle seen once, ``"12-1"``, ``"12-2"`` for one whose frames break."""
     vehicles = vid[starts].astype(int)
     per_vehicle = Counter(vehicles.tolist())
@@ -125,7 +125,7 @@ def _segment_ids(vid: np.ndarray, starts: np.ndarray) -> list[str]:
     return ids
 
 
-def _rows(cols: dict[str, np.ndarray], starts: np.ndarray, dt: float) -> dict[str, np.ndarray]:
+def _rows(cols: dict[str, np.ndarray], starts: Steps, dt: float) -> dict[str, np.ndarray]:
     """Every row's track values at once (rows sorted by vehicle and frame): the front moved
     back to the centre along travel, s, times, heading from the motion."""
     n = len(cols["vehicleid"])
@@ -145,7 +145,7 @@ def _rows(cols: dict[str, np.ndarray], starts: np.ndarray, dt: float) -> dict[st
                                    cols["laneid"], np.nan)}
 
 
-def _tracks(cols: dict[str, np.ndarray], starts: np.ndarray, dt: float) -> list[Track]:
+def _tracks(cols: dict[str, np.ndarray], starts: Steps, dt: float) -> list[Track]:
     """One track per run of contiguous frames that has two or more."""
     values = _rows(cols, starts, dt)
     ends = np.r_[starts[1:], len(cols["vehicleid"])]

@@ -22,7 +22,6 @@ from pathlib import Path
 from typing import Any
 
 import fastjsonschema
-import jsonschema
 import numpy as np
 
 from scenweave import maneuvers
@@ -394,6 +393,8 @@ def validate_database(database: dict[str, Any], path: Path) -> None:
     try:
         _compiled_schema()(database)
     except fastjsonschema.JsonSchemaException:
+        import jsonschema  # here: 0.2 s to import, needed only to explain a failure
+
         error = jsonschema.exceptions.best_match(
             jsonschema.Draft202012Validator(_database_schema()).iter_errors(database))
         where, message = "(root)", "does not match spawn_db/spawn_db.schema.json"

@@ -129,7 +129,9 @@ def _same_spacing(mine: _Seen, theirs: _Seen, vehicles: list[str], steps: int) -
 class SeenEvents:
     """Events kept so far, by road, class and vehicles, with their absolute windows."""
 
-    _kept: dict[tuple, list[tuple[float, float, str]]] = field(default_factory=dict)
+    #: (road, class, ego, npc) -> (start, end, file) of each event kept
+    _kept: dict[tuple[int, str, str, str | None], list[tuple[float, float, str]]] = field(
+        default_factory=dict)
 
     def duplicate_of(self, event: Event, road: int, offset_s: float, source: str) -> str | None:
         """The file of the kept event ``event`` repeats, else None (and ``event`` is kept)."""

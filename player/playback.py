@@ -90,7 +90,7 @@ class Playback:
     timings_s: dict[str, float] = field(default_factory=dict)
     #: the judge's comparison with a record's series (``judge.replay``): per "<entity>
     #: <quantity>", the max and RMS error over the recorded samples; empty without series
-    series_errors: dict[str, dict] = field(default_factory=dict)
+    series_errors: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @classmethod
     def empty(cls, names: Iterable[str]) -> Playback:

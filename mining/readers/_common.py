@@ -14,7 +14,7 @@ from typing import TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from scenweave.mining.tracks import Floats, Mask, Steps
+from scenweave.mining.tracks import Floats, Mask, Steps, Track
 
 FOOT_M = 0.3048
 
@@ -102,12 +102,12 @@ def hold_last(values: npt.NDArray[Item], valid: Mask) -> npt.NDArray[Item]:
     return values[idx]
 
 
-def id_order(track_id: str) -> tuple:
+def id_order(track_id: str) -> tuple[str | int, ...]:
     """Sort key putting ``"9"`` before ``"10"`` and ``"10"`` before ``"10-2"``."""
     return tuple(int(p) if p.isdigit() else p for p in re.split(r"(\d+)", track_id))
 
 
-def sort_tracks(tracks: Iterable) -> list:
+def sort_tracks(tracks: Iterable[Track]) -> list[Track]:
     return sorted(tracks, key=lambda track: id_order(track.id))
 
 

@@ -369,11 +369,15 @@ def run_job(spec: dict) -> str:
     from rq import get_current_job
 
     job = get_current_job()
+    if job is None:
+        raise QueueError("run_job runs as an RQ job (scenweave worker), not on its own")
     connection = job.connection
     keys = RunKeys(spec["run_id"])
     scenario_id = spec["params"]["scenario_id"]
     made_by = connection.hget(keys.made, scenario_id)
-    if made_by is not None and made_by.decode() == spec.get("submission"):
+    if isinstance(made_by, bytes):
+        made_by = made_by.decode()
+    if made_by is not None and made_by == spec.get("submission"):
         return "handed back already"
     folder = scratch_root() / job_id(spec["run_id"], scenario_id)
     _remove(folder)  # leftovers of a dead attempt go

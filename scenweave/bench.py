@@ -4,7 +4,7 @@ Each model gets its own run folder (``<bench>/runs/<model>/``, made by ``run_bat
 interrupted benchmark resumes), and the outcomes of all models are aggregated into
 ``bench.json``: per model and per class the success rate, first-attempt rate, latency
 (mean/std/p50/p95), tokens and the error taxonomy (Tables 6.2, 6.3), plus the figures of
-Figs. 6.1, 6.2, 6.3 (per model) and 6.4 as PNG files and a self-contained ``bench.html``.
+Figs. 6.1, 6.2, 6.3 (per model) and 6.4 as SVG files and a self-contained ``bench.html``.
 
 The model name ``reference`` stands for no LLM at all (the deterministic reference scripts):
 a baseline for latency and a way to run the whole benchmark machinery without a model.
@@ -203,10 +203,10 @@ def aggregate(outcomes_by_model: dict[str, list[dict]]) -> dict:
 
 @dataclass
 class Figure:
-    """One PNG of the benchmark: its file name in the benchmark folder and its caption."""
+    """One SVG chart of the benchmark: its file name in the benchmark folder and its caption."""
 
     file: str
-    png: bytes
+    image: bytes
     caption: str
     alt: str
 
@@ -219,29 +219,29 @@ def figures(summary: dict, outcomes_by_model: dict[str, list[dict]]) -> dict[str
               for model, outcomes in outcomes_by_model.items()}
     made = {
         "latency_vs_success": Figure(
-            "fig6_1_latency_vs_success.png", plot_latency_vs_success(overall),
+            "fig6_1_latency_vs_success.svg", plot_latency_vs_success(overall),
             "Latency vs success rate per model (Fig. 6.1).", "latency vs success"),
         "latency_per_class": Figure(
-            "fig6_2_latency_per_class.png", plot_latency_per_class(outcomes_by_model),
+            "fig6_2_latency_per_class.svg", plot_latency_per_class(outcomes_by_model),
             "Mean latency ± std per class and model (Fig. 6.2).", "latency per class"),
     }
     for model, outcomes in outcomes_by_model.items():
         made[f"latency_boxplot/{model}"] = Figure(
-            f"{BOXPLOT_PREFIX}{model_dir_name(model)}.png", plot_latency_boxplot(outcomes),
+            f"{BOXPLOT_PREFIX}{model_dir_name(model)}.svg", plot_latency_boxplot(outcomes),
             f"Distribution of latencies per class, {model} (Fig. 6.3).",
             f"latency boxplot {model}")
     made["cumulative"] = Figure(
-        "fig6_4_scenarios_per_hour.png", plot_cumulative(curves),
+        "fig6_4_scenarios_per_hour.svg", plot_cumulative(curves),
         "Projected scenarios over one hour of sequential running per model (Fig. 6.4).",
         "scenarios per hour")
     return made
 
 
 def write_bench(root: Path, summary: dict, outcomes_by_model: dict[str, list[dict]]) -> Path:
-    """Write ``bench.json``, the figure PNGs and ``bench.html`` into ``root``."""
+    """Write ``bench.json``, the figures (SVG) and ``bench.html`` into ``root``."""
     made = figures(summary, outcomes_by_model)
     for made_figure in made.values():
-        write_bytes_atomic(root / made_figure.file, made_figure.png)
+        write_bytes_atomic(root / made_figure.file, made_figure.image)
     summary = {**summary, "figures": {key: f.file for key, f in made.items()}}
     write_json_atomic(root / BENCH_FILE, summary)
     write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, made))
@@ -276,6 +276,6 @@ def render_bench(name: str, summary: dict, made: dict[str, Figure]) -> str:
                                    for error, row in summary["error_table"].items()])
         if summary["error_table"] else "<p>No errors.</p>",
         "<h2>Figures</h2>",
-        *(figure(f.png, f"{f.caption} File {f.file}.", f.alt) for f in made.values()),
+        *(figure(f.image, f"{f.caption} File {f.file}.", f.alt) for f in made.values()),
     ]
     return page(f"ScenWeave benchmark {name}", "\n".join(parts))

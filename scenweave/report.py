@@ -5,25 +5,35 @@ Everything here works on outcome dicts (``status.json`` of each scenario, the ``
 The metrics follow thesis §6.1: success rate (SR, the LLM's own success: ``ok`` or
 ``repaired``), first-attempt rate, latency per scenario and the error taxonomy; a fallback
 still delivers a scenario, so ``delivered_rate`` counts it too. The HTML page is static and
-self-contained: figures are inline ``data:`` images (the replay figures SVG, the others PNG),
-links are relative to the run folder. It is rendered from ``templates/run_report.html``
-(Jinja2, every value escaped); this module only computes what the page shows.
+self-contained: figures are inline ``data:`` SVG images (the charts drawn with
+``scenweave.charts``, the replay figures by ``replay_figures``), links are relative to the run
+folder. It is rendered from ``templates/run_report.html`` (Jinja2, every value escaped); this
+module only computes what the page and its charts show.
 """
 
 from __future__ import annotations
 
 import base64
-import io
 import json
 import math
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import markupsafe
 
+from scenweave.charts import (
+    SERIES_COLOURS,
+    Chart,
+    Entry,
+    Panel,
+    Plot,
+    category_label_depth,
+    padded,
+    render_svg,
+)
 from scenweave.files.atomic import write_text_atomic
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
 from scenweave.templating import render, templates
@@ -151,87 +161,147 @@ def observed_curve(run_dir: Path, outcomes: list[dict]) -> list[tuple[float, int
     return [(t, n) for n, t in enumerate(sorted(end - start for end, _ in points), start=1)]
 
 
-# --- figures -------------------------------------------------------------------------------
+# --- figures (SVG, drawn by scenweave.charts) -----------------------------------------------
 
-def new_axes(figsize: tuple[float, float]) -> tuple[Any, Any]:
-    """A figure drawn by Agg, and its one axes: matplotlib's object API, not pyplot, whose
-    import and global figure registry a report does not need (~0.5 s saved per report)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+SVG = "image/svg+xml"
+#: the charts' frame: pixels left of it (tick labels, axis name), above it, right of it; its
+#: height; the width of one class (per series) in a chart by class, and the least width
+CHART_LEFT, CHART_TOP, CHART_RIGHT, CHART_FRAME_HEIGHT = 62.0, 14.0, 16.0, 300.0
+CLASS_PX, CHART_MIN_PX = 55.0, 640.0
+#: below the frame of a chart with numbers on its x axis (tick labels and the axis name)
+NUMBERS_BELOW_PX = 40.0
+BOX_WIDTH = 0.5
+MEDIAN_COLOUR = "#ff7f0e"
 
-    fig = Figure(figsize=figsize)
-    FigureCanvasAgg(fig)
-    return fig, fig.add_subplot()
+
+@dataclass(frozen=True)
+class BoxStats:
+    """What a box of a box plot shows: the quartiles, the whiskers (the furthest values within
+    1.5 interquartile ranges of the box) and the values beyond them."""
+
+    q1: float
+    median: float
+    q3: float
+    low: float
+    high: float
+    fliers: list[float]
 
 
-def figure_png(fig: Any) -> bytes:
-    """A matplotlib figure as PNG bytes."""
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
-    return buffer.getvalue()
+def box_stats(values: list[float], reach: float = 1.5) -> BoxStats:
+    """The box of ``values`` (at least one), quartiles as ``percentile`` computes them."""
+    if not values:
+        raise ValueError("a box of no values")
+    q1, median, q3 = (cast(float, percentile(values, q)) for q in (25, 50, 75))
+    iqr = q3 - q1
+    inside = [v for v in values if q1 - reach * iqr <= v <= q3 + reach * iqr]
+    return BoxStats(q1, median, q3, min(inside), max(inside),
+                    sorted(v for v in values if v < min(inside) or v > max(inside)))
+
+
+def _frame(width: float) -> tuple[float, float, float, float]:
+    return (CHART_LEFT, CHART_TOP, width - CHART_LEFT - CHART_RIGHT, CHART_FRAME_HEIGHT)
+
+
+def _svg_bytes(title: str, width: float, below: float, panel: Panel) -> bytes:
+    """One panel as an SVG document of ``width`` px, ``below`` px under its frame."""
+    height = CHART_TOP + CHART_FRAME_HEIGHT + below
+    return render_svg(Chart(title, round(width), round(height), [panel])).encode("utf-8")
+
+
+def _by_class_layout(classes: list[str], per_class: int) -> tuple[float, float]:
+    """(width, pixels below the frame) of a chart with one column of ``per_class`` per class."""
+    width = max(CHART_MIN_PX, CLASS_PX * len(classes) * max(1, per_class) + CHART_LEFT
+                + CHART_RIGHT)
+    return width, category_label_depth(classes) + 8
+
+
+def _class_ticks(classes: list[str]) -> list[tuple[float, str]]:
+    return list(enumerate(classes))
 
 
 def plot_latency_vs_success(per_model: dict[str, dict]) -> bytes:
     """Fig. 6.1: mean latency against success rate, one labelled point per model."""
-    fig, ax = new_axes((6.4, 4.2))
-    for model, m in per_model.items():
-        mean = m["latency_s"]["mean"] or 0.0
-        ax.scatter(mean, 100 * (m["success_rate"] or 0.0), s=60)
-        ax.annotate(model, (mean, 100 * (m["success_rate"] or 0.0)),
-                    textcoords="offset points", xytext=(6, 4), fontsize=8)
-    ax.set_xlabel("mean latency (s/scenario)")
-    ax.set_ylabel("success rate (%)")
-    ax.set_ylim(-5, 105)
-    ax.grid(alpha=0.3)
-    return figure_png(fig)
+    plot = Plot("latency-vs-success", _frame(CHART_MIN_PX))
+    for i, (model, m) in enumerate(per_model.items()):
+        mean, rate = m["latency_s"]["mean"] or 0.0, 100 * (m["success_rate"] or 0.0)
+        plot.mark(mean, rate, "circle", SERIES_COLOURS[i % len(SERIES_COLOURS)], 8.0,
+                  group=("model", model), cls="point")
+        plot.annotate(mean, rate, model, cls="model")
+    means = [m["latency_s"]["mean"] or 0.0 for m in per_model.values()]
+    panel = plot.finish(plot.auto_scales(padded(means, 0.1), (-5.0, 105.0)),
+                        x_label="mean latency (s/scenario)", y_label="success rate (%)")
+    return _svg_bytes("Latency vs success rate per model", CHART_MIN_PX, NUMBERS_BELOW_PX, panel)
 
 
 def plot_latency_per_class(series: dict[str, list[dict]]) -> bytes:
     """Fig. 6.2: mean latency ± standard deviation per class, one bar group per series."""
     classes = sorted({o.get("maneuver_class", "?") for group in series.values() for o in group})
-    fig, ax = new_axes((max(6.4, 0.55 * len(classes) * max(1, len(series))), 4.2))
-    width = 0.8 / max(1, len(series))
+    width, below = _by_class_layout(classes, len(series))
+    plot = Plot("latency-per-class", _frame(width))
+    bar = 0.8 / max(1, len(series))
     for i, (name, group) in enumerate(series.items()):
+        colour = SERIES_COLOURS[i % len(SERIES_COLOURS)]
         grouped = by_class(group)
-        stats = [latency_stats([v for v in map(latency_s, grouped.get(c, [])) if v is not None])
-                 for c in classes]
-        ax.bar([k + i * width for k in range(len(classes))], [s["mean"] or 0 for s in stats],
-               width, yerr=[s["std"] or 0 for s in stats], capsize=2, label=name)
-    ax.set_xticks([k + width * (len(series) - 1) / 2 for k in range(len(classes))], classes,
-                  rotation=45, ha="right")
-    ax.set_ylabel("latency (s/scenario)")
-    if len(series) > 1:
-        ax.legend(fontsize=8)
-    ax.grid(axis="y", alpha=0.3)
-    return figure_png(fig)
+        for k, code in enumerate(classes):
+            stats = latency_stats([v for v in map(latency_s, grouped.get(code, []))
+                                   if v is not None])
+            mean, std = stats["mean"] or 0.0, stats["std"] or 0.0
+            left, shown = k - 0.4 + i * bar, ("bar", f"{name} {code}: {mean:.2f} ± {std:.2f} s")
+            plot.rect(left, left + bar, 0.0, mean, colour, group=shown, cls="mean")
+            if std:
+                plot.error_bar(left + bar / 2, mean - std, mean + std, "black", group=shown,
+                               cls="error-bar")
+        if len(series) > 1:
+            plot.legend.append(Entry(name, colour, patch=True, opacity=1.0))
+    low, high = min([0.0, *plot.y_values]), max([0.0, *plot.y_values])
+    scales = plot.auto_scales((-0.6, len(classes) - 0.4), (low, high * 1.05 or 1.0))
+    panel = plot.finish(scales, y_label="latency (s/scenario)", grid="y",
+                        categories=_class_ticks(classes))
+    return _svg_bytes("Mean latency ± standard deviation per class", width, below, panel)
 
 
 def plot_latency_boxplot(outcomes: list[dict]) -> bytes:
-    """Fig. 6.3: the distribution of latencies per class."""
+    """Fig. 6.3: the distribution of latencies per class: a box from the first to the third
+    quartile with the median across it, whiskers to the furthest values within 1.5
+    interquartile ranges, the values beyond as circles."""
     grouped = by_class(outcomes)
-    data = [[v for v in map(latency_s, group) if v is not None] or [0.0]
-            for group in grouped.values()]
-    fig, ax = new_axes((max(6.4, 0.5 * len(grouped)), 4.2))
-    ax.boxplot(data)
-    ax.set_xticks(range(1, len(grouped) + 1), list(grouped), rotation=45, ha="right")
-    ax.set_ylabel("latency (s/scenario)")
-    ax.grid(axis="y", alpha=0.3)
-    return figure_png(fig)
+    classes = list(grouped)
+    width, below = _by_class_layout(classes, 1)
+    plot = Plot("latency-boxplot", _frame(width))
+    half, cap = BOX_WIDTH / 2, BOX_WIDTH / 4
+    for k, (code, group) in enumerate(grouped.items()):
+        box = box_stats([v for v in map(latency_s, group) if v is not None] or [0.0])
+        shown = ("box", code)
+        plot.rect(k - half, k + half, box.q1, box.q3, "none", "black", 1.0, group=shown,
+                  cls="quartiles")
+        plot.segment(k - half, box.median, k + half, box.median, MEDIAN_COLOUR, 1.5,
+                     group=shown, cls="median")
+        for end, edge in ((box.low, box.q1), (box.high, box.q3)):
+            plot.segment(k, edge, k, end, "black", 1.0, group=shown, cls="whisker")
+            plot.segment(k - cap, end, k + cap, end, "black", 1.0, group=shown, cls="cap")
+        for value in box.fliers:
+            plot.mark(k, value, "circle", "black", 5.0, fill="none", edge_width=0.8,
+                      group=shown, cls="flier")
+    scales = plot.auto_scales((-0.6, len(classes) - 0.4))
+    panel = plot.finish(scales, y_label="latency (s/scenario)", grid="y",
+                        categories=_class_ticks(classes))
+    return _svg_bytes("Distribution of latencies per class", width, below, panel)
 
 
 def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
     """Fig. 6.4: cumulative scenarios over time, one step curve per series of (time, count)."""
-    fig, ax = new_axes((6.4, 4.2))
-    for name, curve in series.items():
-        if not curve:
-            continue
-        ax.step([0.0] + [t / 60 for t, _ in curve], [0] + [n for _, n in curve], where="post",
-                label=f"{name}: {curve[-1][1]} in {curve[-1][0] / 60:.1f} min")
-    ax.set_xlabel("time (min)")
-    ax.set_ylabel("scenarios finished")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    return figure_png(fig)
+    plot = Plot("cumulative", _frame(CHART_MIN_PX))
+    drawn = [(name, curve) for name, curve in series.items() if curve]
+    for i, (name, curve) in enumerate(drawn):
+        colour = SERIES_COLOURS[i % len(SERIES_COLOURS)]
+        plot.step([0.0] + [t / 60 for t, _ in curve], [0] + [n for _, n in curve], colour, 1.5,
+                  group=("series", name), cls="curve")
+        plot.legend.append(Entry(f"{name}: {curve[-1][1]} in {curve[-1][0] / 60:.1f} min",
+                                 colour))
+    if not drawn:
+        plot.note("no scenario finished")
+    panel = plot.finish(plot.auto_scales(), x_label="time (min)", y_label="scenarios finished")
+    return _svg_bytes("Cumulative scenarios over time", CHART_MIN_PX, NUMBERS_BELOW_PX, panel)
 
 
 # --- the data the templates show -----------------------------------------------------------
@@ -277,7 +347,7 @@ class Figure:
     image: bytes
     caption: str
     alt: str
-    media_type: str = "image/png"
+    media_type: str = SVG
 
     @property
     def data_uri(self) -> str:
@@ -296,9 +366,9 @@ def table(header: list[str], rows: list[list[Any]], text_columns: int = 1,
                                      row_classes)))
 
 
-def figure(png: bytes, caption: str, alt: str) -> str:
-    """An inline PNG figure with a caption, for pages that are not a template of their own."""
-    return str(_macros().figure(Figure(png, caption, alt)))
+def figure(image: bytes, caption: str, alt: str, media_type: str = SVG) -> str:
+    """An inline figure with a caption, for pages that are not a template of their own."""
+    return str(_macros().figure(Figure(image, caption, alt, media_type)))
 
 
 def page(title: str, body: str) -> str:
@@ -493,7 +563,7 @@ def _replay_figure(run_dir: Path, outcome: dict) -> dict[str, Any]:
     caption = f"{outcome['scenario_id']} ({outcome.get('maneuver_class', '?')}): {verdict}"
     return {"caption": caption,
             "figure": Figure(svg, caption, f"replay of {outcome['scenario_id']}",
-                             "image/svg+xml") if isinstance(svg, bytes) else None,
+                             SVG) if isinstance(svg, bytes) else None,
             "problem": svg if isinstance(svg, str) else None}
 
 

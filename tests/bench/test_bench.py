@@ -11,10 +11,13 @@ import lxml.html
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from lxml import etree
 
 from scenweave.bench import BenchError, BenchSettings, agent_settings_for, aggregate, run_bench
 from scenweave.cli import cli
 from scenweave.report import percentile, projected_curve
+
+SVG = "{http://www.w3.org/2000/svg}"
 
 
 def outcome(cls: str, status: str, latency: float, attempts: int = 1, first: bool = False,
@@ -90,7 +93,7 @@ def test_reference_benchmark_aggregates_real_outcomes(tmp_path):
     assert overall["latency_s"]["mean"] == pytest.approx(np.mean(latencies), abs=1e-4)
     assert overall["counts"]["failed"] == run_summary["counts"]["failed"]
     for name in written["figures"].values():
-        assert (tmp_path / "b" / name).read_bytes().startswith(b"\x89PNG")
+        assert etree.fromstring((tmp_path / "b" / name).read_bytes()).tag == f"{SVG}svg"
     assert "Table 6.2" in (tmp_path / "b" / "bench.html").read_text()
     assert_boxplots(tmp_path / "b", written, ["reference"])
 
@@ -139,19 +142,21 @@ def test_agent_benchmark_with_replayed_models(tmp_path):
 
 
 def assert_boxplots(root, aggregate: dict, models: list[str]) -> None:
-    """Fig. 6.3 per model: listed in bench.json, a PNG that decodes, drawn in bench.html."""
-    from matplotlib.image import imread
-
+    """Fig. 6.3 per model: listed in bench.json, an SVG with a box per class of the model's
+    outcomes, drawn inline in bench.html."""
     html = lxml.html.fromstring((root / "bench.html").read_bytes())
     shown = {img.get("alt"): img.get("src") for img in html.xpath("//figure/img")}
     for model in models:
         name = aggregate["figures"][f"latency_boxplot/{model}"]
-        assert name.startswith("fig6_3_") and model in name
-        pixels = imread(root / name)  # raises unless it is a PNG it can decode
-        assert pixels.shape[0] > 100 and pixels.shape[1] > 100
-        assert pixels.std() > 0  # something is drawn, not one flat colour
-        inline = base64.b64decode(shown[f"latency boxplot {model}"].split(",", 1)[1])
-        assert inline == (root / name).read_bytes()
+        assert name.startswith("fig6_3_") and name.endswith(".svg") and model in name
+        root_element = etree.parse(str(root / name)).getroot()  # raises unless well-formed
+        assert int(root_element.get("width")) > 100 and int(root_element.get("height")) > 100
+        boxes = {g.get("data-box") for g in root_element.iter(f"{SVG}g")
+                 if g.get("class") == "box"}
+        assert boxes == set(aggregate["models"][model]["by_class"])  # something is drawn
+        src = shown[f"latency boxplot {model}"]
+        assert src.startswith("data:image/svg+xml;base64,")
+        assert base64.b64decode(src.split(",", 1)[1]) == (root / name).read_bytes()
 
 
 def test_an_unknown_repair_strategy_stops_the_benchmark_before_it_runs(tmp_path):

@@ -61,7 +61,7 @@ def test_the_reader_sees_a_row_per_class(run, page):
 def test_the_figures_are_drawn_inline(page):
     images = page.xpath("//figure/img")
     assert len(images) == 3
-    assert all(img.get("src").startswith("data:image/png;base64,") for img in images)
+    assert all(img.get("src").startswith("data:image/svg+xml;base64,") for img in images)
 
 
 def test_a_scenario_link_opens_that_scenario_s_trace(run, page, tmp_path):

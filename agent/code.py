@@ -126,10 +126,11 @@ def _enum_dot_notation(code: str) -> tuple[str, bool]:
     return fixed, fixed != code
 
 
-def _corpus_package(code: str) -> tuple[str, bool]:
-    fixed = re.sub(r"^(\s*)from\s+(?:corpus\.)?corpus_utils\s+import",
-                   r"\1from scenweave.corpus.corpus_utils import", code, flags=re.M)
-    fixed = re.sub(r"^(\s*)import\s+corpus_utils\b", r"\1from scenweave.corpus import corpus_utils",
+def _library_package(code: str) -> tuple[str, bool]:
+    """The scenario library imported without its package: ``scenweave.scenario_lib.builder``."""
+    fixed = re.sub(r"^(\s*)from\s+(?:scenario_lib\.)?builder\s+import",
+                   r"\1from scenweave.scenario_lib.builder import", code, flags=re.M)
+    fixed = re.sub(r"^(\s*)import\s+builder\b", r"\1from scenweave.scenario_lib import builder",
                    fixed, flags=re.M)
     return fixed, fixed != code
 
@@ -173,7 +174,7 @@ CORRECTIONS = (
     ("fake_imports", _comment_fake_imports),
     ("api_renames", _rename_apis),
     ("enum_dot_notation", _enum_dot_notation),
-    ("corpus_package", _corpus_package),
+    ("library_package", _library_package),
     ("main_block", _drop_main_block),
     ("scenario_minor_version", _scenario_minor_version),
 )

@@ -101,7 +101,7 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
     return "\n".join(rules) + "\n"
 
 
-#: a speed profile (``corpus.phases``) as the worked example writes it: a list of phases,
+#: a speed profile (``scenario_lib.phases``) as the worked example writes it: a list of phases,
 #: each ``{'start_s': N, 'duration_s': N, 'target_ms': N, 'shape': S}``; any length
 PHASE_RULES = (
     'phases ::= "[" (phase (", " phase)*)? "]"',

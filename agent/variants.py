@@ -19,7 +19,7 @@ what the record becomes first (``asked_params``) and hands the LLM the values th
   is placed anew from the same spawn point (``SpawnMatcher.place_at``);
 - background traffic: one vehicle in a same-direction lane the record neither starts in nor
   moves into, a little ahead of the ego at its speed (``SpawnMatcher.background``; the
-  reference scripts play it through ``corpus_utils.make_scenario``);
+  reference scripts play it through ``scenario_lib.builder.make_scenario``);
 - the lane: the spawn stage places the record one lane over (``SpawnMatcher.lane_over``), its
   gaps measured along the new lanes.
 
@@ -50,12 +50,12 @@ from scenweave.agent.prompts import variant_prompt
 from scenweave.agent.run import shared_llm, shared_sandbox
 from scenweave.agent.settings import AgentSettings
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, XOSC_NAME, Trace
-from scenweave.corpus.corpus_utils import known_type
 from scenweave.corpus.worked_example import provenance, worked_example
 from scenweave.errors import ScenarioError
 from scenweave.ingest.extract import with_vehicle_type
 from scenweave.judge.variation import ASPECTS, compare
 from scenweave.player import REPLAY_NAME, Playback
+from scenweave.scenario_lib.builder import known_type
 from scenweave.spawn_db.errors import SpawnDbError
 
 VARIANTS_DIR = "variants"

@@ -1,7 +1,7 @@
 """What one benign attempt costs in the sandbox: the wall time of ``run()`` per backend, split.
 
-The attempt is the BRAKE reference script (imports scenariogeneration through the corpus,
-builds and writes a real scenario). Two ways of running it:
+The attempt is the BRAKE reference script (imports scenariogeneration through the scenario
+library, builds and writes a real scenario). Two ways of running it:
 
 - cold: every attempt starts a fresh bwrap sandbox or container and imports inside it;
 - warm: what a batch pays (``agent``'s sandbox keeps ``AgentSettings.sandbox.warm_pool``
@@ -10,8 +10,8 @@ builds and writes a real scenario). Two ways of running it:
   the pool has refilled.
 
 The split (medians, from ``ExecResult.timings``): start (until the job begins inside),
-import (scenariogeneration and the corpus, inside), generate (the script), collect (outputs
-listed inside, vetted and written on the host), stop (report, exit, teardown). Targets for
+import (scenariogeneration and the scenario library, inside), generate (the script), collect
+(outputs listed inside, vetted and written on the host), stop (report, exit, teardown). Targets for
 what a batch pays per attempt: <= 0.5 s with bwrap, <= 1.0 s with docker. Starts a podman
 service of its own when no engine answers.
 

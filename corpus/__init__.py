@@ -1,12 +1,13 @@
-"""The reference corpus: 16 scenario scripts, their shared building blocks and retrieval.
+"""The reference corpus: 16 scenario scripts, their worked examples and retrieval.
 
 ``retrieve(params_or_query)`` picks a script (keyword, tag table, semantic fallback),
 ``generate(params, out_path)`` runs it in-process (the deterministic ``--no-llm`` path),
-``list_scripts()`` lists them. Scenario layout: ``docs/scenario-conventions.md``.
+``list_scripts()`` lists them. The scripts build their scenarios with the scenario library
+(``scenweave.scenario_lib``), the one folder the sandbox has; this one stays on the host.
+Scenario layout: ``docs/scenario-conventions.md``.
 
-The names below load on first use: inside the sandbox only this folder exists, and a script
-importing ``scenweave.corpus.corpus_utils`` must not pull in retrieval (and the registry) nor
-the error root (``scenweave.errors``, which ``corpus.errors`` derives from).
+The names below load on first use: importing the package (or a reference script in it) does
+not pull in retrieval, the registry or the error root.
 """
 
 from __future__ import annotations

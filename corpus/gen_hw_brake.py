@@ -9,7 +9,7 @@ lead's end speed, keeping its distance instead of running into the lead.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_reacts_to_braking_lead,
     highway_npc,

@@ -9,7 +9,7 @@ keeps or changes its speed as recorded; once the record ends, the merger keeps i
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     highway_npc,
     keep_distance_after_record,

@@ -10,7 +10,7 @@ starts and slows to the cutter's end speed, keeping its distance instead of runn
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_reacts_to_cut_in,
     highway_npc,

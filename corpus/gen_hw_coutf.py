@@ -9,7 +9,7 @@ ego_end_speed_ms.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     highway_npc,
     lane_position,

@@ -8,7 +8,7 @@ to ego_end_speed_ms, so the follower closes in or falls back as recorded.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     following_story,
     hero,
     highway_npc,

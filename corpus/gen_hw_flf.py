@@ -8,7 +8,7 @@ ego_speed_ms to ego_end_speed_ms, so the gap to the car in front opens or closes
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     following_story,
     hero,
     highway_npc,

@@ -8,7 +8,7 @@ duration_s, every vehicle goes from its start speed to its end speed, and so doe
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     free_ride_traffic,
     hero,
     hero_speed_profile,

@@ -8,7 +8,7 @@ vehicle takes part.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     ego_lane_change_story,
     hero,
     lane_position,

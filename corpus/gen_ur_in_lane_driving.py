@@ -8,7 +8,7 @@ lead_speed_ms; an oncoming car of the record comes the other way at oncoming_spe
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_speed_profile,
     lead_keeps_ahead,

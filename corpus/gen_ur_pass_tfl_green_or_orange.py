@@ -10,7 +10,7 @@ the other way when the record had them.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_speed_profile,
     lead_keeps_ahead,

@@ -10,7 +10,7 @@ ahead and an oncoming car comes the other way when the record had them.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_stops_at_line,
     lead_keeps_ahead,

@@ -9,7 +9,7 @@ the other way when the record had them.
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     HERO,
     drive_to,
     hero,

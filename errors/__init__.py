@@ -11,10 +11,10 @@
 
 Every package's own root (``SandboxError``, ``PlayerError``, ``SpawnDbError``...) derives
 from one branch, or from the root when its children differ. This package is the bottom of the
-stack and imports nothing. The one module outside the tree is what LLM-written scripts import
-inside the sandbox (``corpus/corpus_utils.py`` and ``corpus/phases.py``, where only the
-``corpus`` folder is mounted): their errors stay plain ``ValueError``s, which the scripts'
-failures report as values anyway.
+stack and imports nothing. The one package outside the tree is what LLM-written scripts import
+inside the sandbox (``scenario_lib/``: ``builder.py`` and ``phases.py``, where only that folder
+is mounted): their errors stay plain ``ValueError``s, which the scripts' failures report as
+values anyway.
 """
 
 from __future__ import annotations

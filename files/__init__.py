@@ -3,8 +3,8 @@ and readable by others as the user's umask allows (0644 files, 0755 folders unde
 whatever the temporary file was created with.
 
 The bottom of the stack: it imports nothing of ours, so every stage can use it. The one
-exception is ``corpus/corpus_utils.py``, which also runs inside the sandbox where only the
-``corpus`` folder is mounted; it sets the same mode with :func:`file_mode`'s rule spelled out.
+exception is ``scenario_lib/builder.py``, which also runs inside the sandbox where only the
+``scenario_lib`` folder is mounted; it sets the same mode with :func:`file_mode`'s rule spelled out.
 """
 
 from scenweave.files.atomic import (

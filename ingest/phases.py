@@ -1,4 +1,4 @@
-"""Fitting speed phases (``corpus.phases``) to what a record says about an actor's speed.
+"""Fitting speed phases (``scenario_lib.phases``) to what a record says about an actor's speed.
 
 Two kinds of record:
 
@@ -21,9 +21,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
-from scenweave.corpus.phases import Phase, PhasedProfile
 from scenweave.errors import InputError
+from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2
+from scenweave.scenario_lib.phases import Phase, PhasedProfile
 
 #: a fitted profile's speed may differ this much from a recorded sample (m/s)
 SPEED_TOL_MS = 0.3

@@ -14,12 +14,12 @@ from typing import Any
 from lxml import etree
 
 from scenweave import maneuvers
-from scenweave.corpus.kinematics import SpeedProfile, min_gap_m, start_gap_m
-from scenweave.corpus.phases import PhasedProfile
 from scenweave.judge.fidelity import SPEED_TOL_MS, numbers
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
 from scenweave.maneuvers import Maneuver
+from scenweave.scenario_lib.kinematics import SpeedProfile, min_gap_m, start_gap_m
+from scenweave.scenario_lib.phases import PhasedProfile
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))

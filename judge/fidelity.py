@@ -15,7 +15,11 @@ from typing import Any
 from lxml import etree
 
 from scenweave import maneuvers
-from scenweave.corpus.kinematics import (
+from scenweave.judge.findings import Finding
+from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
+from scenweave.maneuvers import Maneuver
+from scenweave.maneuvers.free_ride import SLOTS
+from scenweave.scenario_lib.kinematics import (
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
@@ -26,17 +30,13 @@ from scenweave.corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
-from scenweave.corpus.phases import (
+from scenweave.scenario_lib.phases import (
     PhasesInvalid,
     is_single_ramp,
     lane_change_length,
     phases_of,
     profile_of,
 )
-from scenweave.judge.findings import Finding
-from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
-from scenweave.maneuvers import Maneuver
-from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.schemas.params import number as number_of
 
 SPEED_TOL_MS = 0.01

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from scenweave.corpus.kinematics import STOP_LINE_MARGIN_M
 from scenweave.judge.fidelity import class_of, expected_speed_changes, numbers, placed_actors
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
+from scenweave.scenario_lib.kinematics import STOP_LINE_MARGIN_M
 from scenweave.schemas.params import number as number_of
 
 if TYPE_CHECKING:  # the player loads esmini's bindings: only the type is needed here

@@ -8,8 +8,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from scenweave.corpus.kinematics import SpeedProfile
-from scenweave.corpus.phases import Phase, PhasedProfile
+from scenweave.scenario_lib.kinematics import SpeedProfile
+from scenweave.scenario_lib.phases import Phase, PhasedProfile
 
 EGO_NAMES = ("hero", "ego")
 

@@ -42,7 +42,7 @@ SANDBOX_ENV = {
 #: paths inside the sandbox (the harness hard-codes the same ones)
 JOB_MOUNT = "/sandbox/job"
 RESULT_MOUNT = "/sandbox/result.json"
-CORPUS_MOUNT = "/sandbox/lib/scenweave/corpus"
+LIBRARY_MOUNT = "/sandbox/lib/scenweave/scenario_lib"
 OUT_MOUNT = "/out"
 
 

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scenweave.sandbox.attempt import (
-    CORPUS_MOUNT,
     JOB_MOUNT,
+    LIBRARY_MOUNT,
     OUT_MOUNT,
     RESULT_MOUNT,
     SANDBOX_ENV,
@@ -88,7 +88,7 @@ class BwrapSandbox(Sandbox):
                 f"bwrap cannot start {python} with scenariogeneration as uid "
                 f"{self.settings.sandbox_uid}: {done.stderr.decode(errors='replace').strip()} "
                 "(it needs unprivileged user namespaces, and SandboxSettings.python and "
-                "SandboxSettings.corpus_dir readable by SandboxSettings.sandbox_uid)")
+                "SandboxSettings.library_dir readable by SandboxSettings.sandbox_uid)")
 
     def _start(self, attempt: Attempt, warm: bool) -> Running:
         s = self.settings
@@ -177,9 +177,9 @@ class BwrapSandbox(Sandbox):
         if attempt is not None:
             args += ["--ro-bind", str(attempt.job), JOB_MOUNT,
                      "--bind", str(attempt.report), RESULT_MOUNT]
-        corpus = s.corpus_path()
-        if corpus is not None and corpus.is_dir():
-            args += ["--ro-bind", str(corpus), CORPUS_MOUNT]
+        library = s.library_path()
+        if library is not None and library.is_dir():
+            args += ["--ro-bind", str(library), LIBRARY_MOUNT]
         # last: every mount point exists now; the root and /dev (and so /dev/shm) become
         # read-only, leaving /tmp and /out, both sized, the only writable places
         return [*args, "--remount-ro", "/dev", "--remount-ro", "/"]

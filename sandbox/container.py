@@ -31,8 +31,8 @@ from docker.models.containers import Container
 from docker.types import LogConfig, Ulimit
 
 from scenweave.sandbox.attempt import (
-    CORPUS_MOUNT,
     JOB_MOUNT,
+    LIBRARY_MOUNT,
     OUT_MOUNT,
     RESULT_MOUNT,
     SANDBOX_ENV,
@@ -202,9 +202,9 @@ class DockerSandbox(Sandbox):
         s = self.settings
         volumes = {str(attempt.job): {"bind": JOB_MOUNT, "mode": "ro"},
                    str(attempt.report): {"bind": RESULT_MOUNT, "mode": "rw"}}
-        corpus = s.corpus_path()
-        if corpus is not None and corpus.is_dir():
-            volumes[str(corpus)] = {"bind": CORPUS_MOUNT, "mode": "ro"}
+        library = s.library_path()
+        if library is not None and library.is_dir():
+            volumes[str(library)] = {"bind": LIBRARY_MOUNT, "mode": "ro"}
         # podman adds writable /var/tmp and /run to a read-only root: mount them read-only
         closed = "ro,size=4k"
         try:

@@ -21,13 +21,13 @@ import traceback
 from typing import Any
 
 JOB = "/sandbox/job"
-LIB = "/sandbox/lib"  # holds the read-only `scenweave.corpus` package
+LIB = "/sandbox/lib"  # holds the read-only `scenweave.scenario_lib` package
 RESULT = "/sandbox/result.json"
 OUT = "/out"
 SCENARIO = OUT + "/scenario.xosc"
 GO = JOB + "/go"
 #: what every reference script imports: a warm sandbox imports them while it waits
-WARM_IMPORTS = ("scenariogeneration", "scenweave.corpus.corpus_utils")
+WARM_IMPORTS = ("scenariogeneration", "scenweave.scenario_lib.builder")
 #: machine -> (audit arch, unshare, clone, clone3): what the seccomp filter needs to know
 SYSCALLS = {"x86_64": (0xC000003E, 272, 56, 435), "aarch64": (0xC00000B7, 97, 220, 435)}
 CLONE_NEWUSER = 0x10000000

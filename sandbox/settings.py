@@ -33,7 +33,7 @@ class SandboxSettings:
     image: str = "localhost/scenweave-sandbox:latest"
     docker_host: str | None = None  # default: $DOCKER_HOST, else the podman socket
     python: str = "/opt/scenweave/sandbox-venv/bin/python"  # interpreter bwrap runs
-    corpus_dir: Path | None = None  # default: the installed `corpus` package folder
+    library_dir: Path | None = None  # default: the installed `scenario_lib` package folder
     sandbox_uid: int = 65534  # uid bwrap drops to when started as root
     cgroup_root: Path = Path("/sys/fs/cgroup")
     work_dir: Path | None = None  # where attempts are staged; default: the system temp folder
@@ -71,12 +71,13 @@ class SandboxSettings:
             return os.environ["DOCKER_HOST"]
         return f"unix://{PODMAN_SOCKET}"
 
-    def corpus_path(self) -> Path | None:
-        """The folder of the ``corpus`` package, mounted read-only into the sandbox."""
-        if self.corpus_dir is not None:
-            return Path(self.corpus_dir)
+    def library_path(self) -> Path | None:
+        """The folder of the scenario library (``scenweave.scenario_lib``), the scripts'
+        only ScenWeave package: mounted read-only into the sandbox."""
+        if self.library_dir is not None:
+            return Path(self.library_dir)
         # located, not imported: no upward dependency
-        spec = importlib.util.find_spec("scenweave.corpus")
+        spec = importlib.util.find_spec("scenweave.scenario_lib")
         if spec is None or not spec.submodule_search_locations:
             return None
         return Path(next(iter(spec.submodule_search_locations)))

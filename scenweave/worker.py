@@ -105,7 +105,7 @@ class WorkerOptions:
     #: the map whose matcher is preloaded (a bundled town or an .xodr path; None: Town04)
     preload_map: str | None = None
     #: imported once before work (and before ``--workers N`` forks), not on the first job
-    preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.corpus.corpus_utils",
+    preload_modules: tuple[str, ...] = ("scenweave.corpus", "scenweave.scenario_lib.builder",
                                        "scenweave.schemas", "scenweave.agent",
                                        "scenweave.replay_figures")
     #: the worker's own folder for scenarios in the making (None: a temp folder)

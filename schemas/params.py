@@ -21,9 +21,9 @@ from typing import Any, Literal, TypedDict, TypeGuard
 
 import fastjsonschema
 
-from scenweave.corpus.phases import PhaseRecord
 from scenweave.errors import InputError, ParamsError
 from scenweave.maneuvers.free_ride import SLOTS
+from scenweave.scenario_lib.phases import PhaseRecord
 
 SCHEMA_PATH = Path(__file__).with_name("params.schema.json")
 
@@ -75,7 +75,7 @@ class Params(TypedDict, total=False):
     behavior_type: Literal["B1", "B2", "B3", "B4"]
     ego_dist_traveled_m: float
     driving_side: Side
-    #: an actor's speed as phases where one ramp does not show the record (corpus.phases)
+    #: an actor's speed as phases where one ramp does not show the record (scenario_lib.phases)
     ego_phases: list[PhaseRecord]
     npc_phases: list[PhaseRecord]
     #: what a mined record recorded at every sample (t from the manoeuvre start; speeds,

@@ -15,7 +15,7 @@ OpenSCENARIO frame (``y = -y_carla``, ``h = -radians(yaw_carla)``).
 
 Every highway NPC is placed where it stands at t = 0: its recorded gap holds at
 ``maneuver_start_s`` (when it cuts in, brakes, ...), and until then both cars hold their start
-speeds, so at t = 0 it stands ``corpus.kinematics.start_gap_m`` ahead of the ego, measured
+speeds, so at t = 0 it stands ``scenario_lib.kinematics.start_gap_m`` ahead of the ego, measured
 along its lane (on a curve a straight shift would leave the lane).
 """
 
@@ -31,13 +31,13 @@ from pathlib import Path
 from typing import Any, TypedDict
 
 from scenweave import maneuvers
-from scenweave.corpus.kinematics import lane_change_length_m, start_gap_m
 from scenweave.errors import ParamsError
 from scenweave.roads.bundled import DEFAULT_MAP_PATH, road_network
 from scenweave.roads.errors import LaneEndsError, OpenDriveError
 from scenweave.roads.map_ref import MapRef, resolve_map
 from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.roads.signals import junction_approach
+from scenweave.scenario_lib.kinematics import lane_change_length_m, start_gap_m
 from scenweave.schemas.params import NumberReader
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
@@ -784,7 +784,7 @@ def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, flo
 
 def _start_distance(params: Mapping[str, Any], actor: str) -> float:
     """Where ``actor`` stands at t = 0, ahead of the ego (m): its recorded gap minus the
-    lead-in drift (``corpus.kinematics.start_gap_m``)."""
+    lead-in drift (``scenario_lib.kinematics.start_gap_m``)."""
     number = NumberReader(params)
     return start_gap_m(number(f"{actor}_distance_m", 0.0), number(f"{actor}_speed_ms"),
                        number("ego_speed_ms"), number("maneuver_start_s", 0.0))

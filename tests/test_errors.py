@@ -14,8 +14,8 @@ from tests.test_layering import MODULES
 
 #: exceptions outside the tree, and why
 OUTSIDE = {
-    # imported by LLM-written scripts inside the sandbox, where only `corpus` is mounted
-    "scenweave.corpus.phases.PhasesInvalid",
+    # imported by LLM-written scripts inside the sandbox, where only `scenario_lib` is mounted
+    "scenweave.scenario_lib.phases.PhasesInvalid",
     # Ctrl-C: it must stay a KeyboardInterrupt for click and the shell
     "scenweave.run_folder.RunInterrupted",
 }

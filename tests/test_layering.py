@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
 BOTTOM = ("corpus", "sandbox", "schemas", "judge", "spawn_db", "player", "roads", "maneuvers",
-          "files", "errors")
+          "scenario_lib", "files", "errors")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 
@@ -132,22 +132,42 @@ def test_the_packages_import_each_other_without_a_cycle():
 
 
 @pytest.mark.parametrize("package, below", [("maneuvers", {"errors"}), ("files", set()),
-                                            ("errors", set()), ("roads", {"errors", "files"})])
+                                            ("errors", set()), ("roads", {"errors", "files"}),
+                                            ("scenario_lib", set())])
 def test_the_bottom_layer_imports_nothing_of_ours_but_the_error_root(package, below):
     assert {layer(target) for name, targets in GRAPH.items() if layer(name) == package
             for target in targets} <= {package, *below}
 
 
 def test_the_scenario_library_imports_only_what_the_sandbox_mounts():
-    """LLM-written scripts import ``corpus_utils`` (and so the ``corpus`` package) in the
-    sandbox, where only the ``corpus`` folder exists: nothing they load may leave it."""
-    reached, todo = set(), ["scenweave.corpus", "scenweave.corpus.corpus_utils"]
+    """LLM-written scripts import ``scenario_lib.builder`` (and so the ``scenario_lib`` package)
+    in the sandbox, where only the ``scenario_lib`` folder exists: nothing any of its modules
+    loads may leave it (not even the error root)."""
+    reached = set()
+    todo = [name for name in MODULES if layer(name) == "scenario_lib"]
+    assert "scenweave.scenario_lib.builder" in todo
     while todo:
         name = todo.pop()
         if name not in reached:
             reached.add(name)
             todo += GRAPH[name]
-    assert {layer(name) for name in reached} == {"corpus"}, sorted(reached)
+    assert {layer(name) for name in reached} == {"scenario_lib"}, sorted(reached)
+
+
+def test_the_scenario_library_package_imports_nothing():
+    """The sandbox imports ``scenweave.scenario_lib`` before any module of it."""
+    tree = ast.parse((ROOT / "scenario_lib" / "__init__.py").read_text(encoding="utf-8"))
+    assert [node for node in ast.walk(tree) if isinstance(node, ast.Import | ast.ImportFrom)
+            and not (isinstance(node, ast.ImportFrom) and node.module == "__future__")] == []
+
+
+def test_the_corpus_builds_on_the_scenario_library():
+    """The reference scripts import the scenario library; it never imports the corpus."""
+    used = {target for name, targets in GRAPH.items() if layer(name) == "corpus"
+            for target in targets if layer(target) == "scenario_lib"}
+    assert "scenweave.scenario_lib.builder" in used
+    assert [(name, target) for name, targets in GRAPH.items() if layer(name) == "scenario_lib"
+            for target in targets if layer(target) == "corpus"] == []
 
 
 def test_no_package_imports_another_packages_private_names():

@@ -23,7 +23,6 @@ from typing import Any, TypeGuard
 
 import numpy as np
 
-from scenweave.corpus.corpus_utils import reference_gap_m
 from scenweave.judge.replay import (
     GAP_TOL_M,
     LANE_CHANGE_TOL_S,
@@ -35,6 +34,7 @@ from scenweave.judge.replay import (
     light_state,
 )
 from scenweave.player import REPLAY_NAME, Playback
+from scenweave.scenario_lib.builder import reference_gap_m
 from scenweave.schemas.params import number
 from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
 

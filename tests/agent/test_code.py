@@ -64,10 +64,11 @@ def test_a_reply_without_code_gives_nothing():
     ("s = xosc.linear\n", "s = xosc.DynamicsShapes.linear\n", "enum_dot_notation"),
     ("x = 1 \u2212 2  # \u2500\u2500 box\n", "x = 1 - 2  #  box\n", "unicode"),
     ("s = \u201chero\u201d\n", 's = "hero"\n', "unicode"),
-    ("from corpus_utils import hero\n", "from scenweave.corpus.corpus_utils import hero\n",
-     "corpus_package"),
-    ("from corpus.corpus_utils import hero\n", "from scenweave.corpus.corpus_utils import hero\n",
-     "corpus_package"),
+    ("from builder import hero\n", "from scenweave.scenario_lib.builder import hero\n",
+     "library_package"),
+    ("from scenario_lib.builder import hero\n", "from scenweave.scenario_lib.builder import hero\n",
+     "library_package"),
+    ("import builder\n", "from scenweave.scenario_lib import builder\n", "library_package"),
     ("x = 1\nif __name__ == '__main__':\n    generate({}, 'a.xosc')\n", "x = 1\n", "main_block"),
 ])
 def test_each_correction(bad, good, name):

@@ -24,7 +24,7 @@ def fix(code: str, message: str) -> tuple[str, str]:
 
 def test_the_allow_list_is_the_reference_s_imports_and_scenariogeneration():
     assert set(allowed_modules(reference_source("BRAKE"))) == {
-        "scenweave.corpus.corpus_utils", "pathlib", "scenariogeneration"}
+        "scenweave.scenario_lib.builder", "pathlib", "scenariogeneration"}
 
 
 @pytest.mark.parametrize("code, message, fixed", [

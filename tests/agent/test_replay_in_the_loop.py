@@ -68,11 +68,11 @@ def test_a_replay_failure_is_repaired_with_what_the_engine_showed(replay, stop_a
 
 def test_a_fallback_that_fails_the_replay_ends_failed_with_taxonomy_replay(
         replay, stop_at_red_record, tmp_path, monkeypatch):
-    from scenweave import corpus
+    from scenweave.scenario_lib import builder
 
     # the fallback (the reference, run in this process) with a slow lead that never gets out
     # of the way: valid and faithful, and the ego runs into it when played
-    monkeypatch.setattr(corpus.corpus_utils, "lead_stays_ahead", lambda *args: None)
+    monkeypatch.setattr(builder, "lead_stays_ahead", lambda *args: None)
     params = SpawnMatcher().assign({
         **stop_at_red_record, "maneuver_class": "U1_1", "maneuver_tag": "in_lane_driving",
         "lead_present": True, "lead_distance_m": 15.0, "lead_speed_ms": 1.0,

@@ -11,13 +11,13 @@ import pytest
 from scenweave import corpus
 from scenweave.agent.llm.log import recent_calls
 from scenweave.agent.variants import NotAsked, asked_params
-from scenweave.corpus.corpus_utils import bumper_gap_m
 from scenweave.corpus.worked_example import example_params as stored_example
 from scenweave.inputs import InputSelection, load_input
 from scenweave.judge.variation import compare
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.player import ReplaySettings
 from scenweave.runner import default_matcher, variant_summary
+from scenweave.scenario_lib.builder import bumper_gap_m
 from tests.agent.conftest import adapted_source, fenced
 from tests.replies import json_edits
 

@@ -264,7 +264,7 @@ def assert_brake_reaction(doc: etree._ElementTree, p: dict) -> None:
     steps = int(p["timeout_s"] / 0.001)
     watch_from = t0 if p["maneuver_class"] == "CINF" else 0.0
     closest = gap if watch_from == 0.0 else math.inf
-    for step in range(steps):  # plain Euler integration, independent of corpus.kinematics
+    for step in range(steps):  # plain Euler integration, independent of scenario_lib.kinematics
         t = step * 0.001
         lead_v = v_lead + (v_lead_end - v_lead) * _ramp(t, t0, lead_duration)
         ego_v = v_ego + (target - v_ego) * _ramp(t, start, duration)

@@ -1,4 +1,4 @@
-"""The phase model (``corpus.phases``) and how the reference scripts play it (issue 22)."""
+"""The phase model (``scenario_lib.phases``) and how the reference scripts play it (issue 22)."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ import pytest
 from lxml import etree
 
 from scenweave import corpus
-from scenweave.corpus.kinematics import (
+from scenweave.scenario_lib.kinematics import (
     MAX_DECELERATION_MS2,
     SpeedProfile,
     max_deceleration_ms2,
 )
-from scenweave.corpus.phases import (
+from scenweave.scenario_lib.phases import (
     Phase,
     PhasedProfile,
     PhasesInvalid,

@@ -1,7 +1,7 @@
 """Every reference script writes a valid OpenSCENARIO 1.0 file whose numbers are the params'.
 
 What the file must contain is restated from docs/scenario-conventions.md in
-``tests/corpus/conventions.py``, independently of corpus_utils, so a convention changed on
+``tests/corpus/conventions.py``, independently of the scenario library, so a convention changed on
 one side only makes these tests fail.
 """
 
@@ -18,6 +18,7 @@ from scenariogeneration import xosc
 
 from scenweave import corpus, maneuvers
 from scenweave.errors import ParamsError
+from scenweave.scenario_lib import builder
 from tests.corpus.conventions import (
     action_named,
     assert_entities_match,
@@ -131,25 +132,25 @@ def test_bad_direction_is_a_clear_error(tmp_path):
 
 
 @pytest.mark.parametrize("script", corpus.list_scripts(), ids=lambda p: p.stem)
-def test_scripts_import_only_corpus_utils(script):
-    """They also run in the sandbox, where only ``corpus`` and scenariogeneration exist."""
+def test_scripts_import_only_the_scenario_library(script):
+    """They also run in the sandbox, where only ``scenario_lib`` and scenariogeneration exist."""
     tree = ast.parse(script.read_text(encoding="utf-8"))
     modules = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     modules |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
                 for alias in node.names}
-    assert modules <= {"scenweave.corpus.corpus_utils", "pathlib"}
+    assert modules <= {"scenweave.scenario_lib.builder", "pathlib"}
     assert ast.get_docstring(tree)
     assert any(isinstance(n, ast.FunctionDef) and n.name == "generate" for n in tree.body)
 
 
-def test_corpus_utils_imports_nothing_else_from_scenweave():
-    source = Path(corpus.__file__).with_name("corpus_utils.py").read_text(encoding="utf-8")
+def test_the_builder_imports_nothing_else_from_scenweave():
+    source = Path(builder.__file__).read_text(encoding="utf-8")
     tree = ast.parse(source)
     modules = {node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     modules |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
                 for alias in node.names}
     ours = {name for name in modules if name.split(".")[0] == "scenweave"}
-    assert ours and all(name.startswith("scenweave.corpus.") for name in ours), ours
+    assert ours and all(name.startswith("scenweave.scenario_lib.") for name in ours), ours
 
 
 def test_there_is_a_script_for_every_class():
@@ -175,41 +176,46 @@ def test_nan_speed_is_refused(tmp_path):
 
 
 SANDBOX_RUN = """
-import importlib.abc, importlib.machinery, json, sys
-LIB = sys.argv[1]
-OTHERS = {"ingest", "agent", "sandbox", "schemas", "spawn_db", "player", "roads", "tests"}
-class OnlyTheCorpus(importlib.abc.MetaPathFinder):
+import importlib.abc, importlib.machinery, importlib.util, json, sys
+LIB, SCRIPT = sys.argv[1], sys.argv[2]
+OTHERS = {"ingest", "agent", "sandbox", "schemas", "spawn_db", "player", "roads", "corpus",
+          "tests"}
+class OnlyTheLibrary(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path, target=None):
-        if name == "scenweave":  # as in the sandbox: a namespace that holds only the corpus
+        if name == "scenweave":  # as in the sandbox: a namespace that holds only the library
             spec = importlib.machinery.ModuleSpec(name, None, is_package=True)
             spec.submodule_search_locations = [LIB + "/scenweave"]
             return spec
-        inside = name.startswith("scenweave.") and not name.startswith("scenweave.corpus")
+        inside = (name.startswith("scenweave.")
+                  and not name.startswith("scenweave.scenario_lib"))
         if inside or name.split(".")[0] in OTHERS:
             raise ImportError(f"the sandbox has no {name}")
-sys.meta_path.insert(0, OnlyTheCorpus())
-import importlib
-from scenweave import corpus
-assert corpus.__file__.startswith(LIB), corpus.__file__
-script = importlib.import_module("scenweave.corpus." + sys.argv[2])
+sys.meta_path.insert(0, OnlyTheLibrary())
+from scenweave.scenario_lib import builder
+assert builder.__file__.startswith(LIB), builder.__file__
+spec = importlib.util.spec_from_file_location("llm_script", SCRIPT)  # as the harness does
+script = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(script)
 print(script.generate(json.loads(sys.argv[3]), sys.argv[4]))
 """
 
 
 @pytest.mark.parametrize("code", ["CINF", "FRB", "U4_4"])
-def test_a_copy_of_the_corpus_folder_runs_alone(code, tmp_path, xsd_1_0):
-    """As in the sandbox: only ``scenweave/corpus`` and scenariogeneration are there."""
+def test_a_reference_script_runs_with_a_copy_of_the_scenario_library_alone(
+        code, tmp_path, xsd_1_0):
+    """As in the sandbox: only ``scenweave/scenario_lib`` and scenariogeneration are there,
+    and the script is a file of its own (not a module of the corpus)."""
     import json
     import shutil
     import subprocess
     import sys
 
-    shutil.copytree(Path(corpus.__file__).parent, tmp_path / "scenweave" / "corpus",
+    shutil.copytree(Path(builder.__file__).parent, tmp_path / "scenweave" / "scenario_lib",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    script = corpus.retrieve(code).script_path.stem
+    script = shutil.copy(corpus.retrieve(code).script_path, tmp_path / "script.py")
     out = tmp_path / "out" / "s.xosc"
     run = subprocess.run(
-        [sys.executable, "-c", SANDBOX_RUN, str(tmp_path), script,
+        [sys.executable, "-c", SANDBOX_RUN, str(tmp_path), str(script),
          json.dumps(example_params(code)), str(out)],
         cwd=tmp_path, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"},
         capture_output=True, text=True, timeout=120, check=False)

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pytest
 
-from scenweave.corpus.phases import PhasedProfile, parse_phases
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
+from scenweave.scenario_lib.phases import PhasedProfile, parse_phases
 from tests.ingest.builders import write_npy
 
 KMH = 3.6

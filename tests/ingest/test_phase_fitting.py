@@ -7,7 +7,6 @@ import json
 import numpy as np
 import pytest
 
-from scenweave.corpus.phases import PhasedProfile, parse_phases
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.phases import (
     DISTANCE_TOL_M,
@@ -17,6 +16,7 @@ from scenweave.ingest.phases import (
     fit_series,
 )
 from scenweave.ingest.samples import write_highway_samples
+from scenweave.scenario_lib.phases import PhasedProfile, parse_phases
 
 START_S = 2.0
 

@@ -6,8 +6,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from scenweave.corpus.corpus_utils import reference_gap_m
-from scenweave.corpus.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.ingest import (
     IngestReport,
     check_playable,
@@ -18,6 +16,8 @@ from scenweave.ingest.highway import DEFAULT_BINNING, canonicalize_highway_file
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import load_layouts
 from scenweave.ingest.playable import MIN_BUMPER_GAP_M
+from scenweave.scenario_lib.builder import reference_gap_m
+from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2
 from tests.ingest.builders import write_npy
 
 LAYOUTS = load_layouts()

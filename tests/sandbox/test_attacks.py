@@ -169,7 +169,7 @@ def test_nothing_is_written_outside_the_output_folder(box, tmp_path):
     victim_dir.mkdir(mode=0o777)
     victim_dir.chmod(0o777)
     targets = [victim_dir / "planted", REPO / "planted-by-sandbox",
-               Path(box.settings.corpus_path() or "/nonexistent") / "planted.py",
+               Path(box.settings.library_path() or "/nonexistent") / "planted.py",
                Path("/usr/planted"), Path("/etc/planted")]
     code = """
 import os

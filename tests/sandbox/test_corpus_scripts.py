@@ -1,4 +1,5 @@
-"""The reference scripts run unchanged in the sandbox, importing the read-only `corpus`."""
+"""The reference scripts run unchanged in the sandbox, importing the read-only scenario library
+(`scenweave.scenario_lib`), the only package of ours the sandbox has."""
 
 from __future__ import annotations
 
@@ -21,3 +22,28 @@ def test_reference_script_produces_its_scenario(make_box, tmp_path, code, script
     root = etree.parse(str(tmp_path / "scenario.xosc")).getroot()
     assert root.tag == "OpenSCENARIO"
     assert result.files == [tmp_path / "scenario.xosc"]
+
+
+#: which of our packages a script can import in the sandbox
+PROBE = """
+import importlib
+def generate(params, out_path):
+    found = []
+    for name in params["names"]:
+        try:
+            importlib.import_module(name)
+            found.append(name)
+        except ImportError:
+            pass
+    open(out_path, "w").write(" ".join(found))
+"""
+
+
+def test_the_scenario_library_is_the_only_package_of_ours(box, tmp_path):
+    names = ["scenweave.scenario_lib", "scenweave.scenario_lib.builder",
+             "scenweave.scenario_lib.kinematics", "scenweave.scenario_lib.phases",
+             "scenweave.corpus", "scenweave.corpus.retrieval", "scenweave.errors",
+             "scenweave.maneuvers", "scenweave.sandbox"]
+    result = box.run(PROBE, {"names": names}, tmp_path)
+    assert result.ok, result.traceback or result.stderr
+    assert (tmp_path / "scenario.xosc").read_text().split() == names[:4]

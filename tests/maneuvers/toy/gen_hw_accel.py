@@ -7,7 +7,7 @@ the ego keeps its speed (ego_end_speed_ms).
 
 from pathlib import Path
 
-from scenweave.corpus.corpus_utils import (
+from scenweave.scenario_lib.builder import (
     hero,
     hero_speed_profile,
     highway_npc,

@@ -4,8 +4,8 @@ A phase is one speed change: from ``start_s`` (simulation time) the actor goes f
 speed it has to ``target_ms`` within ``duration_s``, along ``shape`` (OpenSCENARIO's
 ``DynamicsShapes``). Between phases, and after the last, it holds its speed. A profile of one
 linear phase is the single ramp every reference scenario had before phases existed
-(``corpus.kinematics.SpeedProfile``); params carry the list as ``<actor>_phases``
-(docs/params.md), the scripts play each phase as one speed action (``corpus_utils``), and the
+(``scenario_lib.kinematics.SpeedProfile``); params carry the list as ``<actor>_phases``
+(docs/params.md), the scripts play each phase as one speed action (``builder``), and the
 checks read them back through :func:`phases_of`. This is the one place the phase model lives.
 
 Imports nothing but the standard library and ``kinematics``: it runs in the sandbox too.
@@ -18,7 +18,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, TypedDict, TypeGuard
 
-from scenweave.corpus.kinematics import LANE_CHANGE_MIN_LENGTH_M, SpeedProfile, lane_change_length_m
+from scenweave.scenario_lib.kinematics import (
+    LANE_CHANGE_MIN_LENGTH_M,
+    SpeedProfile,
+    lane_change_length_m,
+)
 
 Shape = Literal["linear", "cubic", "sinusoidal", "step"]
 SHAPES: tuple[str, ...] = ("linear", "cubic", "sinusoidal", "step")

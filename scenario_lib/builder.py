@@ -1,11 +1,11 @@
 """Building blocks shared by every reference script: actors, actions, triggers, make_scenario().
 
-The reference scripts (``gen_hw_*.py``, ``gen_ur_*.py``) describe *what* happens in a
-manoeuvre; this module knows *how* that is written in OpenSCENARIO 1.0 for CARLA's
-scenario_runner. Every name, unit and formula used here is documented in
-``docs/scenario-conventions.md`` so that a validator can read the scenario back.
+The reference scripts (``corpus/gen_hw_*.py``, ``corpus/gen_ur_*.py``) and the scripts the
+LLM adapts from them describe *what* happens in a manoeuvre; this module knows *how* that is
+written in OpenSCENARIO 1.0 for CARLA's scenario_runner. Every name, unit and formula used here
+is documented in ``docs/scenario-conventions.md`` so that a validator can read the scenario back.
 
-This module runs inside the sandbox too, where only the ``corpus`` folder and
+This module runs inside the sandbox too, where only the ``scenario_lib`` folder and
 ``scenariogeneration`` exist: it imports nothing else from ScenWeave.
 """
 
@@ -24,7 +24,7 @@ from typing import Any
 
 from scenariogeneration import xosc
 
-from scenweave.corpus.kinematics import (
+from scenweave.scenario_lib.kinematics import (
     MAX_PLAYABLE_DECELERATION_MS2,
     SAFETY_GAP_M,
     YELLOW_PHASE_S,
@@ -38,7 +38,7 @@ from scenweave.corpus.kinematics import (
     start_gap_m,
     stop_at_line,
 )
-from scenweave.corpus.phases import (
+from scenweave.scenario_lib.phases import (
     Phase,
     PhasedProfile,
     PhasesInvalid,
@@ -144,7 +144,8 @@ class StoryEvent:
 
 def number(params: Mapping[str, Any], key: str) -> float:
     """``params[key]`` when it is a finite number; otherwise an error naming the key."""
-    return finite(f"params key {key!r}", params[key])
+    value: float = finite(f"params key {key!r}", params[key])  # as given: an int stays an int
+    return value
 
 
 def finite(what: str, value: Any) -> Any:
@@ -329,7 +330,7 @@ def lead_keeps_ahead(params: Mapping[str, Any],
                      ego_stops_at_line: bool = False) -> list[StoryEvent]:
     """The urban lead's ``lead_speed_change`` when the ego, driving as recorded (stopping at
     the line if ``ego_stops_at_line``), would catch it up before ``timeout_s``
-    (``corpus.kinematics.lead_stays_ahead``); none otherwise."""
+    (``scenario_lib.kinematics.lead_stays_ahead``); none otherwise."""
     if not params.get("lead_present"):
         return []
     clearance = clearance_m(params.get("lead_vehicle_type"))
@@ -459,7 +460,7 @@ def speed_phases(entity: str, profile: Iterable[Phase]) -> list[StoryEvent]:
 
 
 def motion(params: Mapping[str, Any], prefix: str) -> SpeedProfile | PhasedProfile:
-    """``prefix``'s motion from t = 0 (``corpus.phases.profile_of``), its numbers checked."""
+    """``prefix``'s motion from t = 0 (``scenario_lib.phases.profile_of``), its numbers checked."""
     for key in (f"{prefix}_speed_ms", f"{prefix}_end_speed_ms", "duration_s",
                 "maneuver_start_s"):
         number(params, key)
@@ -518,7 +519,7 @@ def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> list[StoryEvent]:
 
     Then the ego slows to the lead's end speed, ``REACTION_TIME_S`` after the lead starts
     braking, over the lead's braking time or faster if that is needed to keep its distance
-    (``corpus.kinematics.ego_reaction``): an ego holding its speed would run into the lead.
+    (``scenario_lib.kinematics.ego_reaction``): an ego holding its speed would run into the lead.
     """
     return _hero_reacts_to_npc(params, cut_in=False)
 

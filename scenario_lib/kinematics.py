@@ -1,7 +1,7 @@
 """When things happen and where cars are: the timing rules of the reference scenarios.
 
 Pure arithmetic on speeds, distances and times, shared by the reference scripts (through
-``corpus_utils``) and by the validator (``schemas``), so the scenario and its check derive a
+``builder``) and by the judge (``judge``), so the scenario and its check derive a
 trigger time or a start gap from the params the same way. Every rule is documented in
 ``docs/scenario-conventions.md``. Imports nothing but the standard library: it runs in the
 sandbox too.

@@ -23,9 +23,10 @@ The title says whether the replay passed; a failed one lists its ``REPLAY_*`` fi
 esmini could not play gets a figure saying why. Every figure has the same size
 (``FIGURE_PX``), so a page of them lines up.
 
-This module only computes what is drawn, in figure coordinates (pixels, y down): scales,
-ticks at nice numbers, lines as SVG path data, marks. ``templates/replay_figure.svg`` draws
-it (Jinja2, every value escaped: a record's text is shown, never run).
+This module only computes what is drawn, in figure coordinates (pixels, y down), with the
+chart primitives of ``scenweave.charts`` (scales, ticks at nice numbers, lines as SVG path
+data, marks, legends). ``templates/replay_figure.svg`` (which extends ``chart.svg``) draws it
+(Jinja2, every value escaped: a record's text is shown, never run).
 """
 
 from __future__ import annotations
@@ -36,20 +37,35 @@ import math
 import re
 import textwrap
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from scenweave.charts import (
+    CAPTION_PX,
+    DASH_DOT,
+    DASHED,
+    DOTTED,
+    LABEL_PX,
+    TITLE_PX,
+    Chart,
+    Entry,
+    Panel,
+    Plot,
+    Scale,
+    Stroke,
+    Text,
+    path_data,
+    render_svg,
+)
 from scenweave.files.atomic import write_text_atomic
 from scenweave.judge.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.run_folder import RECORDED_NAME
 from scenweave.scenario_lib.builder import reference_gap_m
 from scenweave.schemas.params import number as number_of
-from scenweave.templating import render
 
 FIGURE_NAME = "replay.svg"
 TEMPLATE = "replay_figure.svg"
@@ -73,20 +89,14 @@ OTHER_COLOURS = ("#e07b00", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf
 LIGHT_COLOURS = {"green": "#2ca02c", "yellow": "#f2c200", "red": "#d62728"}
 FAIL_COLOUR = "#cf222e"
 PASS_COLOUR = "#1a7f37"
-MUTED = "#57606a"
 #: the panels' frames (x, y, width, height) in pixels
 SPEED_FRAME = (58.0, 46.0, 422.0, 176.0)
 LOWER_FRAME = (58.0, 234.0, 422.0, 166.0)
 MAP_FRAME = (552.0, 46.0, 336.0, 354.0)
 CAPTION_TOP = 446.0
-#: font sizes (px) and the width of an average character, as a share of the font size
-TITLE_PX, LABEL_PX, TICK_PX, LEGEND_PX, CAPTION_PX = 12.5, 10.0, 8.75, 8.1, 9.4
-CHAR_EM = 0.56
-#: line dashes (``stroke-dasharray``) of matplotlib's "--", "-." and ":"
-DASHED, DASH_DOT, DOTTED = "5 3", "6 2 1.5 2", "1.5 2"
-#: a line keeps one point per this many pixels along it (the rest is too fine to see); the
-#: map's lanes bend gently at its scale (a chord of 6 px misses a 20 px radius by 0.2 px)
-THIN_PX, LANE_THIN_PX = 1.5, 6.0
+#: the map's lanes keep one point per this many pixels: they bend gently at its scale (a
+#: chord of 6 px misses a 20 px radius by 0.2 px)
+LANE_THIN_PX = 6.0
 
 
 def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
@@ -122,8 +132,9 @@ def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
             figure = _message_figure(facts, "the replay could not be drawn",
                                      f"{type(err).__name__}: {err}")
     out = folder / FIGURE_NAME
-    write_text_atomic(out, render(TEMPLATE, figure=figure, source=_source_of(played, facts.status),
-                                   source_ns=SOURCE_NS))
+    write_text_atomic(out, render_svg(figure, TEMPLATE,
+                                      source=_source_of(played, facts.status),
+                                      source_ns=SOURCE_NS))
     return out
 
 
@@ -280,353 +291,6 @@ def _scenario_doc(path: Path) -> Any:
         return None
 
 
-# --- what the template draws (figure coordinates: pixels, y down) ---------------------------
-
-@dataclass(frozen=True)
-class Stroke:
-    """A line (SVG path data, unfilled)."""
-
-    d: str
-    colour: str
-    width: float
-    dash: str = ""
-    opacity: float = 1.0
-    cls: str = ""
-    kind: str = "stroke"
-
-
-@dataclass(frozen=True)
-class Shape:
-    """A filled outline (a mark: circle, diamond, square, star, X; a shaded span)."""
-
-    d: str
-    fill: str
-    edge: str = "none"
-    width: float = 0.0
-    opacity: float = 1.0
-    cls: str = ""
-    kind: str = "shape"
-
-
-@dataclass(frozen=True)
-class Text:
-    x: float
-    y: float
-    text: str
-    size: float
-    colour: str = "black"
-    anchor: str = "start"
-    vertical: bool = False
-    mono: bool = False
-    cls: str = ""
-
-
-@dataclass
-class Panel:
-    """One plot: what is drawn inside its frame (clipped), over it and its words."""
-
-    name: str
-    frame: tuple[float, float, float, float]
-    grid: list[Stroke] = field(default_factory=list)
-    clipped: list[Stroke | Shape] = field(default_factory=list)
-    over: list[Stroke | Shape] = field(default_factory=list)
-    texts: list[Text] = field(default_factory=list)
-    actors: list[tuple[str, list[Stroke | Shape]]] = field(default_factory=list)
-
-
-@dataclass
-class Figure:
-    """The whole picture: its size, its panels and its words (title, caption, message)."""
-
-    title: str
-    width: int = FIGURE_PX[0]
-    height: int = FIGURE_PX[1]
-    panels: list[Panel] = field(default_factory=list)
-    texts: list[Text] = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class Scale:
-    """Data ``low``..``high`` onto pixels ``start``..``end`` (``end`` < ``start`` for y)."""
-
-    low: float
-    high: float
-    start: float
-    end: float
-
-    def __call__(self, value: Any) -> Any:
-        return self.start + (value - self.low) * ((self.end - self.start) / (self.high - self.low))
-
-    def ticks(self) -> list[tuple[float, str]]:
-        """(pixel, label) at nice numbers (1, 2, 2.5, 5 × 10^k apart), about one every 80 px
-        across and every 45 px up (a y scale runs up: ``end`` < ``start``)."""
-        every_px = 45 if self.end < self.start else 80
-        count = min(8, max(3, round(abs(self.end - self.start) / every_px)))
-        return [(self(v), label) for v, label in nice_ticks(self.low, self.high, count)]
-
-
-def nice_ticks(low: float, high: float, count: int) -> list[tuple[float, str]]:
-    """Values in ``low``..``high`` at the nice step nearest to giving ``count`` intervals,
-    labelled with as many decimals as the step needs."""
-    raw = (high - low) / max(count, 1)
-    if not raw > 0 or not math.isfinite(raw):
-        return []
-    magnitude = 10.0 ** math.floor(math.log10(raw))
-    step = min((m * magnitude for m in (1.0, 2.0, 2.5, 5.0, 10.0)),
-               key=lambda candidate: abs(math.log(candidate / raw)))
-    text = f"{step:.10g}"
-    decimals = len(text.split(".")[1]) if "." in text and "e" not in text else 0
-    first = math.ceil(low / step - 1e-9)
-    values = [(first + i) * step for i in range(int((high - first * step) / step + 1e-9) + 1)]
-    return [(v, f"{0.0 if abs(v) < step * 1e-6 else v:.{decimals}f}") for v in values]
-
-
-def _path_data(xs: Any, ys: Any, thin_px: float = THIN_PX) -> str:
-    """SVG path data through the points (pixels), a new piece after every missing (NaN)
-    value; of the points within ``thin_px`` along the line only the first is kept."""
-    xs, ys = _thinned(np.asarray(xs, dtype=float), np.asarray(ys, dtype=float), thin_px)
-    points = np.column_stack([xs, ys])
-    present = np.isfinite(points).all(axis=1).astype(np.int8)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], present, [0]])))
-    return "".join("M" + ("%.1f,%.1f " * (end - start) % tuple(points[start:end].ravel().tolist()))
-                   [:-1] for start, end in zip(edges[::2].tolist(), edges[1::2].tolist(),
-                                               strict=True))
-
-
-def _thinned(xs: np.ndarray, ys: np.ndarray,
-             thin_px: float) -> tuple[np.ndarray, np.ndarray]:
-    """The points with one kept per ``thin_px`` of line, and every piece's ends."""
-    if len(xs) < 3:
-        return xs, ys
-    missing = ~(np.isfinite(xs) & np.isfinite(ys))
-    steps = np.nan_to_num(np.hypot(np.diff(xs), np.diff(ys)), nan=0.0)
-    bucket = np.floor(np.concatenate([[0.0], np.cumsum(steps)]) / thin_px)
-    keep = np.concatenate([[True], bucket[1:] != bucket[:-1]]) | missing
-    keep[1:] |= missing[:-1]
-    keep[:-1] |= missing[1:]
-    keep[-1] = True
-    return xs[keep], ys[keep]
-
-
-def _mark_path(shape: str, x: float, y: float, size: float) -> str:
-    """SVG path data of a mark of ``size`` pixels across, centred on (x, y)."""
-    r = size / 2
-    if shape == "circle":
-        return f"M{x - r:.1f},{y:.1f}a{r:.2f},{r:.2f} 0 1,0 {size:.2f},0" \
-               f"a{r:.2f},{r:.2f} 0 1,0 {-size:.2f},0Z"
-    if shape == "square":
-        return f"M{x - r:.1f},{y - r:.1f}h{size:.1f}v{size:.1f}h{-size:.1f}Z"
-    if shape == "diamond":
-        return f"M{x:.1f},{y - r:.1f}L{x + r:.1f},{y:.1f}L{x:.1f},{y + r:.1f}L{x - r:.1f},{y:.1f}Z"
-    if shape == "star":
-        corners = [(r if i % 2 == 0 else r * 0.4, math.pi / 2 + i * math.pi / 5) for i in range(10)]
-    else:  # "x": a plus of arms r long and r/3.5 thick, turned by 45°
-        b = r / 3.5
-        plus = [(b, r), (b, b), (r, b), (r, -b), (b, -b), (b, -r), (-b, -r), (-b, -b), (-r, -b),
-                (-r, b), (-b, b), (-b, r)]
-        corners = [(math.hypot(px, py), math.atan2(py, px) + math.pi / 4) for px, py in plus]
-    return "M" + " L".join(f"{x + d * math.cos(a):.1f},{y - d * math.sin(a):.1f}"
-                           for d, a in corners) + "Z"
-
-
-@dataclass(frozen=True)
-class _Entry:
-    """One line of a legend: a line (dashed or not), a shaded patch or a mark."""
-
-    label: str
-    colour: str = "black"
-    dash: str = ""
-    mark: str = ""
-    patch: bool = False
-
-
-class _Plot:
-    """A panel being drawn: lines, spans and marks in data units, turned into pixels by
-    ``finish`` once the scales are known (by default: the data's extent, 5 % margin)."""
-
-    def __init__(self, name: str, frame: tuple[float, float, float, float]):
-        self.name, self.frame = name, frame
-        self._todo: list[Callable[[Scale, Scale, Panel], None]] = []
-        self._xs: list[float] = []
-        self._ys: list[float] = []
-        self._points: list[np.ndarray] = []  # pixels the data covers, for the legend's place
-        self.legend: list[_Entry] = []
-        self.legend_columns = 1
-
-    def _extend(self, xs: Any, ys: Any) -> None:
-        for target, values in ((self._xs, xs), (self._ys, ys)):
-            found = np.asarray(values, dtype=float).ravel()
-            found = found[np.isfinite(found)]
-            if len(found):
-                target += [float(found.min()), float(found.max())]
-
-    def line(self, xs: Any, ys: Any, colour: str, width: float, dash: str = "",
-             opacity: float = 1.0, actor: str = "") -> None:
-        xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
-        self._extend(xs, ys)
-
-        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
-            px, py = sx(xs), sy(ys)
-            self._points.append(np.column_stack([px, py]))
-            stroke = Stroke(_path_data(px, py), colour, width, dash, opacity)
-            if actor:
-                panel.actors.append((actor, [stroke]))
-            else:
-                panel.clipped.append(stroke)
-        self._todo.append(draw)
-
-    def span(self, x0: float, x1: float, colour: str, opacity: float) -> None:
-        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
-            top, bottom = sy.end, sy.start
-            panel.clipped.append(Shape(f"M{sx(x0):.1f},{top:.1f}H{sx(x1):.1f}V{bottom:.1f}"
-                                       f"H{sx(x0):.1f}Z", colour, opacity=opacity))
-        self._todo.append(draw)
-
-    def hline(self, y: float, colour: str, width: float, dash: str = "") -> None:
-        self._extend([], [y])
-        self._todo.append(lambda sx, sy, panel: panel.clipped.append(Stroke(
-            f"M{sx.start:.1f},{sy(y):.1f}H{sx.end:.1f}", colour, width, dash)))
-
-    def vline(self, x: float, colour: str, width: float, dash: str = "") -> None:
-        self._todo.append(lambda sx, sy, panel: panel.clipped.append(Stroke(
-            f"M{sx(x):.1f},{sy.start:.1f}V{sy.end:.1f}", colour, width, dash)))
-
-    def mark(self, x: float, y: float, shape: str, colour: str, size: float,
-             fill: str | None = None, edge: str | None = None, edge_width: float = 1.2,
-             tolerance: float = 0.0, clip: bool = True, cls: str = "") -> None:
-        """A mark (``fill`` None: the colour), with a bar of ± ``tolerance`` when given."""
-        self._extend([x], [y - tolerance, y + tolerance])
-
-        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
-            px, py = float(sx(x)), float(sy(y))
-            self._points.append(np.array([[px, py]]))
-            drawn: list[Stroke | Shape] = []
-            if tolerance:
-                low, high, cap = sy(y - tolerance), sy(y + tolerance), 2.5
-                drawn.append(Stroke(f"M{px:.1f},{low:.1f}V{high:.1f}M{px - cap:.1f},{low:.1f}"
-                                    f"h{2 * cap}M{px - cap:.1f},{high:.1f}h{2 * cap}", colour,
-                                    1.2))
-            drawn.append(Shape(_mark_path(shape, px, py, size), fill or colour,
-                               edge or colour, edge_width, cls=cls))
-            (panel.clipped if clip else panel.over).extend(drawn)
-        self._todo.append(draw)
-
-    def label(self, x: float, y: float, text: str, colour: str) -> None:
-        """A boxed label beside the point (x, y), toward the middle of the panel."""
-        def draw(sx: Scale, sy: Scale, panel: Panel) -> None:
-            px, py = float(sx(x)), float(sy(y))
-            left = px > (sx.start + sx.end) / 2
-            width = len(text) * TICK_PX * CHAR_EM + 4
-            at = px - 9 - width if left else px + 9
-            panel.over.append(Shape(f"M{at:.1f},{py - 17:.1f}h{width:.1f}v12h{-width:.1f}Z",
-                                    "white", opacity=0.8))
-            panel.texts.append(Text(round(at + 2, 1), round(py - 8, 1), text, TICK_PX, colour,
-                                    cls="collision-time"))
-        self._todo.append(draw)
-
-    def note(self, text: str) -> None:
-        """A word in the middle of the panel, instead of a plot."""
-        x, y, width, height = self.frame
-        self._todo.append(lambda sx, sy, panel: panel.texts.append(Text(
-            x + width / 2, y + height / 2, text, LABEL_PX, MUTED, anchor="middle")))
-
-    def auto_scales(self, x_range: tuple[float, float] | None = None) -> tuple[Scale, Scale]:
-        """Scales around the data (``x_range``: the x limits as given), 5 % margin."""
-        x, y, width, height = self.frame
-        low_x, high_x = x_range or _padded(self._xs)
-        low_y, high_y = _padded(self._ys)
-        return Scale(low_x, high_x, x, x + width), Scale(low_y, high_y, y + height, y)
-
-    def finish(self, scales: tuple[Scale, Scale], x_labels: bool = True, x_label: str = "",
-               y_label: str = "", title: str = "", grid: bool = True) -> Panel:
-        sx, sy = scales
-        panel = Panel(self.name, self.frame)
-        for draw in self._todo:
-            draw(sx, sy, panel)
-        _axes(panel, sx, sy, x_labels, x_label, y_label, title)
-        if not grid:
-            panel.grid = []
-        if self.legend:
-            _legend(panel, self.legend, self.legend_columns, self._points)
-        return panel
-
-
-def _padded(values: list[float]) -> tuple[float, float]:
-    if not values:
-        return 0.0, 1.0
-    low, high = min(values), max(values)
-    if high - low < 1e-9:
-        return low - 1.0, high + 1.0
-    margin = (high - low) * 0.05
-    return low - margin, high + margin
-
-
-def _axes(panel: Panel, sx: Scale, sy: Scale, x_labels: bool, x_label: str, y_label: str,
-          title: str) -> None:
-    """The frame's grid, ticks, tick labels and axis names."""
-    x, y, width, height = panel.frame
-    bottom, right = y + height, x + width
-    ticks = []
-    for px, label in sx.ticks():
-        panel.grid.append(Stroke(f"M{px:.1f},{y:.1f}V{bottom:.1f}", "#b0b0b0", 0.5))
-        ticks.append(f"M{px:.1f},{bottom:.1f}v4")
-        if x_labels:
-            panel.texts.append(Text(round(px, 1), bottom + 14, label, TICK_PX, anchor="middle"))
-    widest = 0
-    for py, label in sy.ticks():
-        panel.grid.append(Stroke(f"M{x:.1f},{py:.1f}H{right:.1f}", "#b0b0b0", 0.5))
-        ticks.append(f"M{x:.1f},{py:.1f}h-4")
-        panel.texts.append(Text(x - 6, round(py + 3, 1), label, TICK_PX, anchor="end"))
-        widest = max(widest, len(label))
-    panel.over.append(Stroke("".join(ticks), "black", 0.8))
-    panel.over.append(Stroke(f"M{x},{y}H{right}V{bottom}H{x}Z", "black", 0.8))
-    if x_label:
-        panel.texts.append(Text(x + width / 2, bottom + 28, x_label, LABEL_PX, anchor="middle"))
-    if y_label:
-        panel.texts.append(Text(round(x - 12 - widest * TICK_PX * CHAR_EM, 1), y + height / 2,
-                                y_label, LABEL_PX, anchor="middle", vertical=True))
-    if title:
-        panel.texts.append(Text(x + width / 2, y - 6, title, LABEL_PX, anchor="middle"))
-
-
-def _legend(panel: Panel, entries: list[_Entry], columns: int,
-            points: list[np.ndarray]) -> None:
-    """The legend in the corner (or edge middle) of the frame that hides the fewest drawn
-    points, as matplotlib's ``loc="best"`` does."""
-    rows = math.ceil(len(entries) / columns)
-    column_width = 26 + max(len(e.label) for e in entries) * LEGEND_PX * CHAR_EM
-    width, height = columns * column_width + 4, rows * 11.5 + 6
-    x, y, frame_width, frame_height = panel.frame
-    spots = [(x + frame_width - width - 4, y + 4), (x + 4, y + 4),
-             (x + 4, y + frame_height - height - 4),
-             (x + frame_width - width - 4, y + frame_height - height - 4),
-             (x + (frame_width - width) / 2, y + 4),
-             (x + (frame_width - width) / 2, y + frame_height - height - 4)]
-    every = np.vstack(points) if points else np.empty((0, 2))
-
-    def hidden(spot: tuple[float, float]) -> int:
-        inside = ((every[:, 0] >= spot[0]) & (every[:, 0] <= spot[0] + width)
-                  & (every[:, 1] >= spot[1]) & (every[:, 1] <= spot[1] + height))
-        return int(inside.sum())
-
-    left, top = min(spots, key=hidden)
-    panel.over.append(Shape(f"M{left:.1f},{top:.1f}h{width:.1f}v{height:.1f}h{-width:.1f}Z",
-                            "white", "#cccccc", 0.8, opacity=0.85, cls="legend"))
-    for i, entry in enumerate(entries):
-        ex = left + 4 + (i % columns) * column_width
-        ey = top + 3 + (i // columns) * 11.5 + 5.75
-        if entry.patch:
-            panel.over.append(Shape(f"M{ex:.1f},{ey - 3.5:.1f}h18v7h-18Z", entry.colour,
-                                    opacity=0.3))
-        elif entry.mark:
-            panel.over.append(Shape(_mark_path(entry.mark, ex + 9, ey, 6), "white",
-                                    entry.colour, 1.2))
-        else:
-            panel.over.append(Stroke(f"M{ex:.1f},{ey:.1f}h18", entry.colour, 1.6, entry.dash))
-        panel.texts.append(Text(round(ex + 22, 1), round(ey + 3, 1), entry.label, LEGEND_PX,
-                                cls="legend"))
-
-
 # --- the figure ------------------------------------------------------------------------------
 
 def _title(facts: _Facts) -> Text:
@@ -636,23 +300,24 @@ def _title(facts: _Facts) -> Text:
 
 
 def _message_figure(facts: _Facts, headline: str, detail: str,
-                    log: list[str] | None = None) -> Figure:
+                    log: list[str] | None = None) -> Chart:
     lines = [headline, "", *textwrap.wrap(detail, 110)[:8]]
     if log:
         lines += ["", "esmini's last log lines:", *(textwrap.shorten(line, 120) for line in log)]
     colour = FAIL_COLOUR if facts.replay else "black"
     title = _title(facts)
-    return Figure(title.text, texts=[title, *(Text(36, 64 + 15 * i, line, 11.25, colour,
-                                                    mono=True, cls="message")
-                                              for i, line in enumerate(lines) if line)])
+    return Chart(title.text, *FIGURE_PX, texts=[title, *(Text(36, 64 + 15 * i, line, 11.25,
+                                                               colour, mono=True, cls="message")
+                                                          for i, line in enumerate(lines)
+                                                          if line)])
 
 
-def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> Figure:
+def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> Chart:
     colours = _colours(playback)
     times = (0.0, max(playback.duration_s, 0.1))
-    speed = _Plot("speed", SPEED_FRAME)
+    speed = Plot("speed", SPEED_FRAME)
     _speed_panel(speed, playback, facts, colours)
-    lower = _Plot("lower", LOWER_FRAME)
+    lower = Plot("lower", LOWER_FRAME)
     if facts.params.get("domain") == "urban":
         _urban_panel(lower, playback, facts, colours, map_path)
         lower_label = "metres"
@@ -663,7 +328,7 @@ def _replay_figure(playback: Playback, facts: _Facts, map_path: Any) -> Figure:
         for time_s in _first_collisions(playback):
             plot.vline(time_s, FAIL_COLOUR, 1.25, DOTTED)
     title = _title(facts)
-    return Figure(title.text, panels=[
+    return Chart(title.text, *FIGURE_PX, panels=[
         speed.finish(speed.auto_scales(times), x_labels=False, y_label="speed (m/s)"),
         lower.finish(lower.auto_scales(times), x_label="time (s)", y_label=lower_label),
         _map_panel(playback, facts, colours, map_path),
@@ -706,16 +371,16 @@ def _first_collisions(playback: Playback) -> list[float]:
 
 # --- speed -----------------------------------------------------------------------------------
 
-def _speed_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str]) -> None:
+def _speed_panel(plot: Plot, playback: Playback, facts: _Facts, colours: dict[str, str]) -> None:
     from scenweave.judge.fidelity import placed_actors
 
     start, duration = facts.number("maneuver_start_s"), facts.number("duration_s")
     if start is not None and duration is not None:
         plot.span(start, start + duration, "#888888", 0.13)
-        plot.legend.append(_Entry("manoeuvre (record)", "#888888", patch=True))
+        plot.legend.append(Entry("manoeuvre (record)", "#888888", patch=True))
     for name in playback.entities:
         plot.line(playback.times, playback.tracks[name]["speed"], colours[name], 1.6)
-        plot.legend.append(_Entry(name, colours[name]))
+        plot.legend.append(Entry(name, colours[name]))
     plot.legend += _recorded_lines(plot, facts, colours, "speed_ms", lambda v: v)
     for name, prefix in placed_actors(facts.params):
         value = facts.number(f"{prefix}_speed_ms")
@@ -726,8 +391,8 @@ def _speed_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[s
         if name in colours:
             plot.mark(at_s, target, "diamond", colours[name], 6.25, fill="white",
                       tolerance=SPEED_TOL_MS)
-    plot.legend += [_Entry("record: start speed", mark="circle"),
-                    _Entry("record: target speed", mark="diamond")]
+    plot.legend += [Entry("record: start speed", mark="circle"),
+                    Entry("record: target speed", mark="diamond")]
     plot.legend_columns = 2
 
 
@@ -753,8 +418,8 @@ def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     return found
 
 
-def _recorded_lines(plot: _Plot, facts: _Facts, colours: dict[str, str], what: str,
-                    convert: Callable[[np.ndarray], Any]) -> list[_Entry]:
+def _recorded_lines(plot: Plot, facts: _Facts, colours: dict[str, str], what: str,
+                    convert: Callable[[np.ndarray], Any]) -> list[Entry]:
     """The mined record's own series, dashed, beside the replay's curves (``what``: speed_ms
     or gap_m; ``convert`` turns recorded values into the panel's)."""
     drawn = []
@@ -763,7 +428,7 @@ def _recorded_lines(plot: _Plot, facts: _Facts, colours: dict[str, str], what: s
         if curve is not None and entity in colours:
             plot.line(curve[0], convert(curve[1]), colours[entity], 1.4, DASHED)
             drawn.append(entity)
-    return [_Entry("recorded (mined data)", dash=DASHED)] if drawn else []
+    return [Entry("recorded (mined data)", dash=DASHED)] if drawn else []
 
 
 # --- gap (highway) ---------------------------------------------------------------------------
@@ -839,7 +504,7 @@ def _recorded_gaps(facts: _Facts) -> list[tuple[str, float, float]]:
     return [(name, gap, at_s) for name, gap, at_s in found if gap is not None]
 
 
-def _gap_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
+def _gap_panel(plot: Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
                map_path: Any) -> None:
     others = [e for e in playback.entities if e != EGO]
     if not others:
@@ -853,13 +518,13 @@ def _gap_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str
     for name in others:
         at = sorted(set(anchors) | set(_lane_change_times(playback, name)))
         plot.line(*_gap_curve(playback, name, at, map_path), colours[name], 1.6)
-        plot.legend.append(_Entry(name, colours[name]))
+        plot.legend.append(Entry(name, colours[name]))
     for name, gap, at_s in recorded:
         if name in colours:
             plot.mark(at_s, gap, "diamond", colours[name], 6.25, fill="white",
                       tolerance=GAP_TOL_M)
     plot.hline(0.0, "black", 0.75)
-    plot.legend += [_Entry("record: gap", mark="diamond"), *mined]
+    plot.legend += [Entry("record: gap", mark="diamond"), *mined]
 
 
 # --- distance vs stop line (urban) -----------------------------------------------------------
@@ -884,7 +549,7 @@ def _light_spans(playback: Playback) -> list[tuple[float, float, str]]:
     return spans
 
 
-def _lead_line(plot: _Plot, playback: Playback, facts: _Facts, colour: str,
+def _lead_line(plot: Plot, playback: Playback, facts: _Facts, colour: str,
                map_path: Any) -> None:
     """Where the lead is, counted from the ego's start like the ego's distance: its replayed
     gap at t = 0 plus what it drove (one lane measurement, not one per sample: in town the
@@ -892,24 +557,24 @@ def _lead_line(plot: _Plot, playback: Playback, facts: _Facts, colour: str,
     gap = float(_gaps(playback, "lead", [0.0], map_path)[0])
     if math.isfinite(gap):
         plot.line(playback.times, gap + _driven(playback, "lead"), colour, 1.5, DASH_DOT)
-        plot.legend.append(_Entry("lead: gap at start + distance driven", colour, DASH_DOT))
+        plot.legend.append(Entry("lead: gap at start + distance driven", colour, DASH_DOT))
     recorded = facts.number("lead_distance_m")
     if recorded is not None:
         plot.mark(0.0, recorded, "diamond", colour, 6.25, fill="white", tolerance=GAP_TOL_M,
                   clip=False)
-        plot.legend.append(_Entry("record: lead gap", colour, mark="diamond"))
+        plot.legend.append(Entry("record: lead gap", colour, mark="diamond"))
 
 
-def _urban_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
+def _urban_panel(plot: Plot, playback: Playback, facts: _Facts, colours: dict[str, str],
                  map_path: Any) -> None:
     for begin, end, colour in _light_spans(playback):
         plot.span(begin, end, LIGHT_COLOURS.get(colour, "#cccccc"), 0.15)
     plot.line(playback.times, _driven(playback, EGO), colours[EGO], 1.6)
-    plot.legend.append(_Entry("ego: distance driven", colours[EGO]))
+    plot.legend.append(Entry("ego: distance driven", colours[EGO]))
     stop_line = facts.number("spawn_stop_line_distance_m")
     if stop_line is not None:
         plot.hline(stop_line, "black", 1.1, DASHED)
-        plot.legend.append(_Entry(f"stop line (record, {stop_line:.1f} m)", dash=DASHED))
+        plot.legend.append(Entry(f"stop line (record, {stop_line:.1f} m)", dash=DASHED))
     if "lead" in playback.tracks:
         _lead_line(plot, playback, facts, colours["lead"], map_path)
 
@@ -918,7 +583,7 @@ def _urban_panel(plot: _Plot, playback: Playback, facts: _Facts, colours: dict[s
 
 def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
                map_path: Any) -> Panel:
-    plot = _Plot("map", MAP_FRAME)
+    plot = Plot("map", MAP_FRAME)
     points = np.array([(x, y) for name in playback.entities
                        for x, y in zip(playback.tracks[name]["x"], playback.tracks[name]["y"],
                                        strict=False)
@@ -936,7 +601,7 @@ def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
         track = playback.tracks[name]  # often lies on the ego's
         ego = name == EGO
         plot.line(track["x"], track["y"], colours[name], 1.75 if ego else 3.5,
-                  opacity=1.0 if ego else 0.75, actor=name)
+                  opacity=1.0 if ego else 0.75, group=("actor", name))
     for name in playback.entities:
         track = playback.tracks[name]
         plot.mark(track["x"][0], track["y"][0], "circle", colours[name], 6.25, edge="black",
@@ -944,17 +609,17 @@ def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
         plot.mark(track["x"][-1], track["y"][-1], "square", colours[name], 5.0, fill="white")
     if extra:
         plot.mark(*turn_exit, "star", "black", 12.5)
-        plot.legend.append(_Entry("record: turn exit", mark="star"))
+        plot.legend.append(Entry("record: turn exit", mark="star"))
     _mark_stop_line(plot, playback, facts)
     light = (facts.number("tfl_x_carla"), facts.number("tfl_y_carla"))
     if None not in light:  # CARLA's y points the other way
         plot.mark(light[0], -light[1], "square", "#ff9900", 7.5, edge="black", edge_width=0.6)
-        plot.legend.append(_Entry("traffic light", "#ff9900", mark="square"))
+        plot.legend.append(Entry("traffic light", "#ff9900", mark="square"))
     _mark_collisions(plot, playback)
     panel = plot.finish(scales, x_label="x (m, OpenDRIVE)", y_label="y (m)",
-                        title="paths: start ● end ■, collision ✕", grid=False)
+                        title="paths: start ● end ■, collision ✕", grid="")
     panel.clipped[:0] = _lanes(map_path, scales)
-    panel.actors.sort(key=lambda actor: actor[0] == EGO)
+    panel.groups.sort(key=lambda group: group.name == EGO)
     return panel
 
 
@@ -968,7 +633,7 @@ def _equal_scales(low: np.ndarray, high: np.ndarray) -> tuple[Scale, Scale]:
             Scale(float(centre[1] - half_y), float(centre[1] + half_y), y + height, y))
 
 
-def _mark_collisions(plot: _Plot, playback: Playback) -> None:
+def _mark_collisions(plot: Plot, playback: Playback) -> None:
     seen: set[tuple[str, str]] = set()
     for time_s, a, b in playback.collisions:
         if (a, b) in seen or a not in playback.tracks or b not in playback.tracks:
@@ -977,10 +642,10 @@ def _mark_collisions(plot: _Plot, playback: Playback) -> None:
         x = (playback.value(a, "x", time_s) + playback.value(b, "x", time_s)) / 2
         y = (playback.value(a, "y", time_s) + playback.value(b, "y", time_s)) / 2
         plot.mark(x, y, "x", FAIL_COLOUR, 14.0, edge="white", edge_width=1.0, cls="collision")
-        plot.label(x, y, f"{a}–{b} {float(time_s):.2f} s", FAIL_COLOUR)
+        plot.label(x, y, f"{a}–{b} {float(time_s):.2f} s", FAIL_COLOUR, cls="collision-time")
 
 
-def _mark_stop_line(plot: _Plot, playback: Playback, facts: _Facts) -> None:
+def _mark_stop_line(plot: Plot, playback: Playback, facts: _Facts) -> None:
     """The record's stop line across the ego's path, where the ego has driven its distance."""
     stop_line = facts.number("spawn_stop_line_distance_m")
     if stop_line is None or EGO not in playback.tracks:
@@ -998,7 +663,7 @@ def _mark_stop_line(plot: _Plot, playback: Playback, facts: _Facts) -> None:
     half = 2.5
     plot.line([x - half * math.sin(h), x + half * math.sin(h)],
               [y + half * math.cos(h), y - half * math.cos(h)], "black", 2.75)
-    plot.legend.append(_Entry("record: stop line"))
+    plot.legend.append(Entry("record: stop line"))
 
 
 def _lanes(map_path: Any, scales: tuple[Scale, Scale]) -> list[Stroke]:
@@ -1017,7 +682,7 @@ def _lanes(map_path: Any, scales: tuple[Scale, Scale]) -> list[Stroke]:
         if chosen:
             gap = np.full((1, 2), np.nan)  # between two lines
             every = np.vstack([part for line in chosen for part in (line, gap)])
-            drawn.append(Stroke(_path_data(*_cropped(sx(every[:, 0]), sy(every[:, 1]), sx, sy),
+            drawn.append(Stroke(path_data(*_cropped(sx(every[:, 0]), sy(every[:, 1]), sx, sy),
                                            LANE_THIN_PX),
                                 colour, width, cls="lanes"))
     return drawn

@@ -69,8 +69,10 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
     ``True``/``False``; ``None`` to anything); after
     a ``"key": value,`` line of a dict, new ``"key": value,`` lines for ``new_keys`` may
     follow; at least ``min_edits`` edits (one per value to change: a small model otherwise
-    stops after the first). A reply in it cannot break the script's syntax, rename a key or
-    touch code; a script with no such line gets :func:`edit_grammar`."""
+    stops after the first) and at most :data:`SPARE_EDITS` more, numbers and strings of
+    bounded length (a small model otherwise repeats an edit or a digit until its output
+    tokens run out, and the cut reply is no JSON). A reply in it cannot break the script's
+    syntax, rename a key or touch code; a script with no such line gets :func:`edit_grammar`."""
     slots = _literal_slots(reference)
     counts = Counter(reference.splitlines())
     pairs = [_pair_rule(line, slots[number], new_keys)
@@ -78,8 +80,9 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
              if slots.get(number) and counts[line] == 1]
     if not pairs:
         return edit_grammar(reference)
-    edits = ('(edit ("," ws edit)*)?' if min_edits < 1 else
-             f'edit ("," ws edit){{{min_edits - 1},}}')
+    most = max(min(len(pairs), min_edits + SPARE_EDITS), min_edits, 1)
+    edits = (f'(edit ("," ws edit){{0,{most - 1}}})?' if min_edits < 1 else
+             f'edit ("," ws edit){{{min_edits - 1},{most - 1}}}')
     rules = [
         f'root ::= "{{" ws "\\"edits\\":" ws "[" ws {edits} ws "]" ws "}}"',
         'edit ::= "{" ws "\\"search\\":" ws pair ws "}"',
@@ -87,8 +90,8 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
         'val ::= num | pystr | bool | "None"',
         'bool ::= "True" | "False"',
         *PHASE_RULES,
-        'num ::= "-"? [0-9]+ ("." [0-9]+)? ([eE] [-+]? [0-9]+)?',
-        f"pystr ::= {_gbnf_literal(QUOTE)} [a-zA-Z0-9_ ./:-]* {_gbnf_literal(QUOTE)}",
+        'num ::= "-"? [0-9]{1,17} ("." [0-9]{1,17})? ([eE] [-+]? [0-9]{1,3})?',
+        f"pystr ::= {_gbnf_literal(QUOTE)} [a-zA-Z0-9_ ./:-]{{0,80}} {_gbnf_literal(QUOTE)}",
         'ws ::= [ \\t\\n]{0,4}',
     ]
     if new_keys:
@@ -101,10 +104,12 @@ def value_edit_grammar(reference: str, new_keys: tuple[str, ...] = (),
     return "\n".join(rules) + "\n"
 
 
+#: edits a value-only reply may make beyond one per value to change
+SPARE_EDITS = 3
 #: a speed profile (``scenario_lib.phases``) as the worked example writes it: a list of phases,
-#: each ``{'start_s': N, 'duration_s': N, 'target_ms': N, 'shape': S}``; any length
+#: each ``{'start_s': N, 'duration_s': N, 'target_ms': N, 'shape': S}``; up to 32 of them
 PHASE_RULES = (
-    'phases ::= "[" (phase (", " phase)*)? "]"',
+    'phases ::= "[" (phase (", " phase){0,31})? "]"',
     "phase ::= \"{'start_s': \" num \", 'duration_s': \" num \", 'target_ms': \" num "
     "\", 'shape': \" shape \"}\"",
     "shape ::= \"'linear'\" | \"'cubic'\" | \"'sinusoidal'\" | \"'step'\"",

@@ -9,11 +9,12 @@ import ctypes
 import importlib.util
 import json
 import math
+import re
 
 import pytest
 
 from scenweave import corpus, maneuvers
-from scenweave.agent.edits import value_edit_grammar
+from scenweave.agent.edits import SPARE_EDITS, value_edit_grammar
 from scenweave.agent.prompts import patch_prompt, variant_prompt
 from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.worked_example import adaptation, worked_example
@@ -132,3 +133,23 @@ def test_a_reply_must_make_at_least_one_edit_per_value_to_change(sampler, placed
     assert not sampler.accepts(grammar, json.dumps({"edits": right[:3]}))
     assert not sampler.accepts(grammar, '{"edits": []}')
     assert sampler.accepts(value_edit_grammar(shown), '{"edits": []}')
+
+
+def test_a_reply_cannot_run_on_until_the_output_tokens_are_spent(sampler, placed):
+    """SmolLM2 once repeated one edit 20 times until its 1024 tokens ran out, and the cut
+    reply was no JSON: the grammar ends a reply after SPARE_EDITS edits more than the values
+    to change, and a number after 17 digits (a float's repr has at most 17)."""
+    brake = next(p for p in placed if p["maneuver_class"] == "BRAKE")
+    shown, values = adaptation(corpus.retrieve(brake).script_path, brake)
+    right = json.loads(json_edits(shown, worked_example(corpus.retrieve(brake).script_path,
+                                                        brake)))["edits"]
+    grammar = patch_prompt(brake, shown, values=values).reply_grammar
+    least, most = (int(n) + 1 for n in re.search(r"\{(\d+),(\d+)\}", grammar).groups())
+    assert least <= len(right) <= most <= least + SPARE_EDITS
+    repeated = (right * 3)[:most + 1]
+    assert sampler.accepts(grammar, json.dumps({"edits": repeated[:most]}))
+    assert not sampler.accepts(grammar, json.dumps({"edits": repeated}))
+    speed = next(line for line in shown.splitlines() if '"ego_speed_ms":' in line)
+    endless = speed.replace(speed.split(": ")[1], "3" * 18 + ",")
+    assert not sampler.accepts(grammar, json.dumps({"edits": [{"search": speed,
+                                                               "replace": endless}]}))

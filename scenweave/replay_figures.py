@@ -143,7 +143,7 @@ def is_reported(outcome: dict, index: int) -> bool:
     the scenario draws it (in parallel) instead of the report at the end: every failed replay,
     and the first scenario of each class (``index`` 0), the one shown when it passes."""
     replay = outcome.get("replay")
-    return bool(replay) and (not replay.get("passed") or index == 0)
+    return isinstance(replay, dict) and bool(replay) and (not replay.get("passed") or index == 0)
 
 
 def figure_source(folder: Path, status: dict) -> str:
@@ -182,7 +182,8 @@ def _read_playback(path: Path) -> tuple[Any, Playback | Exception]:
 
 
 def _source_of(played: Any, status: dict) -> str:
-    replay = status.get("replay") if isinstance(status.get("replay"), dict) else {}
+    raw = status.get("replay")
+    replay: dict[str, Any] = raw if isinstance(raw, dict) else {}
     verdict = {"passed": replay.get("passed"), "codes": replay.get("codes"),
                "errors": (status.get("validation") or {}).get("errors")}
     if isinstance(played, dict):  # how long the replay took is no part of what it shows
@@ -398,9 +399,9 @@ def _speed_panel(plot: Plot, playback: Playback, facts: _Facts, colours: dict[st
 
 def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     """(entity, target speed, when it should be reached) of every scripted speed change."""
-    from scenweave.judge.fidelity import expected_speed_changes
+    from scenweave.judge.fidelity import SpeedChange, expected_speed_changes, speed_targets
 
-    changes = []
+    changes: list[SpeedChange] = []
     if facts.doc is not None:
         try:
             changes = expected_speed_changes(facts.doc, facts.params)
@@ -409,13 +410,7 @@ def _speed_targets(facts: _Facts) -> list[tuple[str, float, float]]:
     elif facts.number("ego_end_speed_ms") is not None:
         changes = [("hero_speed_change", facts.number("ego_end_speed_ms"),
                     facts.number("duration_s"), facts.number("maneuver_start_s"))]
-    found = []
-    for name, target, duration, start in changes:
-        values = [target, duration, start]
-        if all(isinstance(v, int | float) and math.isfinite(v) for v in values):
-            found.append((name.removesuffix("_speed_change"), float(target),
-                          float(start) + float(duration)))
-    return found
+    return speed_targets(changes)
 
 
 def _recorded_lines(plot: Plot, facts: _Facts, colours: dict[str, str], what: str,
@@ -588,8 +583,9 @@ def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
                        for x, y in zip(playback.tracks[name]["x"], playback.tracks[name]["y"],
                                        strict=False)
                        if math.isfinite(x) and math.isfinite(y)])
-    turn_exit = (facts.number("turn_exit_x"), facts.number("turn_exit_y"))
-    extra = [turn_exit] if None not in turn_exit else []
+    exit_x, exit_y = facts.number("turn_exit_x"), facts.number("turn_exit_y")
+    turn_exit = (exit_x, exit_y) if exit_x is not None and exit_y is not None else None
+    extra = [turn_exit] if turn_exit is not None else []
     if not len(points):
         x, y, width, height = MAP_FRAME
         return Panel("map", MAP_FRAME, texts=[Text(x + width / 2, y + height / 2,
@@ -607,13 +603,13 @@ def _map_panel(playback: Playback, facts: _Facts, colours: dict[str, str],
         plot.mark(track["x"][0], track["y"][0], "circle", colours[name], 6.25, edge="black",
                   edge_width=0.6)
         plot.mark(track["x"][-1], track["y"][-1], "square", colours[name], 5.0, fill="white")
-    if extra:
+    if turn_exit is not None:
         plot.mark(*turn_exit, "star", "black", 12.5)
         plot.legend.append(Entry("record: turn exit", mark="star"))
     _mark_stop_line(plot, playback, facts)
-    light = (facts.number("tfl_x_carla"), facts.number("tfl_y_carla"))
-    if None not in light:  # CARLA's y points the other way
-        plot.mark(light[0], -light[1], "square", "#ff9900", 7.5, edge="black", edge_width=0.6)
+    x_carla, y_carla = facts.number("tfl_x_carla"), facts.number("tfl_y_carla")
+    if x_carla is not None and y_carla is not None:  # CARLA's y points the other way
+        plot.mark(x_carla, -y_carla, "square", "#ff9900", 7.5, edge="black", edge_width=0.6)
         plot.legend.append(Entry("traffic light", "#ff9900", mark="square"))
     _mark_collisions(plot, playback)
     panel = plot.finish(scales, x_label="x (m, OpenDRIVE)", y_label="y (m)",

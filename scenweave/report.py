@@ -67,6 +67,10 @@ def percentile(values: list[float], q: float) -> float | None:
     return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
 
 
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(value, 4)
+
+
 def latency_stats(values: list[float]) -> dict:
     """Mean, standard deviation, p50, p95, min and max of latencies in seconds."""
     if not values:
@@ -74,7 +78,7 @@ def latency_stats(values: list[float]) -> dict:
     mean = sum(values) / len(values)
     std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
     return {"mean": round(mean, 4), "std": round(std, 4),
-            "p50": round(percentile(values, 50), 4), "p95": round(percentile(values, 95), 4),
+            "p50": _rounded(percentile(values, 50)), "p95": _rounded(percentile(values, 95)),
             "min": round(min(values), 4), "max": round(max(values), 4)}
 
 
@@ -125,7 +129,8 @@ def projected_curve(latencies: list[float], horizon_s: float = HOUR_S,
         return []
     expected = horizon_s / (sum(usable) / len(usable))
     step = max(1, math.ceil(expected / max_points))
-    curve, clock, count = [], 0.0, 0
+    curve: list[tuple[float, int]] = []
+    clock, count = 0.0, 0
     while True:
         for value in usable:
             if clock + value > horizon_s:

@@ -19,7 +19,7 @@ import math
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, TypeGuard
+from typing import Any
 
 import numpy as np
 
@@ -226,26 +226,16 @@ def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]
     """(entity, target speed, when it should be reached) of each scripted speed change."""
     from lxml import etree
 
-    from scenweave.judge.fidelity import expected_speed_changes
+    from scenweave.judge.fidelity import expected_speed_changes, speed_targets
     from scenweave.judge.scenario_doc import ScenarioDoc
 
     if not params:
         return []
     try:
         doc = ScenarioDoc(etree.parse(str(folder / XOSC_NAME)), params.get("map"))
-        changes = expected_speed_changes(doc, params)
+        return speed_targets(expected_speed_changes(doc, params))
     except (OSError, etree.XMLSyntaxError, KeyError, TypeError, ValueError, AttributeError):
         return []
-    found: list[tuple[str, float, float]] = []
-    for name, target, duration, start in changes:
-        if _finite(target) and _finite(duration) and _finite(start):
-            found.append((name.removesuffix("_speed_change"), float(target),
-                          float(start) + float(duration)))
-    return found
-
-
-def _finite(value: object) -> TypeGuard[int | float]:
-    return isinstance(value, int | float) and math.isfinite(value)
 
 
 def _recorded(folder: Path, params: dict) -> dict:

@@ -55,7 +55,7 @@ from scenweave.errors import ScenarioError
 from scenweave.ingest.extract import with_vehicle_type
 from scenweave.judge.variation import ASPECTS, compare
 from scenweave.player import REPLAY_NAME, Playback
-from scenweave.scenario_lib.builder import known_type
+from scenweave.scenario_lib.vehicles import known_type
 from scenweave.spawn_db.errors import SpawnDbError
 
 VARIANTS_DIR = "variants"

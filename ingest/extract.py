@@ -14,8 +14,8 @@ from scenweave.ingest.layouts import default_layouts
 from scenweave.ingest.phases import SPEED_TOL_MS, NoProfile, fit_end_values, fit_series
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.maneuver import RecordFieldError
-from scenweave.scenario_lib.builder import bumper_gap_m, reference_gap_m
 from scenweave.scenario_lib.phases import PHASED_ACTORS, is_single_ramp, profile_of
+from scenweave.scenario_lib.vehicles import bumper_gap_m, reference_gap_m
 from scenweave.schemas.params import ParamsInvalid, check_params
 
 HIGHWAY_MANEUVER_START_S = 2.0

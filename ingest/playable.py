@@ -16,9 +16,9 @@ from scenweave.ingest.extract import npc_end_gap_phases
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.phases import NoProfile
 from scenweave.maneuvers import SameLane
-from scenweave.scenario_lib.builder import reference_gap_m
 from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2, min_gap_m
 from scenweave.scenario_lib.phases import PhasedProfile, phases_of, profile_of
+from scenweave.scenario_lib.vehicles import reference_gap_m
 
 #: the least free space between two cars' facing bumpers in one lane, ahead or behind (m):
 #: less and a played scenario's bounding boxes touch within the replay's tolerances

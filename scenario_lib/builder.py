@@ -26,7 +26,6 @@ from scenariogeneration import xosc
 
 from scenweave.scenario_lib.kinematics import (
     MAX_PLAYABLE_DECELERATION_MS2,
-    SAFETY_GAP_M,
     YELLOW_PHASE_S,
     SpeedProfile,
     follower_settles,
@@ -47,6 +46,12 @@ from scenweave.scenario_lib.phases import (
     parse_phases,
     profile_of,
 )
+from scenweave.scenario_lib.vehicles import (
+    BOX_CENTRE_AHEAD,
+    VEHICLE_MODELS,
+    clearance_m,
+    known_type,
+)
 
 HERO = "hero"
 XML_DECLARATION = '<?xml version="1.0" encoding="utf-8"?>\n'
@@ -61,41 +66,6 @@ HEADER_DATE = dt.datetime(2026, 1, 1, 0, 0, 0)
 LANE_CHANGE_SIGN = {"left": 1, "right": -1}
 #: params colour of a light -> TrafficSignalStateAction state
 LIGHT_STATES = {"green": "green", "orange": "yellow", "yellow": "yellow", "red": "red"}
-
-
-@dataclass(frozen=True)
-class VehicleModel:
-    """A CARLA blueprint with the OpenSCENARIO category and dimensions that describe it."""
-
-    blueprint: str
-    category: Any
-    length_m: float
-    width_m: float
-    height_m: float
-    max_speed_ms: float
-
-
-#: the Performance maxSpeed of every model (m/s, 250 km/h): players cap an actor at it, and a
-#: record may show any vehicle (a truck at 130 km/h included) faster than its model's real top
-#: speed; the scenario must play what was recorded
-PERFORMANCE_MAX_SPEED_MS = 69.0
-
-#: the bounding box's centre lies this share of the length ahead of the reference point (the
-#: rear axle, where TeleportAction puts a vehicle)
-BOX_CENTRE_AHEAD = 0.3
-
-VEHICLE_MODELS: dict[str, VehicleModel] = {
-    "ego": VehicleModel("vehicle.tesla.model3", xosc.VehicleCategory.car, 4.8, 2.1, 1.5,
-                        PERFORMANCE_MAX_SPEED_MS),
-    "car": VehicleModel("vehicle.audi.a2", xosc.VehicleCategory.car, 3.7, 1.8, 1.6,
-                        PERFORMANCE_MAX_SPEED_MS),
-    "truck": VehicleModel("vehicle.carlamotors.carlacola", xosc.VehicleCategory.truck, 5.2, 2.6,
-                          2.5, PERFORMANCE_MAX_SPEED_MS),
-    "van": VehicleModel("vehicle.mercedes.sprinter", xosc.VehicleCategory.van, 5.9, 2.0, 2.6,
-                        PERFORMANCE_MAX_SPEED_MS),
-    "motorcycle": VehicleModel("vehicle.yamaha.yzf", xosc.VehicleCategory.motorbike, 2.2, 0.9,
-                               1.5, PERFORMANCE_MAX_SPEED_MS),
-}
 
 
 @dataclass(frozen=True)
@@ -215,50 +185,6 @@ def background_traffic(params: Mapping[str, Any]) -> list[Actor]:
                 number(params, "background_speed_ms"), params.get("background_vehicle_type"))]
 
 
-def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
-    """The distance between the ego's and another vehicle's reference points when the free
-    space between their facing bumpers is ``bumper_gap_m`` (positive: the other ahead, its rear
-    facing the ego's front; negative: behind, its front facing the ego's rear)."""
-    ego, other = VEHICLE_MODELS["ego"].length_m, VEHICLE_MODELS[known_type(other_type)].length_m
-    if bumper_gap_m >= 0:
-        return bumper_gap_m + _front_of(ego) + _rear_of(other)
-    return bumper_gap_m - _rear_of(ego) - _front_of(other)
-
-
-def bumper_gap_m(reference_m: float, other_type: str | None) -> float | None:
-    """The free space between the facing bumpers of the ego and a vehicle of ``other_type``
-    whose reference point is ``reference_m`` ahead (negative: behind): ``reference_gap_m``
-    undone. ``None`` when the two overlap along the lane (side by side: no facing bumpers)."""
-    ego, other = VEHICLE_MODELS["ego"].length_m, VEHICLE_MODELS[known_type(other_type)].length_m
-    if reference_m >= _front_of(ego) + _rear_of(other):
-        return reference_m - _front_of(ego) - _rear_of(other)
-    if reference_m <= -(_rear_of(ego) + _front_of(other)):
-        return reference_m + _rear_of(ego) + _front_of(other)
-    return None
-
-
-def _front_of(length_m: float) -> float:
-    """How far the front bumper lies ahead of the reference point (the box centre is
-    ``BOX_CENTRE_AHEAD`` x length ahead of it)."""
-    return length_m * (BOX_CENTRE_AHEAD + 0.5)
-
-
-def _rear_of(length_m: float) -> float:
-    return length_m * (0.5 - BOX_CENTRE_AHEAD)
-
-
-def clearance_m(other_type: str | None) -> float:
-    """The distance the ego and a vehicle of ``other_type`` keep, reference point to reference
-    point in one lane: half of both lengths plus ``SAFETY_GAP_M``."""
-    lengths = VEHICLE_MODELS["ego"].length_m + VEHICLE_MODELS[known_type(other_type)].length_m
-    return lengths / 2 + SAFETY_GAP_M
-
-
-def known_type(vehicle_type: str | None) -> str:
-    """``vehicle_type`` when it has a CARLA model here, else ``car``."""
-    return vehicle_type if vehicle_type in VEHICLE_MODELS else "car"
-
-
 def highway_npc(params: Mapping[str, Any]) -> Actor:
     """The highway NPC (lead, cutter or follower) where the spawn stage put it for t = 0 (its
     recorded gap holds when the manoeuvre starts)."""
@@ -356,7 +282,7 @@ def _vehicle(actor: Actor) -> xosc.Vehicle:
                            model.length_m * BOX_CENTRE_AHEAD, 0, model.height_m / 2)
     front = xosc.Axle(0.5, 0.7, model.width_m * 0.85, model.length_m * 0.6, 0.35)
     rear = xosc.Axle(0.0, 0.7, model.width_m * 0.85, 0.0, 0.35)
-    vehicle = xosc.Vehicle(model.blueprint, model.category, box, front, rear,
+    vehicle = xosc.Vehicle(model.blueprint, xosc.VehicleCategory[model.category], box, front, rear,
                            model.max_speed_ms, MAX_PLAYABLE_DECELERATION_MS2,
                            MAX_PLAYABLE_DECELERATION_MS2)
     if actor.name == HERO:

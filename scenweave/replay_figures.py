@@ -64,7 +64,7 @@ from scenweave.files.atomic import write_text_atomic
 from scenweave.judge.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.run_folder import RECORDED_NAME
-from scenweave.scenario_lib.builder import reference_gap_m
+from scenweave.scenario_lib.vehicles import reference_gap_m
 from scenweave.schemas.params import number as number_of
 
 FIGURE_NAME = "replay.svg"

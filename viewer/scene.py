@@ -34,7 +34,7 @@ from scenweave.judge.replay import (
     light_state,
 )
 from scenweave.player import REPLAY_NAME, Playback
-from scenweave.scenario_lib.builder import reference_gap_m
+from scenweave.scenario_lib.vehicles import reference_gap_m
 from scenweave.schemas.params import number
 from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
 

@@ -17,7 +17,7 @@ from scenweave.judge.variation import compare
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.player import ReplaySettings
 from scenweave.runner import default_matcher, variant_summary
-from scenweave.scenario_lib.builder import bumper_gap_m
+from scenweave.scenario_lib.vehicles import bumper_gap_m
 from tests.agent.conftest import adapted_source, fenced
 from tests.replies import json_edits
 

@@ -16,8 +16,8 @@ from scenweave.ingest.highway import DEFAULT_BINNING, canonicalize_highway_file
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import load_layouts
 from scenweave.ingest.playable import MIN_BUMPER_GAP_M
-from scenweave.scenario_lib.builder import reference_gap_m
 from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2
+from scenweave.scenario_lib.vehicles import reference_gap_m
 from tests.ingest.builders import write_npy
 
 LAYOUTS = load_layouts()

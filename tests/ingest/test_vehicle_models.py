@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from scenweave.ingest.extract import with_vehicle_type
 from scenweave.inputs import InputSelection, load_input
-from scenweave.scenario_lib.builder import VEHICLE_MODELS, bumper_gap_m, reference_gap_m
+from scenweave.scenario_lib.vehicles import VEHICLE_MODELS, bumper_gap_m, reference_gap_m
 
 MODELS = [name for name in VEHICLE_MODELS if name != "ego"]
 

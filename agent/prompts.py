@@ -8,6 +8,8 @@ plays, by the same keys; the LLM writes them in place of the example's."""
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
+from typing import Any
 
 from scenweave.agent.edits import edit_schema, value_edit_grammar
 from scenweave.agent.llm.base import Prompt
@@ -47,7 +49,7 @@ Change each value listed below, in RECORD and wherever generate() has it written
 value the script does not have yet to RECORD. If nothing is listed: {{"edits": []}}"""
 
 
-def llm_params(params: dict, values: dict | None = None) -> dict:
+def llm_params(params: Mapping[str, Any], values: dict | None = None) -> dict:
     """The params the LLM sees: the record's ``values`` the script plays, else everything
     but metadata (thesis Table 5.5)."""
     if values is not None:
@@ -55,18 +57,19 @@ def llm_params(params: dict, values: dict | None = None) -> dict:
     return {k: v for k, v in params.items() if k not in METADATA_KEYS}
 
 
-def maneuver_name(params: dict) -> str:
+def maneuver_name(params: Mapping[str, Any]) -> str:
     name = params.get("maneuver_tag") or params.get("maneuver_class", "driving")
     return str(name).replace("_", " ")
 
 
-def generation_prompt(params: dict, reference: str, values: dict | None = None) -> Prompt:
+def generation_prompt(params: Mapping[str, Any], reference: str,
+                      values: dict | None = None) -> Prompt:
     """Attempt 1: the six sections of thesis Table 5.5."""
     user = _sections(*_shared_head(params, reference, values), ("OUTPUT", OUTPUT_CUE))
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "generate")
 
 
-def error_prompt(params: dict, reference: str, failed_code: str, error: str,
+def error_prompt(params: Mapping[str, Any], reference: str, failed_code: str, error: str,
                  values: dict | None = None) -> Prompt:
     """Attempts 2 and 3 (thesis Table 5.6): previous code and its error injected.
 
@@ -84,7 +87,7 @@ def error_prompt(params: dict, reference: str, failed_code: str, error: str,
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), "repair")
 
 
-def patch_prompt(params: dict, reference: str, error: str | None = None,
+def patch_prompt(params: Mapping[str, Any], reference: str, error: str | None = None,
                  values: dict | None = None) -> Prompt:
     """Ask for JSON edits against the worked example (their schema rides along for backends
     that constrain decoding); after a failure, with the error."""
@@ -106,7 +109,8 @@ def patch_prompt(params: dict, reference: str, error: str | None = None,
                   "repair" if error else "generate", edit_schema(reference), grammar)
 
 
-def _shared_head(params: dict, reference: str, values: dict | None) -> list[tuple[str, str]]:
+def _shared_head(params: Mapping[str, Any], reference: str,
+                 values: dict | None) -> list[tuple[str, str]]:
     return [
         ("TASK", TASK.format(maneuver=maneuver_name(params))),
         ("CONSTRAINTS", CONSTRAINTS),
@@ -123,7 +127,7 @@ def _fenced(text: str, lang: str = "python") -> str:
     return f"```{lang}\n{text.rstrip()}\n```"
 
 
-def _params_json(params: dict, values: dict | None = None) -> str:
+def _params_json(params: Mapping[str, Any], values: dict | None = None) -> str:
     return _fenced(json.dumps(llm_params(params, values), indent=1), "json")
 
 

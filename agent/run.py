@@ -26,6 +26,7 @@ from scenweave.agent.settings import AgentSettings
 from scenweave.agent.state import AgentState
 from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
 from scenweave.sandbox import Sandbox, get_sandbox
+from scenweave.schemas.params import Params
 
 if TYPE_CHECKING:
     from langchain_core.runnables import RunnableConfig
@@ -59,7 +60,7 @@ class AgentOutcome:
         return asdict(self)
 
 
-def run_scenario(params: dict, out_dir: Path, settings: AgentSettings,
+def run_scenario(params: Params, out_dir: Path, settings: AgentSettings,
                  trace: Trace | None = None) -> AgentOutcome:
     """Make one scenario with the agent in ``out_dir``; raise only infrastructure errors.
 

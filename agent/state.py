@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Annotated, TypedDict
 
+from scenweave.schemas.params import Params
+
 
 def add_seconds(left: dict[str, float], right: dict[str, float]) -> dict[str, float]:
     """Reducer of ``node_latency_s``: seconds per node add up over repeated visits."""
@@ -58,7 +60,7 @@ class Attempt(TypedDict, total=False):
 class AgentState(TypedDict, total=False):
     """What the graph knows about one scenario at each step."""
 
-    params: dict
+    params: Params
     """The scenario's params with its spawn: the values the script must reproduce."""
     out_dir: str
     """This scenario's folder; attempts write into ``attempts/<n>/`` below it."""

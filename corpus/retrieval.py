@@ -31,6 +31,7 @@ from scenweave import maneuvers
 from scenweave.corpus.errors import CorpusError
 from scenweave.errors import ParamsError
 from scenweave.files import write_bytes_atomic
+from scenweave.schemas.params import Params
 
 CORPUS_DIR = Path(__file__).resolve().parent
 
@@ -97,7 +98,7 @@ def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
     return retrieve_semantic(query)
 
 
-def generate(params: Mapping[str, Any], out_path: str | os.PathLike[str]) -> Path:
+def generate(params: Params, out_path: str | os.PathLike[str]) -> Path:
     """Run the retrieved reference script in-process: the deterministic (``--no-llm``) path.
 
     Params the script cannot use raise ``ParamsError`` naming the scenario, script and key.

@@ -13,9 +13,10 @@ from scenweave.ingest.extract import extract_params
 from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.playable import check_playable
 from scenweave.ingest.records import check_record
+from scenweave.schemas.params import Params
 
 
-def admit(record: dict) -> dict:
+def admit(record: dict) -> Params:
     """The params of ``record``, or :class:`RecordIssue` naming why no scenario can show it."""
     check_record(record)
     try:

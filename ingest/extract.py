@@ -7,6 +7,8 @@ from them (end speeds, timeout, the spawn footprint), so perturbed variants stay
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Mapping
+from typing import Any
 
 from scenweave import maneuvers
 from scenweave.ingest.issues import RecordIssue
@@ -16,7 +18,7 @@ from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.maneuver import RecordFieldError
 from scenweave.scenario_lib.phases import PHASED_ACTORS, is_single_ramp, profile_of
 from scenweave.scenario_lib.vehicles import bumper_gap_m, reference_gap_m
-from scenweave.schemas.params import ParamsInvalid, check_params
+from scenweave.schemas.params import Params, ParamsInvalid, checked
 
 HIGHWAY_MANEUVER_START_S = 2.0
 TIMEOUT_FACTOR = 2.5
@@ -31,7 +33,7 @@ SPAWN_KEYS = ("spawn_id", "ego_x", "ego_y", "ego_z", "ego_h", "ego_road_id", "eg
               "ego_s")
 
 
-def extract_params(record: dict) -> dict:
+def extract_params(record: dict) -> Params:
     """The flat params dict of one canonical record, highway or urban."""
     if record.get("domain") == "highway":
         return _extract_highway(record)
@@ -43,7 +45,7 @@ def extract_params(record: dict) -> dict:
 
 # -- highway -----------------------------------------------------------------------------------
 
-def _extract_highway(record: dict) -> dict:
+def _extract_highway(record: dict) -> Params:
     code = record["maneuver_class"]
     maneuver = maneuvers.find(code)
     if maneuver is None or maneuver.domain != "highway":
@@ -97,7 +99,7 @@ def _gap_keys(prefix: str) -> tuple[str, ...]:
     return f"{prefix}_distance_m", f"{prefix}_end_distance_m", f"{prefix}_distance_end_m"
 
 
-def with_vehicle_type(params: dict, prefix: str, vehicle_type: str) -> dict:
+def with_vehicle_type(params: Mapping[str, Any], prefix: str, vehicle_type: str) -> Params:
     """``params`` with actor ``prefix`` (``npc``, a free-ride slot, ``lead``, ...) driving
     another model: the free space between the facing bumpers, which the record fixes, is
     kept, so the reference-point gaps params hold move by the change in length; the values
@@ -127,7 +129,7 @@ def record_conventions(record: dict) -> dict:
 
 # -- urban -------------------------------------------------------------------------------------
 
-def _extract_urban(record: dict) -> dict:
+def _extract_urban(record: dict) -> Params:
     trajectory = record["dynamic_content"]["ego_trajectory"]
     t, ds, v = trajectory["t"], trajectory["ds"], trajectory["v"]
     env = record["environment"]
@@ -220,7 +222,7 @@ def _time_at_distance(t: list[float], ds: list[float], target: float) -> float |
 
 # -- derived values, shared by both domains and by variants -----------------------------------
 
-def finish(params: dict) -> dict:
+def finish(params: dict) -> Params:
     """Fill the values that follow from the primary ones and check the result against the
     params contract (``schemas.check_params``); returns ``params`` (changed in place)."""
     if "delta_speed_ms" in params:
@@ -241,10 +243,9 @@ def finish(params: dict) -> dict:
     params["gap_ahead_m"] = max([g for g in gaps if g > 0], default=0.0)
     params["gap_behind_m"] = max([-g for g in gaps if g < 0], default=0.0)
     try:
-        check_params(params)
+        return checked(params)
     except ParamsInvalid as err:
         raise RecordIssue(str(err), field=err.key and f"params.{err.key}") from err
-    return params
 
 
 def fit_phases(params: dict) -> None:
@@ -327,7 +328,7 @@ def _recorded_distance(series: dict, prefix: str):
     return lambda t: table.get(t, 0.0)
 
 
-def npc_end_gap_phases(params: dict) -> tuple:
+def npc_end_gap_phases(params: Mapping[str, Any]) -> tuple:
     """The NPC's profile that meets its recorded end gap while the ego drives its ramp
     (``ingest.phases.fit_end_values``; raises ``NoProfile``)."""
     duration = params["duration_s"]

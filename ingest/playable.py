@@ -11,6 +11,9 @@ that fails gets one issue naming its file, row, the field at fault and why no pr
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 from scenweave import maneuvers
 from scenweave.ingest.extract import npc_end_gap_phases
 from scenweave.ingest.issues import RecordIssue
@@ -27,7 +30,7 @@ MIN_BUMPER_GAP_M = 0.5
 ROUNDING_M = 1e-6
 
 
-def check_playable(params: dict) -> None:
+def check_playable(params: Mapping[str, Any]) -> None:
     """Raise ``RecordIssue`` (naming the file's field) when no replay can show ``params``."""
     if params.get("domain") != "highway":
         return
@@ -46,7 +49,7 @@ def check_playable(params: dict) -> None:
             _cars_in_one_lane_stay_apart(params, maneuver.same_lane)
 
 
-def _brakes_as_a_car_can(params: dict) -> None:
+def _brakes_as_a_car_can(params: Mapping[str, Any]) -> None:
     profile = PhasedProfile(params["npc_speed_ms"], phases_of(params, "npc"))
     hardest = profile.max_acceleration_ms2(braking_only=True)
     if hardest > MAX_PLAYABLE_DECELERATION_MS2:
@@ -57,7 +60,7 @@ def _brakes_as_a_car_can(params: dict) -> None:
             "profile can show it", field="delta_vel_kmh")
 
 
-def _end_gap_reachable(params: dict) -> None:
+def _end_gap_reachable(params: Mapping[str, Any]) -> None:
     """A following record's end gap needs a profile of the NPC that covers the distance."""
     try:
         npc_end_gap_phases(params)
@@ -70,14 +73,14 @@ def _end_gap_reachable(params: dict) -> None:
             f"(ego): no speed profile fits, {err}", field="npc_distance_end_m") from err
 
 
-def _gained_m(params: dict) -> float:
+def _gained_m(params: Mapping[str, Any]) -> float:
     """How much the NPC gains on the ego over the record (m; negative: it drops back)."""
     start, end = params["maneuver_start_s"], params["maneuver_start_s"] + params["duration_s"]
     npc, ego = profile_of(params, "npc"), profile_of(params, "ego")
     return npc.distance(end) - npc.distance(start) - ego.distance(end) + ego.distance(start)
 
 
-def _merges_behind(params: dict) -> None:
+def _merges_behind(params: Mapping[str, Any]) -> None:
     """A cut-in behind ends with the car behind the ego, bumpers apart."""
     duration, gained = params["duration_s"], _gained_m(params)
     end_gap = params["npc_distance_m"] + gained
@@ -96,11 +99,11 @@ def _clearance(kind: str | None, ahead: bool) -> float:
     return abs(reference_gap_m(MIN_BUMPER_GAP_M if ahead else -MIN_BUMPER_GAP_M, kind))
 
 
-def _present(params: dict, same_lane: SameLane) -> bool:
+def _present(params: Mapping[str, Any], same_lane: SameLane) -> bool:
     return same_lane.prefix == "npc" or bool(params.get(f"{same_lane.prefix}_present"))
 
 
-def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
+def _cars_in_one_lane_stay_apart(params: Mapping[str, Any], same_lane: SameLane) -> None:
     """Two cars of one lane keep their bumpers apart: at t = 0, and for a car that stays in
     the lane, while both drive their profiles over the record."""
     prefix, column = same_lane.prefix, same_lane.gap_column
@@ -127,7 +130,7 @@ def _cars_in_one_lane_stay_apart(params: dict, same_lane: SameLane) -> None:
             field=column)
 
 
-def _recorded_gaps_never_overlap(params: dict, same_lane: SameLane) -> None:
+def _recorded_gaps_never_overlap(params: Mapping[str, Any], same_lane: SameLane) -> None:
     """A mined record's own bumper gaps: a car the class keeps in the ego's lane that is ever
     side by side with the ego (gap 0) cannot be played without the two overlapping."""
     if not _present(params, same_lane):

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import zlib
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from scenweave import maneuvers
 from scenweave.ingest.extract import extract_params, finish
 from scenweave.ingest.urban import DEFAULT_PERTURBATION
+from scenweave.schemas.params import Params
 
 DERIVED_ONLY_FOR = {  # keys ``finish`` recomputes from the perturbed ones
     "init_speed_ms": lambda p: True,
@@ -21,7 +24,7 @@ TIME_KEYS = ("duration_s", "brake_time_s", "yellow_delay_s")
 MIN_DURATION_S = 0.1
 
 
-def extract_with_variants(record: dict, n: int, seed: int) -> list[dict]:
+def extract_with_variants(record: dict, n: int, seed: int) -> list[Params]:
     """``n`` params dicts drawn around the record's: Gaussian noise on speeds and timings.
 
     Noise scales come from the record's perturbation block (urban) or the defaults (highway).
@@ -33,7 +36,8 @@ def extract_with_variants(record: dict, n: int, seed: int) -> list[dict]:
     return [_variant(base, index, rng, noise) for index in range(1, n + 1)]
 
 
-def _variant(base: dict, index: int, rng: np.random.Generator, noise: dict) -> dict:
+def _variant(base: Mapping[str, Any], index: int, rng: np.random.Generator,
+             noise: dict) -> Params:
     params = dict(base)
     params["scenario_id"] = f"{base['scenario_id']}_v{index:02d}"
     for key in _perturbed_speed_keys(base):
@@ -49,7 +53,7 @@ def _variant(base: dict, index: int, rng: np.random.Generator, noise: dict) -> d
     return finish(params)
 
 
-def _perturbed_speed_keys(params: dict) -> list[str]:
+def _perturbed_speed_keys(params: Mapping[str, Any]) -> list[str]:
     keys = []
     for key, value in params.items():
         if not key.endswith("speed_ms") or not isinstance(value, float) or value <= 0:

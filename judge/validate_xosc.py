@@ -21,6 +21,7 @@ from scenweave.judge.fidelity import fidelity
 from scenweave.judge.findings import Finding, ReplaySummary, ValidationResult
 from scenweave.judge.replay import judge_replay
 from scenweave.judge.scenario_doc import ScenarioDoc
+from scenweave.schemas.params import Params
 from scenweave.schemas.xsd import osc_1_0_schema
 
 if TYPE_CHECKING:  # the player loads esmini's bindings: imported only when a file is played
@@ -29,7 +30,7 @@ if TYPE_CHECKING:  # the player loads esmini's bindings: imported only when a fi
 DESCRIPTION_CLASS = re.compile(r"^ScenWeave (?P<code>[A-Z][A-Z0-9_]*)\b")
 
 
-def validate_xosc(path: Path | str, params: Mapping[str, Any] | None = None, *,
+def validate_xosc(path: Path | str, params: Params | None = None, *,
                   fix: bool = True, replay: ReplaySettings | None = None,
                   map_path: Path | None = None) -> ValidationResult:
     """Validate one ``.xosc`` (fixing it in place first unless ``fix=False``).

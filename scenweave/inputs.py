@@ -18,6 +18,7 @@ from scenweave.ingest import (
     load_records,
 )
 from scenweave.ingest.issues import IngestError, RecordIssue
+from scenweave.schemas.params import Params
 
 
 @dataclass
@@ -36,7 +37,7 @@ class InputSelection:
 class LoadedInput:
     """Params to run, in input order, and the problems met while reading the input."""
 
-    params: list[dict] = field(default_factory=list)
+    params: list[Params] = field(default_factory=list)
     report: IngestReport = field(default_factory=IngestReport)
     kind: str = "raw"
     #: scenario id -> the series a mined record recorded (``scenweave mine``), which the
@@ -94,7 +95,7 @@ def _records(data: Path, loaded: LoadedInput,
             yield record, str(record.get("source", {}).get("file") or data)
 
 
-def _with_variants(record: dict, selection: InputSelection) -> list[dict]:
+def _with_variants(record: dict, selection: InputSelection) -> list[Params]:
     """The record's params (``ingest.admit``: the rule ingest applies too) and its variants,
     each one a replay can show; else the record is an input issue."""
     made = [admit(record)]

@@ -12,13 +12,14 @@ from __future__ import annotations
 import json
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
 from scenweave.errors import InfrastructureError, ParamsError
+from scenweave.schemas.params import Params
 
 __all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
            "process_scenario"]
@@ -39,7 +40,7 @@ class PipelineSettings:
     vary: int = 0
 
 
-def process_scenario(params: dict, index: int, out_dir: Path, settings: PipelineSettings,
+def process_scenario(params: Params, index: int, out_dir: Path, settings: PipelineSettings,
                      matcher: Any) -> dict:
     """Make, validate and describe one scenario in ``out_dir``; return its outcome."""
     started = time.perf_counter()
@@ -75,7 +76,7 @@ def is_infrastructure_error(err: BaseException) -> bool:
     return isinstance(err, (OSError, MemoryError, InfrastructureError))
 
 
-def base_outcome(params: dict) -> dict:
+def base_outcome(params: Mapping[str, Any]) -> dict:
     """The outcome of a scenario before anything ran: ``failed``, no attempts, no spawn."""
     return {
         "scenario_id": params["scenario_id"], "maneuver_class": params["maneuver_class"],
@@ -94,7 +95,7 @@ def write_playback(result: Any, out_dir: Path) -> None:
         result.playback.write(out_dir / REPLAY_NAME)
 
 
-def _reference_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
+def _reference_scenario(params: Params, out_dir: Path, settings: PipelineSettings,
                         timings: dict, trace: Trace) -> dict:
     from scenweave import corpus
     from scenweave.judge import failure_category, validate_xosc

@@ -33,6 +33,7 @@ from scenweave.run_folder import (
     RunFolder,
     Started,
 )
+from scenweave.schemas.params import Params
 
 
 @dataclass
@@ -143,7 +144,7 @@ def _staging(folder: RunFolder, recorded: dict[str, dict], params: dict) -> Path
     return staging
 
 
-def make_scenario(params: dict, index: int, staging: Path, settings: PipelineSettings,
+def make_scenario(params: Params, index: int, staging: Path, settings: PipelineSettings,
                   matcher: Any) -> dict:
     """``process_scenario``, then the replay figure the report will show (drawn here, in the
     worker that made the scenario, not serially at the end); its time is ``timings_s.figure``."""
@@ -157,9 +158,9 @@ def make_scenario(params: dict, index: int, staging: Path, settings: PipelineSet
     return outcome
 
 
-def _in_this_process(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
+def _in_this_process(todo: list[tuple[int, Params]], stage: Callable[[Params], Path],
                      settings: PipelineSettings, matcher: Any
-                     ) -> Iterator[tuple[dict, Path, dict]]:
+                     ) -> Iterator[tuple[Params, Path, dict]]:
     for index, params in todo:
         staging = stage(params)
         yield params, staging, make_scenario(params, index, staging, settings, matcher)
@@ -171,14 +172,14 @@ _PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
                      "scenweave.player", "scenweave.replay_figures")
 
 
-def _process_in_worker(params: dict, index: int, staging: Path,
+def _process_in_worker(params: Params, index: int, staging: Path,
                        settings: PipelineSettings) -> dict:
     return make_scenario(params, index, staging, settings, _worker_matcher)
 
 
-def _in_processes(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
+def _in_processes(todo: list[tuple[int, Params]], stage: Callable[[Params], Path],
                   settings: PipelineSettings, matcher: Any,
-                  jobs: int) -> Iterator[tuple[dict, Path, dict]]:
+                  jobs: int) -> Iterator[tuple[Params, Path, dict]]:
     """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
 
     Workers are forked once this process has imported the pipeline and loaded the matcher, so
@@ -203,7 +204,7 @@ def _in_processes(todo: list[tuple[int, dict]], stage: Callable[[dict], Path],
             yield params, staging, future.result()
 
 
-def round_robin(params_list: list[dict]) -> Iterator[tuple[int, dict]]:
+def round_robin(params_list: list[Params]) -> Iterator[tuple[int, Params]]:
     """Each params with its spawn index: its position among the records of its class."""
     per_class: Counter[str] = Counter()
     for params in params_list:

@@ -59,6 +59,7 @@ from scenweave.run_folder import (
     safe_name,
 )
 from scenweave.runner import make_scenario, round_robin, run_description, summarize
+from scenweave.schemas.params import Params
 
 QUEUE_NAME = "scenweave"
 QUEUE_ENV = "SCENWEAVE_QUEUE"
@@ -609,8 +610,8 @@ def warm_up(options: WorkerOptions) -> None:
                 matcher = matcher_for(options.preload_matcher or DEFAULT_MATCHER,
                                       options.preload_map)
                 # a name of its own: the example's own id may be a record's of a real run
-                params = {**(example_params(CORPUS_DIR / script) or {}),
-                          "scenario_id": f"scenweave-warm-up-{Path(script).stem}"}
+                params = cast(Params, {**(example_params(CORPUS_DIR / script) or {}),
+                                       "scenario_id": f"scenweave-warm-up-{Path(script).stem}"})
                 folder = Path(tmp) / script
                 folder.mkdir()
                 make_scenario(params, 0, folder, settings, matcher)

@@ -17,7 +17,7 @@ import typing
 from collections.abc import Callable, Mapping
 from functools import cache
 from pathlib import Path
-from typing import Any, Literal, TypedDict, TypeGuard
+from typing import Any, Literal, TypedDict, TypeGuard, cast
 
 import fastjsonschema
 
@@ -214,6 +214,13 @@ def check_params(params: Mapping[str, Any]) -> None:
     for key, value in params.items():
         if isinstance(value, float) and not math.isfinite(value):
             raise ParamsInvalid(f"params key {key!r} is {value}, not a finite number", key)
+
+
+def checked(params: Mapping[str, Any]) -> Params:
+    """``params`` typed as the contract, once :func:`check_params` found it keeps it (raises
+    :class:`ParamsInvalid` otherwise): where a stage's dict becomes ``Params``."""
+    check_params(params)
+    return cast(Params, params)
 
 
 def number(params: Mapping[str, Any], key: str) -> float | None:

@@ -28,7 +28,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Any, TypedDict
+from typing import Any, TypedDict, cast
 
 from scenweave import maneuvers
 from scenweave.errors import ParamsError
@@ -38,7 +38,7 @@ from scenweave.roads.map_ref import MapRef, resolve_map
 from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.roads.signals import junction_approach
 from scenweave.scenario_lib.kinematics import lane_change_length_m, start_gap_m
-from scenweave.schemas.params import NumberReader
+from scenweave.schemas.params import NumberReader, Params
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
     load_database,
@@ -281,7 +281,7 @@ class SpawnMatcher:
             assessments.append(Assessment(entry["spawn_id"], score, rejections))
         return assessments
 
-    def find(self, params: Mapping[str, Any], top_n: int = 5) -> list[SpawnCandidate]:
+    def find(self, params: Params, top_n: int = 5) -> list[SpawnCandidate]:
         """The ``top_n`` best spawn points for ``params``, best first.
 
         Raises :class:`NoSpawnFits` naming the constraint that ruled most spawn points out.
@@ -319,10 +319,11 @@ class SpawnMatcher:
             (heapq.heappush if len(top_scores) < top_n else heapq.heappushpop)(top_scores, score)
         return accepted
 
-    def assign(self, params: Mapping[str, Any], index: int, top_n: int = 5) -> dict[str, Any]:
+    def assign(self, params: Params, index: int, top_n: int = 5) -> Params:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
         candidates = self.find(params, top_n)
-        return self._placed(params, candidates[index % len(candidates)])
+        placed = self._placed(params, candidates[index % len(candidates)])
+        return cast(Params, placed)  # the record's params with the spawn keys filled
 
     def lane_over(self, placed: dict[str, Any], index: int = 0) -> dict[str, Any]:
         """``placed`` (params ``assign`` filled) with the whole scenario one lane over: the ego

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from scenweave.agent.code import apply_corrections, extract_python_code
 from scenweave.agent.llm.base import LLM, LLMReply, Prompt
@@ -15,7 +17,7 @@ from scenweave.agent.state import Attempt
 class Request:
     """What a strategy works from."""
 
-    params: dict
+    params: Mapping[str, Any]
     reference: str
     """Source of the retrieved reference script."""
     attempts: list[Attempt]

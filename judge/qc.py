@@ -11,9 +11,9 @@ from scenweave.judge.findings import Finding
 def run_asam_qc(path: Path | str) -> list[Finding]:
     """Every issue the ASAM checker bundle reports for ``path`` (ASAM_QC findings)."""
     # the ASAM checker packages ship neither type hints (py.typed) nor stubs
-    from qc_baselib import Configuration, Result  # type: ignore[import-untyped]
-    from qc_openscenario import constants  # type: ignore[import-untyped]
-    from qc_openscenario.main import run_checks  # type: ignore[import-untyped]
+    from qc_baselib import Configuration, Result
+    from qc_openscenario import constants
+    from qc_openscenario.main import run_checks
 
     config = Configuration()
     config.set_config_param("InputFile", str(path))

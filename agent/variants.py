@@ -40,8 +40,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from scenweave import corpus
 from scenweave.agent.code import PatchError, extract_python_code
@@ -56,6 +57,7 @@ from scenweave.ingest.extract import with_vehicle_type
 from scenweave.judge.variation import ASPECTS, compare
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.scenario_lib.vehicles import known_type
+from scenweave.schemas.params import Params
 from scenweave.spawn_db.errors import SpawnDbError
 
 VARIANTS_DIR = "variants"
@@ -140,7 +142,7 @@ def asked_params(params: dict, aspect: str, matcher: Any, round_number: int = 0)
         raise NotAsked("VARY_NO_ROOM", str(err)) from err
 
 
-def _vehicle_actors(params: dict) -> list[str]:
+def _vehicle_actors(params: Mapping[str, Any]) -> list[str]:
     """The params prefixes of the recorded actors besides the ego (each has a model)."""
     actors = []
     for key in params:
@@ -151,8 +153,9 @@ def _vehicle_actors(params: dict) -> list[str]:
     return actors
 
 
-def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict, folder: Path,
-             out_dir: Path, settings: AgentSettings, replay: Any, seen: set[str]) -> dict:
+def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict,
+             folder: Path, out_dir: Path, settings: AgentSettings, replay: Any,
+             seen: set[str]) -> dict:
     found: dict[str, Any] = {"asked": _changes(params, asked)}
     if "ego_lane_id" in found["asked"]:
         found["placed"] = {key: asked.get(key) for key in PLACEMENT_KEYS}
@@ -188,13 +191,13 @@ def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict, fol
     return found | {"changed": variation.changed, "kept": not errors, "errors": errors}
 
 
-def _changes(params: dict, asked: dict) -> dict[str, list]:
+def _changes(params: Mapping[str, Any], asked: dict) -> dict[str, list]:
     """``key: [old, new]`` of each value ``asked`` changes."""
     return {key: [params.get(key), value] for key, value in asked.items()
             if params.get(key) != value}
 
 
-def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:
+def _replay_errors(scenario: Path, params: Mapping[str, Any], replay: Any) -> list[str]:
     """Valid and playing the record, against its params with the variant's own weather (the
     one value the record fixes that a variant may change)."""
     from lxml import etree
@@ -203,8 +206,8 @@ def _replay_errors(scenario: Path, params: dict, replay: Any) -> list[str]:
     from scenweave.judge.scenario_doc import ScenarioDoc
 
     weather = ScenarioDoc(etree.parse(str(scenario))).weather_name
-    result = validate_xosc(scenario, {**params, "weather_key": weather or params["weather_key"]},
-                           replay=replay)
+    judged = cast(Params, {**params, "weather_key": weather or params["weather_key"]})
+    result = validate_xosc(scenario, judged, replay=replay)
     if isinstance(result.playback, Playback):  # what it played, beside it (replay.json)
         result.playback.write(scenario.with_name(REPLAY_NAME))
     return [f"{f.code}: {f.message}" for f in result.errors if f.severity == "error"]

@@ -270,7 +270,7 @@ def fit_phases(params: dict) -> None:
             _keep(params, "npc", npc_end_gap_phases(params))
 
 
-def _fit_actor(params: dict, series: dict, prefix: str) -> tuple:
+def _fit_actor(params: Mapping[str, Any], series: dict, prefix: str) -> tuple:
     """``prefix``'s phases from the series, keeping its gap to the ego too where that does
     not take many more phases (a recorded gap that disagrees with the recorded motion, e.g.
     measured across lanes, would otherwise cost a phase per sample)."""
@@ -284,7 +284,7 @@ def _fit_actor(params: dict, series: dict, prefix: str) -> tuple:
     return with_gap if len(with_gap) <= 2 * len(own) + 2 else own
 
 
-def _gap_targets(params: dict, series: dict, prefix: str) -> list[float | None] | None:
+def _gap_targets(params: Mapping[str, Any], series: dict, prefix: str) -> list[float | None] | None:
     """The distance ``prefix`` must have driven since its first speed sample at each sample
     for its recorded gap to the ego to hold: what it had driven when the gap was first
     measured, plus the ego's fitted distance since then and the gap's change (None: no gap
@@ -348,7 +348,7 @@ def _keep(params: dict, prefix: str, phases: tuple) -> None:
         del params[f"{prefix}_phases"]
 
 
-def _series_starts_at_params(params: dict, series: dict) -> bool:
+def _series_starts_at_params(params: Mapping[str, Any], series: dict) -> bool:
     for prefix in PHASED_ACTORS:
         speeds = [v for v in series.get(f"{prefix}_speed_ms") or () if v is not None]
         start = params.get(f"{prefix}_speed_ms")
@@ -358,6 +358,6 @@ def _series_starts_at_params(params: dict, series: dict) -> bool:
     return True
 
 
-def _start_gaps(params: dict) -> list[float]:
+def _start_gaps(params: Mapping[str, Any]) -> list[float]:
     keys = ["npc_distance_m", "lead_distance_m", *(f"{s}_distance_m" for s in SLOTS)]
     return [float(params[k]) for k in keys if isinstance(params.get(k), int | float)]

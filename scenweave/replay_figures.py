@@ -36,7 +36,7 @@ import json
 import math
 import re
 import textwrap
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
@@ -198,7 +198,7 @@ class _Facts:
     """The record's values (params), the replay's verdict (status) and the scenario's
     storyboard (for the scripted speed changes), each possibly missing."""
 
-    def __init__(self, folder: Path, params: dict, status: dict, doc: Any):
+    def __init__(self, folder: Path, params: Mapping[str, Any], status: dict, doc: Any):
         self.folder, self.params, self.status, self.doc = folder, params, status, doc
 
     @classmethod

@@ -12,7 +12,7 @@ import json
 import multiprocessing
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
@@ -135,7 +135,7 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
     return RunResult(folder, summary, skipped, issues)
 
 
-def _staging(folder: RunFolder, recorded: dict[str, dict], params: dict) -> Path:
+def _staging(folder: RunFolder, recorded: dict[str, dict], params: Mapping[str, Any]) -> Path:
     """The scenario's staging folder, holding what a mined record recorded (for its figure)."""
     staging = folder.staging(params["scenario_id"])
     series = recorded.get(params["scenario_id"])

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -113,7 +114,7 @@ def _actors(playback: Playback) -> dict[str, dict]:
     return actors
 
 
-def _lights(playback: Playback, params: dict) -> list[dict]:
+def _lights(playback: Playback, params: Mapping[str, Any]) -> list[dict]:
     """Each light of the scenario: where it stands and its colour from when to when (a
     replay.json written before it said where lights stand: the params' light, CARLA frame)."""
     started = playback.fired("action")
@@ -168,7 +169,8 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
 
 # --- the charts ------------------------------------------------------------------------------
 
-def _charts(playback: Playback, params: dict, folder: Path, map_path: Path | None) -> dict:
+def _charts(playback: Playback, params: Mapping[str, Any], folder: Path,
+            map_path: Path | None) -> dict:
     """Speed, gap, lateral offset and lane, light state: the replay's series, the record's
     values with the judge's tolerance, and the mined record's own series where there is one."""
     from scenweave.judge.fidelity import placed_actors
@@ -203,7 +205,7 @@ def _driven(playback: Playback, entity: str) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum((speeds[1:] + speeds[:-1]) / 2 * np.diff(times))])
 
 
-def _stop_line_chart(playback: Playback, params: dict) -> dict:
+def _stop_line_chart(playback: Playback, params: Mapping[str, Any]) -> dict:
     """Urban: the ego's distance driven against the record's stop line, and where that line
     lies on the ego's path (across it, for the map)."""
     stop_line = number(params, "spawn_stop_line_distance_m")
@@ -222,7 +224,7 @@ def _stop_line_chart(playback: Playback, params: dict) -> dict:
             "at": [round(x, 3), round(y, 3), round(h, 5)]}
 
 
-def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]:
+def _speed_targets(folder: Path, params: Mapping[str, Any]) -> list[tuple[str, float, float]]:
     """(entity, target speed, when it should be reached) of each scripted speed change."""
     from lxml import etree
 
@@ -238,7 +240,7 @@ def _speed_targets(folder: Path, params: dict) -> list[tuple[str, float, float]]
         return []
 
 
-def _recorded(folder: Path, params: dict) -> dict:
+def _recorded(folder: Path, params: Mapping[str, Any]) -> dict:
     """A mined record's series (params' ``recorded_series``, else the folder's
     ``recorded.json``) on the scenario's clock: its event starts with the manoeuvre."""
     recorded = params.get("recorded_series")
@@ -250,7 +252,7 @@ def _recorded(folder: Path, params: dict) -> dict:
     return {**recorded, "t": [None if t is None else t + shift for t in recorded["t"]]}
 
 
-def _gap_chart(playback: Playback, params: dict, recorded: dict,
+def _gap_chart(playback: Playback, params: Mapping[str, Any], recorded: dict,
                map_path: Path | None) -> dict:
     """Every other vehicle's gap to the ego along its lane (highway; the judge's measure)."""
     from scenweave.judge.fidelity import class_of, placed_actors
@@ -288,7 +290,7 @@ def _gap_chart(playback: Playback, params: dict, recorded: dict,
 
 # --- the verdict -----------------------------------------------------------------------------
 
-def _findings(playback: Playback, params: dict, folder: Path, map_path: Path | None,
+def _findings(playback: Playback, params: Mapping[str, Any], folder: Path, map_path: Path | None,
               status: dict) -> list[dict]:
     """The judge's REPLAY_* findings on this playback, each with its time where it has one."""
     from lxml import etree

@@ -8,6 +8,7 @@ Each played scenario gets its ``replay.json`` beside it; the delivered ``.xosc``
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -114,7 +115,7 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
             **({"forced": forced} if params_path.is_file() and forced else {})}
 
 
-def _forced_replay(xosc: Path, params: dict, settings, map_path: Path | None) -> tuple:
+def _forced_replay(xosc: Path, params: Mapping[str, Any], settings, map_path: Path | None) -> tuple:
     """Play a file that failed the checks before the replay; the playback and the judge's
     findings (a REPLAY_MAP finding when no map is named)."""
     from lxml import etree

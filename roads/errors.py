@@ -19,3 +19,8 @@ class LaneEndsError(RoadError, ScenarioError):
 
 class UnknownMapError(RoadError, InputError, ValueError):
     """A map name that is not bundled, or a map file that does not exist."""
+
+
+class RecordedRoadError(RoadError, InputError):
+    """A recorded lane network that cannot be written as OpenDRIVE; the message names the
+    file (where known) and the lanelet."""

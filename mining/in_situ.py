@@ -1,0 +1,344 @@
+"""A mined event where it happened: the recorded road and every vehicle recorded around it.
+
+``write_in_situ(recording, event, out_dir, road, settings)`` writes ``<out_dir>/in_situ/``:
+``scenario.xosc`` (OpenSCENARIO 1.0, ``scenario_lib.trajectories``), ``road.xodr`` (the
+recording's converted road, linked or copied), ``in_situ.json`` (what was chosen: file, ego,
+tracks, window, held samples) and, when played, ``replay.json`` and ``judge.json`` (the
+judge's findings and numbers, ``judge.in_situ``); with ``external_ego`` also
+``hero_reference.csv`` (the ego's recorded trajectory, the stack's reference). The folder
+appears whole or not at all.
+
+What is chosen (:func:`choose`): the event's window widened by ``context_s`` on both sides and
+clipped to the ego's track (the scenario is the ego's: t = 0 is where it starts); every
+vehicle recorded in it, each cut to the window, named ``v<track id>`` (the ego ``hero``, its
+track id a property), with its recorded size and kind. Where a standing car's recorded
+position steps backwards (NGSIM jitters up to 0.45 m), the trajectory holds it: the backward
+part of the step is dropped, so no car reverses. A track with a gap in the window, a vehicle
+without a size, or a road that cannot be converted refuses the in-situ scenario
+(:class:`InSituRefused`, one line naming the file and the track or lanelet); the event's
+other scenarios are not affected.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenweave.errors import InputError
+from scenweave.files import write_json_atomic, write_text_atomic
+from scenweave.judge.in_situ import InSituVerdict, RecordedPath, judge_in_situ
+from scenweave.mining.detect import Event
+from scenweave.mining.tracks import Recording, Track, TrafficLight
+from scenweave.scenario_lib.builder import HERO, write_scenario
+from scenweave.scenario_lib.trajectories import (
+    InSituScene,
+    RecordedVehicle,
+    SignalController,
+    SignalPhase,
+    hold_backward,
+    in_situ_scenario,
+    reference_csv,
+    scenario_summary,
+)
+
+FOLDER = "in_situ"
+SCENARIO_NAME = "scenario.xosc"
+ROAD_NAME = "road.xodr"
+CHOICE_NAME = "in_situ.json"
+JUDGE_NAME = "judge.json"
+REPLAY_NAME = "replay.json"
+REFERENCE_NAME = "hero_reference.csv"
+#: a step longer than this many recording steps is a gap in the track
+GAP_STEPS = 1.5
+#: parked cars wait this far beyond the recorded traffic (m)
+PARKING_OFFSET_M = 150.0
+
+
+class InSituRefused(InputError):
+    """The in-situ scenario of an event cannot be made from its recording; the message is one
+    line naming the file and the track or lanelet."""
+
+
+@dataclass(frozen=True)
+class InSituSettings:
+    """How in-situ scenarios are made (``scenweave mine --in-situ``)."""
+
+    #: seconds of recording kept before and after the event
+    context_s: float = 3.0
+    #: hand the ego to an external controller (the stack under test)
+    external_ego: bool = False
+    #: play the scenario in esmini and judge it against the record
+    replay: bool = True
+    #: the player's wall-clock limit per scenario (s)
+    wall_time_s: float = 30.0
+
+
+@dataclass(frozen=True)
+class RecordedRoad:
+    """The recording's road as OpenDRIVE and its traffic lights' signal ids."""
+
+    xodr: Path
+    #: recorded light id -> the OpenDRIVE signal ids that show it
+    signals: Mapping[str, Sequence[str]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class EventWindow:
+    """Which ego and when: a mined event's or a mined record's."""
+
+    ego: str
+    start_s: float
+    end_s: float
+    label: str = ""
+
+
+@dataclass
+class InSituChoice:
+    """What the in-situ scenario plays: times from the window's start."""
+
+    source: str
+    ego: str
+    start_s: float
+    end_s: float
+    vehicles: list[RecordedVehicle]
+    record: list[RecordedPath]
+    held_samples: int
+    step_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        tracks = {v.name: v.properties.get("track_id", v.name.removeprefix("v"))
+                  for v in self.vehicles}
+        return {"file": self.source, "ego_track": self.ego,
+                "window_s": [round(self.start_s, 3), round(self.end_s, 3)],
+                "tracks": tracks, "held_backward_samples": self.held_samples,
+                "step_s": self.step_s}
+
+
+@dataclass
+class InSituResult:
+    """What ``write_in_situ`` wrote and what the judge found (``verdict`` None: not played)."""
+
+    folder: Path
+    scenario: Path
+    choice: InSituChoice
+    verdict: InSituVerdict | None = None
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+
+def window_of(event: Event | Mapping[str, Any]) -> EventWindow:
+    """The ego and window of a mined :class:`Event` or of a mined record (its provenance)."""
+    if isinstance(event, Event):
+        return EventWindow(event.ego, event.start_s, event.end_s, event.code)
+    provenance = event.get("provenance") or {}
+    try:
+        return EventWindow(str(provenance["tracks"]["ego"]), float(provenance["start_s"]),
+                           float(provenance["end_s"]), str(event.get("scenario_id", "")))
+    except (KeyError, TypeError, ValueError) as err:
+        raise InSituRefused(f"record {event.get('scenario_id', '?')}: no provenance "
+                            f"(tracks.ego, start_s, end_s) to find it in its recording: "
+                            f"{err!r}") from err
+
+
+def choose(recording: Recording, window: EventWindow, context_s: float = 3.0) -> InSituChoice:
+    """Every vehicle recorded in ``window`` widened by ``context_s`` (clipped to the ego's
+    track), cut to it and checked; :class:`InSituRefused` naming file and track otherwise."""
+    source = recording.source
+    ego = next((t for t in recording.tracks if t.id == window.ego), None)
+    if ego is None:
+        raise InSituRefused(f"{source}: track {window.ego} (the event's ego) is not in the "
+                            "recording")
+    start = max(window.start_s - context_s, float(ego.t[0]))
+    end = min(window.end_s + context_s, float(ego.t[-1]))
+    dt = recording.dt or 0.1
+    vehicles, record, held = [], [], 0
+    for track in recording.tracks:
+        inside = (track.t >= start - 1e-6) & (track.t <= end + 1e-6)
+        if inside.sum() < 2:
+            continue
+        _check_track(source, track, inside, dt)
+        name = HERO if track.id == window.ego else f"v{track.id}"
+        vehicle, path, backward = _vehicle(track, inside, start, name)
+        vehicles.append(vehicle)
+        record.append(path)
+        held += backward
+    return InSituChoice(source, window.ego, start, end, vehicles, record, held, dt)
+
+
+def _check_track(source: str, track: Track, inside: np.ndarray, dt: float) -> None:
+    """A track the scenario can play: a size, no gap, finite positions within the window."""
+    for what, value in (("length", track.length_m), ("width", track.width_m)):
+        if not math.isfinite(value) or value <= 0:
+            raise InSituRefused(f"{source}: track {track.id} has no {what} ({value!r}): a "
+                                "vehicle without a size cannot be played")
+    t = track.t[inside]
+    steps = np.diff(t)
+    if len(steps) and steps.max() > GAP_STEPS * dt:
+        k = int(np.argmax(steps))
+        raise InSituRefused(f"{source}: track {track.id} has a gap from {t[k]:.2f} s to "
+                            f"{t[k + 1]:.2f} s (no position for {steps[k]:.2f} s)")
+    values = np.concatenate([track.x[inside], track.y[inside], track.heading[inside]])
+    if not np.isfinite(values).all():
+        raise InSituRefused(f"{source}: track {track.id} has a position or heading that is "
+                            "not a number within the event's window")
+
+
+def _vehicle(track: Track, inside: np.ndarray, start: float,
+             name: str) -> tuple[RecordedVehicle, RecordedPath, int]:
+    """The scenario's vehicle (jitter held) and the raw record it is judged against."""
+    t = np.round(track.t[inside] - start, 3)
+    x, y, h = track.x[inside], track.y[inside], track.heading[inside]
+    held_x, held_y, held = hold_backward(x, y, h)
+    properties = {"track_id": track.id} if name == HERO else {}
+    vehicle = RecordedVehicle(name, track.vehicle_type, track.length_m, track.width_m,
+                              t.tolist(), held_x, held_y, h.tolist(), properties)
+    path = RecordedPath(name, t.tolist(), x.tolist(), y.tolist(), h.tolist(), track.length_m,
+                        track.width_m)
+    return vehicle, path, sum(held)
+
+
+def light_controllers(lights: Sequence[TrafficLight], signals: Mapping[str, Sequence[str]],
+                      start_s: float, end_s: float) -> list[SignalController]:
+    """One controller per recorded light the road shows as signals: its recorded states
+    over the window as phases from t = 0 (``off`` where the record says nothing)."""
+    controllers = []
+    for light in lights:
+        ids = signals.get(light.id) or ()
+        if not ids:
+            continue
+        phases, now = [], start_s
+        for phase in sorted(light.phases, key=lambda p: p.start_s):
+            begin, stop = max(phase.start_s, start_s), min(phase.end_s, end_s)
+            if stop <= begin:
+                continue
+            if begin > now + 1e-6:
+                phases.append(SignalPhase(begin - now, {i: "off" for i in ids}))
+            phases.append(SignalPhase(stop - begin, {i: phase.state for i in ids}))
+            now = stop
+        if phases:
+            controllers.append(SignalController(f"light_{light.id}", phases))
+    return controllers
+
+
+def _parking(recording: Recording) -> tuple[float, float]:
+    """The first parking slot: left of and below every recorded position."""
+    xs = [float(np.nanmin(t.x)) for t in recording.tracks if len(t.x)]
+    ys = [float(np.nanmin(t.y)) for t in recording.tracks if len(t.y)]
+    return (min(xs, default=0.0), min(ys, default=0.0) - PARKING_OFFSET_M)
+
+
+def scene_of(recording: Recording, choice: InSituChoice, road: RecordedRoad,
+             window: EventWindow, external: bool) -> InSituScene:
+    """The scenario's content: the chosen vehicles on the road, the lights, the hero."""
+    duration = round(choice.end_s - choice.start_s, 3)
+    description = (f"ScenWeave in situ {window.label} {Path(recording.source).name} "
+                   f"ego {choice.ego} {choice.start_s:.1f}-{choice.end_s:.1f} s").strip()
+    return InSituScene(description, ROAD_NAME, duration, choice.vehicles, _parking(recording),
+                       choice.step_s,
+                       light_controllers(recording.lights, road.signals, choice.start_s,
+                                         choice.end_s),
+                       external=external, reference_file=REFERENCE_NAME if external else None)
+
+
+def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_dir: Path,
+                  road: RecordedRoad, settings: InSituSettings | None = None) -> InSituResult:
+    """Write ``<out_dir>/in_situ/`` for ``event`` of ``recording`` (see the module's
+    docstring); played and judged unless ``settings.replay`` is off. Raises
+    :class:`InSituRefused` (one line) for input it cannot play; the folder is then not
+    written. ``PlayerUnavailable`` when a replay is asked for and there is no esmini."""
+    settings = settings or InSituSettings()
+    started = time.perf_counter()
+    window = window_of(event)
+    choice = choose(recording, window, settings.context_s)
+    scene = scene_of(recording, choice, road, window, settings.external_ego)
+    folder = Path(out_dir) / FOLDER
+    staging = Path(tempfile.mkdtemp(prefix=f".{FOLDER}.", dir=_made(Path(out_dir))))
+    try:
+        scenario = write_scenario(in_situ_scenario(scene), staging / SCENARIO_NAME)
+        _place_road(road.xodr, staging / ROAD_NAME)
+        if settings.external_ego:
+            hero = next(v for v in choice.vehicles if v.name == HERO)
+            write_text_atomic(staging / REFERENCE_NAME, reference_csv(hero))
+        written = time.perf_counter()
+        result = InSituResult(folder, folder / SCENARIO_NAME, choice)
+        if settings.replay:
+            result.verdict = _play_and_judge(scenario, road.xodr, choice, settings, staging)
+        write_json_atomic(staging / CHOICE_NAME, {**choice.to_dict(),
+                                                  **scenario_summary(scene)})
+        _publish(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    result.folder = folder
+    result.timings_s = {"write": round(written - started, 4),
+                        "total": round(time.perf_counter() - started, 4)}
+    return result
+
+
+def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
+                    settings: InSituSettings, staging: Path) -> InSituVerdict:
+    """Play the staged scenario on the whole road (a trajectory's reach cannot be bounded, so
+    the player's map cut would only cost the time to find that out) at the recording's step,
+    judge it, and keep the playback and the verdict beside it."""
+    from scenweave import player  # loads esmini's bindings only when asked to play
+
+    replay = player.ReplaySettings(time_step_s=choice.step_s, wall_time_s=settings.wall_time_s,
+                                   default_duration_s=choice.end_s - choice.start_s,
+                                   cut_map=False)
+    playback = player.replay_file(scenario, road, replay)
+    skip = {HERO} if settings.external_ego else set()
+    verdict = judge_in_situ(playback, choice.record, skip)
+    playback.write(staging / REPLAY_NAME)
+    write_json_atomic(staging / JUDGE_NAME, {**verdict.to_dict(),
+                                             "timings_s": playback.timings_s})
+    return verdict
+
+
+def _made(folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def _place_road(road: Path, target: Path) -> None:
+    """The road beside the scenario: a hard link to the cached file where the file system
+    allows, else a copy."""
+    try:
+        os.link(road, target)
+    except OSError:
+        shutil.copyfile(road, target)
+        os.chmod(target, 0o644)
+
+
+def _publish(staging: Path, folder: Path) -> None:
+    """Put the staged folder in place of ``folder`` (replacing an older one)."""
+    os.chmod(staging, 0o755)
+    old = None
+    if folder.exists():
+        old = folder.with_name(f".{folder.name}.old-{os.getpid()}")
+        os.replace(folder, old)
+    os.replace(staging, folder)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def road_of(source: str | Path, cache_dir: Path) -> RecordedRoad:
+    """The recording's road (``mining.recorded_road.road_for``: converted once per file
+    content, cached in ``cache_dir``) with its lights' signal ids; a road that cannot be
+    converted refuses the in-situ scenarios of the file (:class:`InSituRefused`, naming the
+    file and the lanelet)."""
+    from scenweave.mining.recorded_road import road_for
+
+    try:
+        road = road_for(Path(source), cache_dir)
+    except InputError as err:
+        raise InSituRefused(str(err)) from err
+    return RecordedRoad(road.xodr, {light.light_id: tuple(light.signal_ids)
+                                    for light in road.lights})

@@ -18,8 +18,8 @@ def _precipitation_attribute(text: str) -> str:
 
 
 def _missing_time_of_day(text: str) -> str:
-    def fix(match: re.Match) -> str:
-        body = match.group(0)
+    def fix(match: re.Match[str]) -> str:
+        body: str = match.group(0)
         if "<TimeOfDay" in body:
             return body
         return re.sub(r"(<Environment\b[^>]*>)", r"\1" + DEFAULT_TIME_OF_DAY, body, count=1)
@@ -28,8 +28,8 @@ def _missing_time_of_day(text: str) -> str:
 
 
 def _missing_precipitation(text: str) -> str:
-    def fix(match: re.Match) -> str:
-        body = match.group(0)
+    def fix(match: re.Match[str]) -> str:
+        body: str = match.group(0)
         if "<Precipitation" in body:
             return body
         if "<Fog" in body:  # the schema orders Weather's children: Sun, Fog, Precipitation
@@ -51,11 +51,12 @@ def _orphan_signal_state_close(text: str) -> str:
 
 
 def _delay_expression(text: str) -> str:
-    def fix(match: re.Match) -> str:
+    def fix(match: re.Match[str]) -> str:
         value = match.group(2)
         try:
             float(value)
-            return match.group(0)
+            whole: str = match.group(0)
+            return whole
         except ValueError:
             return f'{match.group(1)}"0"'
 

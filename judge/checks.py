@@ -8,18 +8,17 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
-from typing import Any
 
 from lxml import etree
 
 from scenweave import maneuvers
-from scenweave.judge.fidelity import SPEED_TOL_MS, numbers
+from scenweave.judge.fidelity import SPEED_TOL_MS
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc, number, source_line
 from scenweave.maneuvers import Maneuver
 from scenweave.scenario_lib.kinematics import SpeedProfile, min_gap_m, start_gap_m
 from scenweave.scenario_lib.phases import PhasedProfile
+from scenweave.schemas.params import Params, actor_value, all_finite
 
 #: spawn coordinates of the thesis's examples (Appendix D) that an LLM may copy verbatim
 DEFAULT_SPAWNS = ((312.4, 171.8), (312.4, -171.8), (-22.1, -18.9), (-22.1, 18.9))
@@ -160,7 +159,7 @@ def _meets_a_light(maneuver_class: str | None) -> bool:
 # -- manoeuvre semantics --------------------------------------------------------------------
 
 def semantics(doc: ScenarioDoc, maneuver_class: str | None,
-              params: Mapping[str, Any] | None) -> list[Finding]:
+              params: Params | None) -> list[Finding]:
     """What a scenario of this class must (not) contain (its :class:`Maneuver` says); empty
     when the class is unknown."""
     maneuver = maneuvers.find(maneuver_class)
@@ -177,7 +176,7 @@ def _lane_changes(doc: ScenarioDoc) -> list[tuple[etree._Element, tuple[str, ...
 
 
 def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
-                       params: Mapping[str, Any] | None) -> list[Finding]:
+                       params: Params | None) -> list[Finding]:
     code = maneuver.code
     found = []
     ego = doc.ego_name
@@ -206,7 +205,7 @@ def _highway_semantics(doc: ScenarioDoc, maneuver: Maneuver,
     return found
 
 
-def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: Mapping[str, Any]) -> list[Finding]:
+def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: Params) -> list[Finding]:
     """The ego must not run into the NPC in front: a braking lead (from t = 0) or a cutter
     (from its cut-in on). Both speed profiles come from the file, the gap at t = 0 from where
     the file places the two cars (along the lane, :func:`_start_gap`).
@@ -236,14 +235,14 @@ def _rear_end(doc: ScenarioDoc, maneuver: Maneuver, params: Mapping[str, Any]) -
     return []
 
 
-def _other_start_speeds(params: Mapping[str, Any],
+def _other_start_speeds(params: Params,
                         *profiles: SpeedProfile | PhasedProfile) -> bool:
     wanted = (params.get("ego_speed_ms"), params.get("npc_speed_ms"))
     return any(want is not None and abs(profile.v0 - want) > SPEED_TOL_MS
                for want, profile in zip(wanted, profiles, strict=True))
 
 
-def _start_gap(doc: ScenarioDoc, params: Mapping[str, Any]) -> float | None:
+def _start_gap(doc: ScenarioDoc, params: Params) -> float | None:
     """Distance from the ego to the NPC at t = 0, as the file places them.
 
     Both on LanePositions of the scenario's map: measured along the NPC's lane from beside the ego
@@ -251,7 +250,8 @@ def _start_gap(doc: ScenarioDoc, params: Mapping[str, Any]) -> float | None:
     minus the lead-in drift), corrected by how far a WorldPosition moves the NPC from its
     spawn along its heading.
     """
-    keys = numbers(params, "npc_distance_m", "npc_speed_ms", "ego_speed_ms", "maneuver_start_s")
+    keys = all_finite(params.get("npc_distance_m"), params.get("npc_speed_ms"),
+                      params.get("ego_speed_ms"), params.get("maneuver_start_s"))
     if keys is None:
         return None
     along = doc.lane_gap("npc")
@@ -259,7 +259,8 @@ def _start_gap(doc: ScenarioDoc, params: Mapping[str, Any]) -> float | None:
         return along
     gap = start_gap_m(*keys)
     position = doc.spawn_position("npc")
-    spawn = numbers(params, "npc_x", "npc_y", "npc_h")
+    spawn = all_finite(actor_value(params, "npc", "x"), actor_value(params, "npc", "y"),
+                       actor_value(params, "npc", "h"))
     if position is None or position.tag != "WorldPosition" or spawn is None:
         return gap
     x, y, h = spawn
@@ -268,14 +269,16 @@ def _start_gap(doc: ScenarioDoc, params: Mapping[str, Any]) -> float | None:
     return gap + moved
 
 
-def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: Mapping[str, Any]) -> list[Finding]:
+def _cut_lanes(doc: ScenarioDoc, maneuver: Maneuver, params: Params) -> list[Finding]:
     """A cut-in starts in the lane next to the ego's and ends in it; a cut-out starts in it.
 
     The ego's lane is followed along the map (``roads.advance_along_lane``) to where the
     NPC stands, so a gap across a road boundary compares the right lane ids.
     """
-    ego_road, npc_road = params.get("ego_road_id"), params.get("npc_road_id")
-    keys = numbers(params, "ego_lane_id", "ego_s", "npc_distance_m", "npc_lane_id")
+    ego_road = actor_value(params, "ego", "road_id")
+    npc_road = actor_value(params, "npc", "road_id")
+    keys = all_finite(actor_value(params, "ego", "lane_id"), actor_value(params, "ego", "s"),
+                      params.get("npc_distance_m"), actor_value(params, "npc", "lane_id"))
     change = doc.events.get("npc_lane_change")
     if change is None:
         return []
@@ -327,7 +330,7 @@ def _light_events(doc: ScenarioDoc) -> list[tuple[float | None, etree._Element]]
 
 
 def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
-                     params: Mapping[str, Any] | None) -> list[Finding]:
+                     params: Params | None) -> list[Finding]:
     code = maneuver.code
     found = []
     lights = _light_events(doc)
@@ -360,7 +363,7 @@ def _urban_semantics(doc: ScenarioDoc, maneuver: Maneuver,
     return found
 
 
-def _code(params: Mapping[str, Any] | None) -> str:
+def _code(params: Params | None) -> str:
     return str((params or {}).get("maneuver_class") or "the class")
 
 
@@ -379,7 +382,7 @@ def _state_at(states: list[tuple[float | None, str]], t: float) -> str | None:
 
 
 def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
-          params: Mapping[str, Any] | None) -> list[Finding]:
+          params: Params | None) -> list[Finding]:
     """A class that stops at the line: the ego brakes only once the light is no longer green,
     and (with the spawn's stop line in params) comes to rest at or before the stop line."""
     code = _code(params)
@@ -401,7 +404,7 @@ def _stop(doc: ScenarioDoc, states: list[tuple[float | None, str]],
 
 
 def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
-                 params: Mapping[str, Any]) -> list[Finding]:
+                 params: Params) -> list[Finding]:
     """A class that passes on green or orange: the ego crosses the stop line before the light
     is red; on an orange record, after it turned yellow (else it passes on green)."""
     code = _code(params)
@@ -420,7 +423,7 @@ def _pass_timing(doc: ScenarioDoc, states: list[tuple[float | None, str]],
     return []
 
 
-def _right_turn(doc: ScenarioDoc, params: Mapping[str, Any] | None) -> list[Finding]:
+def _right_turn(doc: ScenarioDoc, params: Params | None) -> list[Finding]:
     """A right turn: the ego is routed somewhere. When params carry the map's exit of the right
     movement (``turn_exit_*``), FIDELITY_TURN compares the target with it: the approach may
     curve before the junction, so where the exit lies seen from the spawn says little.
@@ -435,7 +438,7 @@ def _right_turn(doc: ScenarioDoc, params: Mapping[str, Any] | None) -> list[Find
     targets = [t for t in targets if t is not None]
     if not targets or spawn is None or spawn.tag != "WorldPosition":
         return [Finding("URB_NO_TURN", f"{code}: no AcquirePositionAction takes the ego anywhere")]
-    if (params or {}).get("turn_exit_x") is not None:
+    if params and actor_value(params, "turn_exit", "x") is not None:
         return []
     target = targets[0]
     h = number(spawn, "h") or 0.0

@@ -8,9 +8,8 @@ shown digits (an LLM writing 8.33 for 8.3333) but not a changed value.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, TypeGuard
+from typing import TypeGuard
 
 from lxml import etree
 
@@ -37,7 +36,7 @@ from scenweave.scenario_lib.phases import (
     phases_of,
     profile_of,
 )
-from scenweave.schemas.params import number as number_of
+from scenweave.schemas.params import Params, actor_value, all_finite, finite
 
 SPEED_TOL_MS = 0.01
 TIME_TOL_S = 0.01
@@ -52,26 +51,15 @@ FOG_BELOW_M = 1000.0
 NO_CLASS = Maneuver(code="", tag="", domain="urban", name="", script="")
 
 
-def class_of(params: Mapping[str, Any]) -> Maneuver:
+def class_of(params: Params) -> Maneuver:
     """The params' class definition (``NO_CLASS`` for a code nobody registered)."""
     return maneuvers.find(params.get("maneuver_class")) or NO_CLASS
-
-
-def numbers(params: Mapping[str, Any], *keys: str) -> tuple[float, ...] | None:
-    """``schemas.params.number`` of each key, in order; None when any is missing."""
-    found = []
-    for key in keys:
-        value = number_of(params, key)
-        if value is None:
-            return None
-        found.append(value)
-    return tuple(found)
 
 
 @dataclass
 class _Check:
     doc: ScenarioDoc
-    params: Mapping[str, Any]
+    params: Params
     found: list[Finding]
 
     def close(self, code: str, what: str, got: float | None, want: float | None, tol: float,
@@ -83,7 +71,7 @@ class _Check:
                                       source_line(element)))
 
 
-def fidelity(doc: ScenarioDoc, params: Mapping[str, Any]) -> list[Finding]:
+def fidelity(doc: ScenarioDoc, params: Params) -> list[Finding]:
     """FIDELITY_* findings: every value the scenario takes from ``params`` must match it."""
     check = _Check(doc, params, [])
     _map(check)
@@ -140,15 +128,17 @@ def _weather(check: _Check) -> None:
                                        f"{seen[what]!r}, weather_key {weather!r} says {value!r}"))
 
 
-def placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str]]:
+def placed_actors(params: Params) -> list[tuple[str, str]]:
     """(entity, params prefix) of every actor the scenario must place, ego first."""
     actors = [("hero", "ego")]
     if params.get("domain") == "highway":
         if params.get("has_npc") and not class_of(params).surrounding_slots:
             actors.append(("npc", "npc"))
-        actors += [(f"npc_{slot}", slot) for slot in SLOTS if params.get(f"{slot}_present")]
+        actors += [(f"npc_{slot}", slot) for slot in SLOTS
+                   if actor_value(params, slot, "present")]
     else:
-        actors += [(role, role) for role in ("lead", "oncoming") if params.get(f"{role}_present")]
+        actors += [(role, role) for role in ("lead", "oncoming")
+                   if actor_value(params, role, "present")]
     return actors
 
 
@@ -171,9 +161,10 @@ def _spawns(check: _Check) -> None:
 Pose = tuple[float, float, float, float]
 
 
-def _pose(params: Mapping[str, Any], prefix: str) -> Pose | None:
+def _pose(params: Params, prefix: str) -> Pose | None:
     """``(x, y, z, h)`` the spawn stage gave ``prefix``, or None when a key is missing."""
-    pose = numbers(params, *(f"{prefix}_{axis}" for axis in "xyzh"))
+    pose = all_finite(actor_value(params, prefix, "x"), actor_value(params, prefix, "y"),
+                      actor_value(params, prefix, "z"), actor_value(params, prefix, "h"))
     if pose is None:
         return None
     x, y, z, h = pose
@@ -187,8 +178,9 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
     NPC's lane id is not found there, walking back that far along the NPC's lane must reach
     the ego's ``s``."""
     params = check.params
-    keys = numbers(params, f"{prefix}_distance_m", f"{prefix}_speed_ms", "ego_speed_ms",
-                   "maneuver_start_s")
+    keys = all_finite(actor_value(params, prefix, "distance_m"),
+                      actor_value(params, prefix, "speed_ms"), params.get("ego_speed_ms"),
+                      params.get("maneuver_start_s"))
     if keys is None:
         return
     distance = keys[0]
@@ -202,7 +194,8 @@ def _gap_along_lane(check: _Check, entity: str, prefix: str, position: etree._El
                 f"lane, params say {gap:.2f} m at t = 0 {why}", "error", source_line(position)))
         return
     walked = _walk_back(check.doc, position, gap)
-    ego_road, ego_s = params.get("ego_road_id"), number_of(params, "ego_s")
+    ego_road, ego_s = actor_value(params, "ego", "road_id"), finite(
+        actor_value(params, "ego", "s"))
     if walked is None or ego_road is None or ego_s is None:
         return
     road, back_s = walked
@@ -236,12 +229,13 @@ def _lane_position(check: _Check, code: str, entity: str, prefix: str,
         check.found.append(Finding(code, f"{entity} is placed by <{position.tag}>, params give "
                                    "a lane position", "error", source_line(position)))
         return
-    for attribute, key in (("roadId", "road_id"), ("laneId", "lane_id")):
-        want = params.get(f"{prefix}_{key}")
+    for attribute, want in (("roadId", actor_value(params, prefix, "road_id")),
+                            ("laneId", actor_value(params, prefix, "lane_id"))):
         if want is not None and str(position.get(attribute)) != str(int(want)):
             check.found.append(Finding(code, f"{entity} {attribute} is {position.get(attribute)},"
                                        f" params say {int(want)}", "error", source_line(position)))
-    check.close(code, f"{entity} s", number(position, "s"), params.get(f"{prefix}_s"),
+    check.close(code, f"{entity} s", number(position, "s"),
+                finite(actor_value(params, prefix, "s")),
                 POSITION_TOL_M, position)
 
 
@@ -267,7 +261,7 @@ def _init_speeds(check: _Check) -> None:
         if check.doc.spawn_position(entity) is None:
             continue
         check.close("FIDELITY_SPEED", f"{entity} initial speed", check.doc.init_speed(entity),
-                    check.params.get(f"{prefix}_speed_ms"), SPEED_TOL_MS,
+                    actor_value(check.params, prefix, "speed_ms"), SPEED_TOL_MS,
                     check.doc.init_private(entity))
 
 
@@ -289,7 +283,7 @@ def _finite(value: object) -> TypeGuard[int | float]:
     return isinstance(value, int | float) and math.isfinite(value)
 
 
-def expected_speed_changes(doc: ScenarioDoc, params: Mapping[str, Any]) -> list[SpeedChange]:
+def expected_speed_changes(doc: ScenarioDoc, params: Params) -> list[SpeedChange]:
     """(action name, end speed, duration, start) of every speed change the class must contain."""
     maneuver = class_of(params)
     recorded_ego = params.get("ego_phases") is not None and not _single_ramp(params, "ego")
@@ -305,17 +299,18 @@ def expected_speed_changes(doc: ScenarioDoc, params: Mapping[str, Any]) -> list[
     if maneuver.npc_speed_change:
         changes += _phase_changes(params, "npc", "npc")
     if maneuver.surrounding_slots:
-        changes += [change for slot in SLOTS if params.get(f"{slot}_present")
+        changes += [change for slot in SLOTS if actor_value(params, slot, "present")
                     for change in _phase_changes(params, f"npc_{slot}", slot)]
     return changes
 
 
-def _phase_changes(params: Mapping[str, Any], entity: str, prefix: str) -> list[SpeedChange]:
+def _phase_changes(params: Params, entity: str, prefix: str) -> list[SpeedChange]:
     """One speed change per phase of ``prefix`` (``corpus.phases``): ``<entity>_speed_change``,
     then ``_2``, ``_3``...; the single ramp when params give no phases."""
     duration, start = params.get("duration_s"), params.get("maneuver_start_s")
-    if params.get(f"{prefix}_phases") is None or None in (duration, start):
-        return [(f"{entity}_speed_change", params.get(f"{prefix}_end_speed_ms"), duration, start)]
+    if actor_value(params, prefix, "phases") is None or None in (duration, start):
+        return [(f"{entity}_speed_change", actor_value(params, prefix, "end_speed_ms"),
+                 duration, start)]
     try:
         phases = phases_of(params, prefix)
     except PhasesInvalid:
@@ -324,26 +319,29 @@ def _phase_changes(params: Mapping[str, Any], entity: str, prefix: str) -> list[
              p.duration_s, p.start_s) for i, p in enumerate(phases)]
 
 
-def _single_ramp(params: Mapping[str, Any], prefix: str) -> bool:
+def _single_ramp(params: Params, prefix: str) -> bool:
     try:
         return is_single_ramp(params, prefix)
     except (PhasesInvalid, KeyError):
         return True
 
 
-def _stop_at_line(params: Mapping[str, Any]) -> SpeedProfile | None:
+def _stop_at_line(params: Params) -> SpeedProfile | None:
     """A stop at the light: the ego's braking that ends before the spawn's stop line
     (conventions)."""
-    keys = numbers(params, "ego_speed_ms", "brake_time_s", "spawn_stop_line_distance_m")
+    keys = all_finite(params.get("ego_speed_ms"), params.get("brake_time_s"),
+                      params.get("spawn_stop_line_distance_m"))
     return None if keys is None else stop_at_line(*keys)
 
 
-def _npc_reaction(doc: ScenarioDoc, params: Mapping[str, Any]) -> SpeedProfile | None:
+def _npc_reaction(doc: ScenarioDoc, params: Params) -> SpeedProfile | None:
     """A reacting class (BRAKE, CINF): the ego slows to the NPC's end speed after a reaction
     time, if the NPC (braking lead, cutter) ends slower than the ego's recorded end speed
     (conventions)."""
-    keys = numbers(params, "ego_speed_ms", "ego_end_speed_ms", "npc_speed_ms", "npc_end_speed_ms",
-                   "duration_s", "maneuver_start_s", "npc_distance_m", "timeout_s")
+    keys = all_finite(params.get("ego_speed_ms"), params.get("ego_end_speed_ms"),
+                      params.get("npc_speed_ms"), params.get("npc_end_speed_ms"),
+                      params.get("duration_s"), params.get("maneuver_start_s"),
+                      params.get("npc_distance_m"), params.get("timeout_s"))
     ego_length, npc_length = doc.vehicle_length("hero"), doc.vehicle_length("npc")
     if keys is None or ego_length is None or npc_length is None:
         return None
@@ -390,7 +388,8 @@ def _lane_change(check: _Check, actor: str) -> None:
         check.found.append(Finding("FIDELITY_DIRECTION", f"{name} goes {got} lanes, params say "
                                    f"{direction} ({want:+.0f})", "error", source_line(target)))
     prefix = "ego" if actor == "hero" else "npc"
-    ramp = numbers(params, f"{prefix}_speed_ms", f"{prefix}_end_speed_ms", "duration_s")
+    ramp = all_finite(actor_value(params, prefix, "speed_ms"),
+                      actor_value(params, prefix, "end_speed_ms"), params.get("duration_s"))
     if ramp is not None:
         length = lane_change_length_m(*ramp) if _single_ramp(params, prefix) \
             else lane_change_length(params, prefix)
@@ -458,13 +457,14 @@ def _turn_exit(check: _Check) -> None:
                 TURN_EXIT_HEADING_TOL_RAD, target)
 
 
-def _light_plan(params: Mapping[str, Any]) -> tuple[str, float | None]:
+def _light_plan(params: Params) -> tuple[str, float | None]:
     """(state at t = 0, time the light turns yellow) the class's light follows (conventions)."""
     if class_of(params).stops_at_line:
         stop = _stop_at_line(params)
         return ("green", None) if stop is None else red_light_timing(stop)
-    keys = numbers(params, "ego_speed_ms", "ego_end_speed_ms", "maneuver_start_s", "duration_s",
-                   "spawn_stop_line_distance_m")
+    keys = all_finite(params.get("ego_speed_ms"), params.get("ego_end_speed_ms"),
+                      params.get("maneuver_start_s"), params.get("duration_s"),
+                      params.get("spawn_stop_line_distance_m"))
     if keys is None:
         return "green", None
     v0, v1, start, duration, stop_line = keys

@@ -10,16 +10,16 @@ under "Replay".
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from scenweave.judge.fidelity import class_of, expected_speed_changes, numbers, placed_actors
+from scenweave.judge.fidelity import class_of, expected_speed_changes, placed_actors
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.scenario_lib.kinematics import STOP_LINE_MARGIN_M
-from scenweave.schemas.params import number as number_of
+from scenweave.schemas.params import Params, actor_value, all_finite, finite
 
 if TYPE_CHECKING:  # the player loads esmini's bindings: only the type is needed here
     from scenweave.player.playback import Playback
@@ -74,7 +74,7 @@ def _finding(code: str, message: str, time_s: float | None = None) -> Finding:
 @dataclass
 class _Judge:
     playback: Playback
-    params: Mapping[str, Any]
+    params: Params
     doc: ScenarioDoc
     map_path: MapPath
     found: list[Finding]
@@ -91,7 +91,7 @@ class _Judge:
         return times[1] - times[0] if len(times) > 1 else 0.0
 
 
-def judge_replay(playback: Playback, params: Mapping[str, Any], doc: ScenarioDoc,
+def judge_replay(playback: Playback, params: Params, doc: ScenarioDoc,
                  map_path: MapPath = None) -> list[Finding]:
     """REPLAY_* findings of one playback against the params the scenario was made from."""
     judge = _Judge(playback, params, doc, map_path, [])
@@ -157,11 +157,12 @@ def _start_poses(judge: _Judge) -> None:
                        f"deg off its lane's direction of traffic {where}", 0.0)
 
 
-def _planned_lane(params: Mapping[str, Any], prefix: str | None) -> LanePosition | None:
+def _planned_lane(params: Params, prefix: str | None) -> LanePosition | None:
     """The lane position the spawn stage chose for ``prefix``, None when params lack it."""
     if prefix is None:
         return None
-    road, lane, s = (params.get(f"{prefix}_{key}") for key in ("road_id", "lane_id", "s"))
+    road, lane = actor_value(params, prefix, "road_id"), actor_value(params, prefix, "lane_id")
+    s = actor_value(params, prefix, "s")
     return None if road is None or lane is None or s is None else (road, lane, s)
 
 
@@ -174,7 +175,7 @@ def _actors_present(judge: _Judge) -> None:
 
 def _start_speeds(judge: _Judge) -> None:
     for entity, prefix in placed_actors(judge.params):
-        want = number_of(judge.params, f"{prefix}_speed_ms")
+        want = finite(actor_value(judge.params, prefix, "speed_ms"))
         if want is None or entity not in judge.playback.tracks:
             continue
         got = judge.playback.tracks[entity]["speed"][0]
@@ -215,12 +216,12 @@ def _speed_changes(judge: _Judge) -> None:
 def _gaps(judge: _Judge) -> None:
     """The recorded gap holds at the manoeuvre start (and, for FL, ``duration_s`` later)."""
     params = judge.params
-    start = number_of(params, "maneuver_start_s")
-    wanted = [(entity, number_of(params, f"{prefix}_distance_m"), start)
+    start = finite(params.get("maneuver_start_s"))
+    wanted = [(entity, finite(actor_value(params, prefix, "distance_m")), start)
               for entity, prefix in placed_actors(params) if entity != "hero"]
     if class_of(params).gap_at_end and start is not None:
-        wanted.append(("npc", number_of(params, "npc_distance_end_m"),
-                       start + (number_of(params, "duration_s") or 0.0)))
+        wanted.append(("npc", finite(params.get("npc_distance_end_m")),
+                       start + (finite(params.get("duration_s")) or 0.0)))
     for entity, gap, at_s in wanted:
         if gap is None or at_s is None or entity not in judge.playback.tracks \
                 or params.get("domain") != "highway" or at_s > judge.playback.duration_s:
@@ -238,7 +239,7 @@ def _lane_changes(judge: _Judge) -> None:
     params = judge.params
     maneuver = class_of(params)
     actor = maneuver.lane_change
-    timing = numbers(params, "maneuver_start_s", "duration_s")
+    timing = all_finite(params.get("maneuver_start_s"), params.get("duration_s"))
     if actor is None or actor not in judge.playback.tracks or timing is None:
         return
     _, duration = timing
@@ -284,7 +285,7 @@ def _events_fired(judge: _Judge) -> None:
 def _lights(judge: _Judge) -> None:
     """The light shows what the class needs when the ego reaches the stop line (or stops)."""
     params = judge.params
-    stop_line = number_of(params, "spawn_stop_line_distance_m")
+    stop_line = finite(params.get("spawn_stop_line_distance_m"))
     if not judge.playback.lights or stop_line is None:
         return
     reached = _time_travelled(judge.playback, "hero", stop_line)
@@ -295,7 +296,7 @@ def _lights(judge: _Judge) -> None:
         if colour not in ("yellow", "red"):
             judge.fail("REPLAY_LIGHT", f"the light is {colour} when the ego stops; a stop at "
                        "red happens on yellow or red", stopped)
-        ego_speed = number_of(params, "ego_speed_ms")
+        ego_speed = finite(params.get("ego_speed_ms"))
         if ego_speed is not None:  # braking: ONSET_MS slower than the record's start speed
             braking_below = ego_speed - ONSET_MS
             early = _first_time(judge.playback, "hero", 0.0, lambda v: v < braking_below)
@@ -312,7 +313,7 @@ def _lights(judge: _Judge) -> None:
 
 def _stop_or_pass(judge: _Judge) -> None:
     params = judge.params
-    maneuver, stop_line = class_of(params), number_of(params, "spawn_stop_line_distance_m")
+    maneuver, stop_line = class_of(params), finite(params.get("spawn_stop_line_distance_m"))
     if params.get("domain") != "urban" or maneuver.light is None or stop_line is None:
         return
     if maneuver.stops_at_line:
@@ -342,7 +343,9 @@ def _right_turn(judge: _Judge) -> None:
     if class_of(params).turn != "right":
         return
     track = judge.playback.tracks["hero"]
-    exit_pose = numbers(params, *(f"turn_exit_{k}" for k in "xyh"))
+    exit_pose = all_finite(actor_value(params, "turn_exit", "x"),
+                           actor_value(params, "turn_exit", "y"),
+                           actor_value(params, "turn_exit", "h"))
     if exit_pose is None:
         turned = heading_change(judge.playback, "hero")
         if turned > -RIGHT_TURN_MIN_RAD:
@@ -379,7 +382,7 @@ def _collision_findings(playback: Playback) -> list[Finding]:
     return found
 
 
-def _has_speed_series(params: Mapping[str, Any], entity: str) -> bool:
+def _has_speed_series(params: Params, entity: str) -> bool:
     series = params.get("recorded_series")
     role = {e: r for r, e in ROLE_ENTITIES.items()}.get(entity)
     return isinstance(series, dict) and role is not None and bool(series.get(f"{role}_speed_ms"))
@@ -399,18 +402,18 @@ class SeriesError:
     def worst(self) -> tuple[float, float, float]:
         return max(self.samples, key=lambda s: abs(s[2] - s[1]))
 
-    def summary(self) -> dict:
+    def summary(self) -> dict[str, float | int]:
         errors = [abs(got - want) for _, want, got in self.samples]
         return {"max": round(max(errors), 4),
                 "rms": round(math.sqrt(sum(e * e for e in errors) / len(errors)), 4),
                 "samples": len(errors), "worst_at_s": round(self.worst[0], 3)}
 
 
-def series_errors(playback: Playback, params: Mapping[str, Any]) -> list[SeriesError]:
+def series_errors(playback: Playback, params: Params) -> list[SeriesError]:
     """Each actor's played speed and gap change against the record's series at every recorded
     sample (scenario time = ``maneuver_start_s`` + the series' ``t``), and a lane change's
     played start and end against the record's; empty without series."""
-    series, start = params.get("recorded_series"), number_of(params, "maneuver_start_s")
+    series, start = params.get("recorded_series"), finite(params.get("maneuver_start_s"))
     if not isinstance(series, dict) or start is None or not playback.times:
         return []
     times = series.get("t") or []
@@ -460,12 +463,12 @@ def _gap_changes(playback: Playback, entity: str,
              - travelled(playback, "hero", at) - base) for at, gap in gaps]
 
 
-def _lane_change_timing(playback: Playback, params: Mapping[str, Any]) -> list[SeriesError]:
+def _lane_change_timing(playback: Playback, params: Params) -> list[SeriesError]:
     """The recorded lane change runs from ``maneuver_start_s`` for ``duration_s`` (mined:
     measured from the lateral motion); the played one from leaving the old lane's centre to
     settling in the new one's."""
     actor = class_of(params).lane_change
-    timing = numbers(params, "maneuver_start_s", "duration_s")
+    timing = all_finite(params.get("maneuver_start_s"), params.get("duration_s"))
     if actor is None or actor not in playback.tracks or timing is None:
         return []
     start, duration = timing
@@ -484,7 +487,7 @@ def _series(judge: _Judge) -> None:
                  "lane change start": SERIES_LANE_CHANGE_TOL_S,
                  "lane change end": SERIES_LANE_CHANGE_TOL_S}
     errors = series_errors(judge.playback, judge.params)
-    summary: dict[str, dict] = {}
+    summary: dict[str, dict[str, float | int]] = {}
     for error in errors:
         summary[f"{error.entity} {error.quantity}"] = error.summary()
         at, want, got = error.worst

@@ -7,9 +7,8 @@ changed), and every check runs on the one parsed tree, so a validation costs mil
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from lxml import etree
 
@@ -65,7 +64,7 @@ def validate_xosc(path: Path | str, params: Params | None = None, *,
 
 
 def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._ElementTree,
-                      params: Mapping[str, Any], settings: ReplaySettings,
+                      params: Params, settings: ReplaySettings,
                       map_path: Path | None) -> None:
     from scenweave import player
 
@@ -89,7 +88,7 @@ def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._Element
     result.replay = summary
 
 
-def validate_tree(tree: etree._ElementTree, params: Mapping[str, Any] | None = None,
+def validate_tree(tree: etree._ElementTree, params: Params | None = None,
                   fixes: list[str] | None = None) -> ValidationResult:
     """Every check on a parsed scenario (``validate_xosc`` without the file and the fixes)."""
     doc = ScenarioDoc(tree, (params or {}).get("map"))

@@ -17,4 +17,6 @@ SCHEMAS_DIR = Path(__file__).resolve().parent
 @cache
 def load_json_schema(name: str) -> dict[str, Any]:
     """Load ``schemas/<name>.schema.json`` (cached per process)."""
-    return json.loads((SCHEMAS_DIR / f"{name}.schema.json").read_text(encoding="utf-8"))
+    schema: dict[str, Any] = json.loads((SCHEMAS_DIR / f"{name}.schema.json").read_text(
+        encoding="utf-8"))
+    return schema

@@ -17,9 +17,11 @@ import typing
 from collections.abc import Callable, Mapping
 from functools import cache
 from pathlib import Path
-from typing import Any, Literal, TypedDict, TypeGuard, cast
+from typing import Any, Literal, TypeGuard, cast, overload
 
 import fastjsonschema
+import typing_extensions
+from typing_extensions import ReadOnly, TypedDict
 
 from scenweave.errors import InputError, ParamsError
 from scenweave.maneuvers.free_ride import SLOTS
@@ -40,83 +42,83 @@ class Params(TypedDict, total=False):
     key; the slot (``center_*``...) and spawn (``ego_x``...) families are added below."""
 
     # -- every params dict -----------------------------------------------------------------
-    scenario_id: str
-    maneuver_class: str
-    maneuver_tag: str
-    domain: Literal["highway", "urban"]
-    weather_key: str
-    duration_s: float
-    maneuver_start_s: float
-    timeout_s: float
-    ego_speed_ms: float
-    ego_end_speed_ms: float
-    has_npc: bool
-    npc_position: Literal["front", "behind"] | None
-    required_lane_sides: list[Side]
-    max_speed_ms: float
-    gap_ahead_m: float
-    gap_behind_m: float
-    spawn_id: int | None
-    description: str
+    scenario_id: ReadOnly[str]
+    maneuver_class: ReadOnly[str]
+    maneuver_tag: ReadOnly[str]
+    domain: ReadOnly[Literal["highway", "urban"]]
+    weather_key: ReadOnly[str]
+    duration_s: ReadOnly[float]
+    maneuver_start_s: ReadOnly[float]
+    timeout_s: ReadOnly[float]
+    ego_speed_ms: ReadOnly[float]
+    ego_end_speed_ms: ReadOnly[float]
+    has_npc: ReadOnly[bool]
+    npc_position: ReadOnly[Literal["front", "behind"] | None]
+    required_lane_sides: ReadOnly[list[Side]]
+    max_speed_ms: ReadOnly[float]
+    gap_ahead_m: ReadOnly[float]
+    gap_behind_m: ReadOnly[float]
+    spawn_id: ReadOnly[int | None]
+    description: ReadOnly[str]
     #: the map the scenario is made for: a bundled CARLA town's name or an .xodr path
-    map: str
+    map: ReadOnly[str]
 
     # -- highway ---------------------------------------------------------------------------
-    npc_speed_ms: float
-    npc_end_speed_ms: float
-    delta_speed_ms: float
-    npc_distance_m: float
-    npc_distance_end_m: float
-    npc_dist_traveled_m: float
-    npc_vehicle_type: VehicleType
-    brake_intensity: float
-    other_dir_traffic: bool
-    lane_change_direction: Side
-    behavior_type: Literal["B1", "B2", "B3", "B4"]
-    ego_dist_traveled_m: float
-    driving_side: Side
+    npc_speed_ms: ReadOnly[float]
+    npc_end_speed_ms: ReadOnly[float]
+    delta_speed_ms: ReadOnly[float]
+    npc_distance_m: ReadOnly[float]
+    npc_distance_end_m: ReadOnly[float]
+    npc_dist_traveled_m: ReadOnly[float]
+    npc_vehicle_type: ReadOnly[VehicleType]
+    brake_intensity: ReadOnly[float]
+    other_dir_traffic: ReadOnly[bool]
+    lane_change_direction: ReadOnly[Side]
+    behavior_type: ReadOnly[Literal["B1", "B2", "B3", "B4"]]
+    ego_dist_traveled_m: ReadOnly[float]
+    driving_side: ReadOnly[Side]
     #: an actor's speed as phases where one ramp does not show the record (scenario_lib.phases)
-    ego_phases: list[PhaseRecord]
-    npc_phases: list[PhaseRecord]
+    ego_phases: ReadOnly[list[PhaseRecord]]
+    npc_phases: ReadOnly[list[PhaseRecord]]
     #: what a mined record recorded at every sample (t from the manoeuvre start; speeds,
     #: gaps...): the replay is compared with it (judge.replay)
-    recorded_series: dict[str, list[float | None]]
+    recorded_series: ReadOnly[dict[str, list[float | None]]]
 
     # -- urban -----------------------------------------------------------------------------
-    road_type: str
-    init_speed_ms: float
-    final_speed_ms: float
-    brake_time_s: float
-    yellow_delay_s: float | None
-    drive_distance_m: float
-    tfl_ds_m: float | None
-    tfl_state: Literal["green", "orange", "red"] | None
-    turn: Literal["straight", "right"]
+    road_type: ReadOnly[str]
+    init_speed_ms: ReadOnly[float]
+    final_speed_ms: ReadOnly[float]
+    brake_time_s: ReadOnly[float]
+    yellow_delay_s: ReadOnly[float | None]
+    drive_distance_m: ReadOnly[float]
+    tfl_ds_m: ReadOnly[float | None]
+    tfl_state: ReadOnly[Literal["green", "orange", "red"] | None]
+    turn: ReadOnly[Literal["straight", "right"]]
     #: what the record says of its road, when it says it: no stage needs these
-    speed_limit_kmh: float | None
-    lane_count: int | None
-    lane_width_m: float | None
-    lead_present: bool
-    lead_distance_m: float
-    lead_speed_ms: float
-    lead_vehicle_type: VehicleType | None
-    oncoming_present: bool
-    oncoming_distance_m: float
-    oncoming_speed_ms: float
-    oncoming_vehicle_type: VehicleType | None
-    pedestrian_present: bool
-    min_ttc_s: float | None
-    v_noise_std: float
-    dl_noise_std: float
-    t_noise_std: float
-    tfl_x_carla: float | None
-    tfl_y_carla: float | None
-    spawn_tfl_distance_m: float | None
-    spawn_stop_line_distance_m: float | None
+    speed_limit_kmh: ReadOnly[float | None]
+    lane_count: ReadOnly[int | None]
+    lane_width_m: ReadOnly[float | None]
+    lead_present: ReadOnly[bool]
+    lead_distance_m: ReadOnly[float]
+    lead_speed_ms: ReadOnly[float]
+    lead_vehicle_type: ReadOnly[VehicleType | None]
+    oncoming_present: ReadOnly[bool]
+    oncoming_distance_m: ReadOnly[float]
+    oncoming_speed_ms: ReadOnly[float]
+    oncoming_vehicle_type: ReadOnly[VehicleType | None]
+    pedestrian_present: ReadOnly[bool]
+    min_ttc_s: ReadOnly[float | None]
+    v_noise_std: ReadOnly[float]
+    dl_noise_std: ReadOnly[float]
+    t_noise_std: ReadOnly[float]
+    tfl_x_carla: ReadOnly[float | None]
+    tfl_y_carla: ReadOnly[float | None]
+    spawn_tfl_distance_m: ReadOnly[float | None]
+    spawn_stop_line_distance_m: ReadOnly[float | None]
     # -- background traffic (a ``--vary`` traffic variant; SpawnMatcher.background) --------
-    background_present: bool
-    background_speed_ms: float
-    background_vehicle_type: VehicleType | None
+    background_present: ReadOnly[bool]
+    background_speed_ms: ReadOnly[float]
+    background_vehicle_type: ReadOnly[VehicleType | None]
 
 
 #: every params dict has these (spawn keys null until the spawn stage fills them)
@@ -146,13 +148,13 @@ class ParamsInvalid(InputError, ValueError):
 
 def all_keys() -> dict[str, Any]:
     """Every key of the contract and its type."""
-    keys = dict(typing.get_type_hints(Params))
+    keys = dict(typing_extensions.get_type_hints(Params))
     keys |= {f"{slot}_{key}": kind for slot in SLOTS for key, kind in SLOT_KEYS.items()}
     keys |= {f"{actor}_{key}": kind for actor in PLACED_ACTORS for key, kind in POSE_KEYS.items()}
     return keys
 
 
-def json_schema() -> dict:
+def json_schema() -> dict[str, Any]:
     """The JSON Schema of the contract (what ``schemas/params.schema.json`` holds)."""
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -166,7 +168,7 @@ def json_schema() -> dict:
     }
 
 
-def _json_type(kind: Any) -> dict:
+def _json_type(kind: Any) -> dict[str, Any]:
     if kind is bool:
         return {"type": "boolean"}
     if kind is int:
@@ -199,7 +201,7 @@ def _json_type(kind: Any) -> dict:
 
 
 @cache
-def _validator() -> Callable[[dict], Any]:
+def _validator() -> Callable[[dict[str, Any]], Any]:
     return fastjsonschema.compile(json.loads(SCHEMA_PATH.read_text(encoding="utf-8")))
 
 
@@ -223,11 +225,64 @@ def checked(params: Mapping[str, Any]) -> Params:
     return cast(Params, params)
 
 
+def unchecked(params: Mapping[str, Any]) -> Params:
+    """``params`` read back from a scenario folder's params.json, typed as the contract
+    without the check: its readers (the judge, the viewer, the replay figure) take what they
+    find (:func:`finite`, :func:`actor_value` give None for a missing or broken value), so a
+    hand-edited file is judged, not refused. Where a stage makes params, :func:`checked`."""
+    return cast(Params, params)
+
+
 def number(params: Mapping[str, Any], key: str) -> float | None:
     """``params[key]`` as a float, or None when it is absent, null (not yet filled) or not a
-    finite number: for judging what a scenario did, where a missing value means "not checked"."""
-    value = params.get(key)
+    finite number: for judging what a scenario did, where a missing value means "not checked".
+    For a dict of unknown shape (a params.json read back); a ``Params`` reader writes
+    ``finite(params.get("ego_speed_ms"))``, whose key mypy checks."""
+    return finite(params.get(key))
+
+
+def finite(value: float | None) -> float | None:
+    """``value`` as a float, None when it is None or not a finite number (a hand-made params
+    file may hold anything). Typed ``float | None`` so that what it reads is a number key of
+    :class:`Params`: ``params.get("ego_sped_ms")`` is ``object`` to mypy, and an error here."""
     return float(value) if _is_finite_number(value) else None
+
+
+def all_finite(*values: float | None) -> tuple[float, ...] | None:
+    """Each of ``values`` by :func:`finite`, in order; None when any is missing: the numbers a
+    rule needs together (``all_finite(params.get("ego_speed_ms"), params.get("duration_s"))``)."""
+    found = tuple(finite(value) for value in values)
+    return None if None in found else cast(tuple[float, ...], found)
+
+
+#: the suffixes of the ``<actor>_<key>`` families, by the type of their values
+FlagKey = Literal["present", "in_junction"]
+LaneKey = Literal["road_id", "lane_id"]
+NumberKey = Literal["speed_ms", "end_speed_ms", "distance_m", "end_distance_m",
+                    "x", "y", "z", "h", "s"]
+#: the suffix of a key of an actor's family: ``SLOT_KEYS`` and ``POSE_KEYS`` (a test pins it)
+ActorKey = FlagKey | LaneKey | NumberKey | Literal["vehicle_type", "phases"]
+
+
+@overload
+def actor_value(params: Params, actor: str, key: FlagKey) -> bool | None: ...
+@overload
+def actor_value(params: Params, actor: str, key: LaneKey) -> int | None: ...
+@overload
+def actor_value(params: Params, actor: str, key: NumberKey) -> float | None: ...
+@overload
+def actor_value(params: Params, actor: str,
+                key: Literal["vehicle_type"]) -> VehicleType | None: ...
+@overload
+def actor_value(params: Params, actor: str,
+                key: Literal["phases"]) -> list[PhaseRecord] | None: ...
+def actor_value(params: Params, actor: str, key: ActorKey) -> object:
+    """``params["<actor>_<key>"]`` (None when absent): a key of the per-actor and per-slot
+    families (``npc_speed_ms``, ``center_present``, ``ego_road_id``...), which :class:`Params`
+    cannot name one by one since the actor is a variable. The suffix is checked by mypy and
+    the value typed by it: ``actor_value(params, prefix, "sped_ms")`` is an error."""
+    values: Mapping[str, object] = params
+    return values.get(f"{actor}_{key}")
 
 
 class NumberReader:

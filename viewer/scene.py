@@ -17,7 +17,6 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -36,7 +35,7 @@ from scenweave.judge.replay import (
 )
 from scenweave.player import REPLAY_NAME, Playback
 from scenweave.scenario_lib.vehicles import reference_gap_m
-from scenweave.schemas.params import number
+from scenweave.schemas.params import Params, actor_value, finite, unchecked
 from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
 
 EGO = "hero"
@@ -53,7 +52,7 @@ FINDING_TIME = re.compile(r"^at (?P<t>-?\d+(?:\.\d+)?) s: ")
 def scene(folder: Path) -> dict[str, Any]:
     """The scenario in ``folder`` as the page animates and charts it (``KeyError``-free: a
     missing file leaves its part out; no ``replay.json`` gives ``played: False``)."""
-    params, status = read_json(folder / PARAMS_NAME), read_json(folder / STATUS_NAME)
+    params, status = unchecked(read_json(folder / PARAMS_NAME)), read_json(folder / STATUS_NAME)
     replay_path = folder / REPLAY_NAME
     out: dict[str, Any] = {"scenario_id": params.get("scenario_id") or status.get("scenario_id")
                            or folder.name,
@@ -114,7 +113,7 @@ def _actors(playback: Playback) -> dict[str, dict]:
     return actors
 
 
-def _lights(playback: Playback, params: Mapping[str, Any]) -> list[dict]:
+def _lights(playback: Playback, params: Params) -> list[dict]:
     """Each light of the scenario: where it stands and its colour from when to when (a
     replay.json written before it said where lights stand: the params' light, CARLA frame)."""
     started = playback.fired("action")
@@ -122,7 +121,7 @@ def _lights(playback: Playback, params: Mapping[str, Any]) -> list[dict]:
     spans = [[t, changes[i + 1][0] if i + 1 < len(changes) else playback.duration_s,
               playback.lights[name]] for i, (t, name) in enumerate(changes)]
     positions = {tuple(xy) for xy in playback.light_positions.values()}
-    x_carla, y_carla = number(params, "tfl_x_carla"), number(params, "tfl_y_carla")
+    x_carla, y_carla = finite(params.get("tfl_x_carla")), finite(params.get("tfl_y_carla"))
     if not positions and spans and x_carla is not None and y_carla is not None:
         positions = {(x_carla, -y_carla)}
     return [{"x": x, "y": y, "spans": spans} for x, y in sorted(positions)]
@@ -169,7 +168,7 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
 
 # --- the charts ------------------------------------------------------------------------------
 
-def _charts(playback: Playback, params: Mapping[str, Any], folder: Path,
+def _charts(playback: Playback, params: Params, folder: Path,
             map_path: Path | None) -> dict:
     """Speed, gap, lateral offset and lane, light state: the replay's series, the record's
     values with the judge's tolerance, and the mined record's own series where there is one."""
@@ -179,7 +178,7 @@ def _charts(playback: Playback, params: Mapping[str, Any], folder: Path,
     speed_marks = [{"entity": entity, "t": 0.0, "value": value, "tol": SPEED_TOL_MS,
                     "what": "start speed"}
                    for entity, prefix in placed_actors(params)
-                   if (value := number(params, f"{prefix}_speed_ms")) is not None]
+                   if (value := finite(actor_value(params, prefix, "speed_ms"))) is not None]
     speed_marks += [{"entity": entity, "t": at_s, "value": target, "tol": SPEED_TOL_MS,
                      "what": "target speed"}
                     for entity, target, at_s in _speed_targets(folder, params)]
@@ -194,7 +193,7 @@ def _charts(playback: Playback, params: Mapping[str, Any], folder: Path,
                     "lane": {n: t["lane"] for n, t in playback.tracks.items()},
                     "tol_s": LANE_CHANGE_TOL_S},
         "light": [light_state(playback, t) for t in playback.times] if playback.lights else [],
-        "maneuver": [number(params, "maneuver_start_s"), number(params, "duration_s")],
+        "maneuver": [finite(params.get("maneuver_start_s")), finite(params.get("duration_s"))],
         "stop_line": _stop_line_chart(playback, params),
     }
 
@@ -205,10 +204,10 @@ def _driven(playback: Playback, entity: str) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum((speeds[1:] + speeds[:-1]) / 2 * np.diff(times))])
 
 
-def _stop_line_chart(playback: Playback, params: Mapping[str, Any]) -> dict:
+def _stop_line_chart(playback: Playback, params: Params) -> dict:
     """Urban: the ego's distance driven against the record's stop line, and where that line
     lies on the ego's path (across it, for the map)."""
-    stop_line = number(params, "spawn_stop_line_distance_m")
+    stop_line = finite(params.get("spawn_stop_line_distance_m"))
     if stop_line is None or EGO not in playback.tracks:
         return {}
     driven = _driven(playback, EGO)
@@ -224,7 +223,7 @@ def _stop_line_chart(playback: Playback, params: Mapping[str, Any]) -> dict:
             "at": [round(x, 3), round(y, 3), round(h, 5)]}
 
 
-def _speed_targets(folder: Path, params: Mapping[str, Any]) -> list[tuple[str, float, float]]:
+def _speed_targets(folder: Path, params: Params) -> list[tuple[str, float, float]]:
     """(entity, target speed, when it should be reached) of each scripted speed change."""
     from lxml import etree
 
@@ -240,7 +239,7 @@ def _speed_targets(folder: Path, params: Mapping[str, Any]) -> list[tuple[str, f
         return []
 
 
-def _recorded(folder: Path, params: Mapping[str, Any]) -> dict:
+def _recorded(folder: Path, params: Params) -> dict:
     """A mined record's series (params' ``recorded_series``, else the folder's
     ``recorded.json``) on the scenario's clock: its event starts with the manoeuvre."""
     recorded = params.get("recorded_series")
@@ -248,11 +247,11 @@ def _recorded(folder: Path, params: Mapping[str, Any]) -> dict:
         recorded = read_json(folder / RECORDED_NAME)
     if not isinstance(recorded.get("t"), list):
         return {}
-    shift = number(params, "maneuver_start_s") or 0.0
+    shift = finite(params.get("maneuver_start_s")) or 0.0
     return {**recorded, "t": [None if t is None else t + shift for t in recorded["t"]]}
 
 
-def _gap_chart(playback: Playback, params: Mapping[str, Any], recorded: dict,
+def _gap_chart(playback: Playback, params: Params, recorded: dict,
                map_path: Path | None) -> dict:
     """Every other vehicle's gap to the ego along its lane (highway; the judge's measure)."""
     from scenweave.judge.fidelity import class_of, placed_actors
@@ -271,13 +270,13 @@ def _gap_chart(playback: Playback, params: Mapping[str, Any], recorded: dict,
                 gap = None
             gaps.append(None if gap is None else round(gap, 3))
         series[name] = gaps
-    start = number(params, "maneuver_start_s")
+    start = finite(params.get("maneuver_start_s"))
     marks = [{"entity": e, "t": start, "value": gap, "tol": GAP_TOL_M, "what": "gap"}
              for e, prefix in placed_actors(params) if e != EGO and start is not None
-             and (gap := number(params, f"{prefix}_distance_m")) is not None]
-    end_gap = number(params, "npc_distance_end_m")
+             and (gap := finite(actor_value(params, prefix, "distance_m"))) is not None]
+    end_gap = finite(params.get("npc_distance_end_m"))
     if params and class_of(params).gap_at_end and start is not None and end_gap is not None:
-        marks.append({"entity": "npc", "t": start + (number(params, "duration_s") or 0.0),
+        marks.append({"entity": "npc", "t": start + (finite(params.get("duration_s")) or 0.0),
                       "value": end_gap, "tol": GAP_TOL_M, "what": "gap at end"})
     kind = params.get("npc_vehicle_type")
     # the record's gap is between bumpers; the chart's, like the judge's, between reference points
@@ -290,7 +289,7 @@ def _gap_chart(playback: Playback, params: Mapping[str, Any], recorded: dict,
 
 # --- the verdict -----------------------------------------------------------------------------
 
-def _findings(playback: Playback, params: Mapping[str, Any], folder: Path, map_path: Path | None,
+def _findings(playback: Playback, params: Params, folder: Path, map_path: Path | None,
               status: dict) -> list[dict]:
     """The judge's REPLAY_* findings on this playback, each with its time where it has one."""
     from lxml import etree

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from scipy.spatial import cKDTree
 
 Floats = npt.NDArray[np.float64]
 
@@ -97,7 +98,8 @@ def _tangents(points: Floats) -> Floats:
     bad = norm < 1e-9  # a reversal: fall back on the incoming segment
     tangents[bad] = np.vstack([unit[:1], unit])[bad]
     norm[bad] = 1.0
-    return tangents / norm[:, None]
+    result: Floats = tangents / norm[:, None]
+    return result
 
 
 def _arc_length(b: Floats, c: Floats, d: Floats) -> float:
@@ -133,6 +135,7 @@ class DenseLine:
     xy: Floats
     s: Floats
     tangent: Floats
+    tree: cKDTree
 
     @classmethod
     def of(cls, pieces: list[Piece]) -> DenseLine:
@@ -151,7 +154,7 @@ class DenseLine:
         xy, s = np.vstack(xys), np.concatenate(ss)
         seg = np.diff(xy, axis=0)
         unit = seg / np.maximum(np.hypot(*seg.T), 1e-12)[:, None]
-        return cls(xy, s, np.vstack([unit, unit[-1:]]))
+        return cls(xy, s, np.vstack([unit, unit[-1:]]), cKDTree(xy))
 
     @property
     def length(self) -> float:
@@ -159,34 +162,38 @@ class DenseLine:
 
     def project(self, points: Floats) -> tuple[Floats, Floats, npt.NDArray[np.bool_]]:
         """``s``, ``t`` (positive to the left) of each point's nearest point on the line, and
-        whether that point lies inside the line (not beyond one of its ends)."""
-        a, b = self.xy[:-1], self.xy[1:]
+        whether that point lies inside the line (not beyond one of its ends). The nearest
+        vertex is found in a k-d tree and the two segments meeting there are tried: exact
+        while a point is nearer the line than the line's radius of curvature."""
+        _, nearest = self.tree.query(points)
+        last = len(self.xy) - 2  # the last segment's index
+        candidates = np.stack([np.clip(nearest - 1, 0, last), np.clip(nearest, 0, last)], axis=1)
+        a, b = self.xy[candidates], self.xy[candidates + 1]
         seg = b - a
-        seg_len2 = np.maximum((seg ** 2).sum(axis=1), 1e-12)
-        rel = points[:, None, :] - a[None, :, :]
-        u = (rel * seg[None]).sum(axis=2) / seg_len2[None]
-        inside = (u >= 0) & (u <= 1)
+        rel = points[:, None, :] - a
+        u = (rel * seg).sum(axis=2) / np.maximum((seg ** 2).sum(axis=2), 1e-12)
         u_clipped = np.clip(u, 0.0, 1.0)
-        foot = a[None] + u_clipped[..., None] * seg[None]
-        dist2 = ((points[:, None, :] - foot) ** 2).sum(axis=2)
-        best = np.argmin(dist2, axis=1)
+        gap = rel - u_clipped[..., None] * seg
+        dist2 = (gap ** 2).sum(axis=2)
+        pick = np.argmin(dist2, axis=1)
         rows = np.arange(len(points))
-        ub = u_clipped[rows, best]
+        best, ub = candidates[rows, pick], u_clipped[rows, pick]
         s = self.s[best] + ub * (self.s[best + 1] - self.s[best])
-        cross = seg[best, 0] * rel[rows, best, 1] - seg[best, 1] * rel[rows, best, 0]
-        t = np.sign(cross) * np.sqrt(dist2[rows, best])
-        within = inside[rows, best] | ((best > 0) & (best < len(seg) - 1))
-        return s, t, within
+        cross = seg[rows, pick, 0] * rel[rows, pick, 1] - seg[rows, pick, 1] * rel[rows, pick, 0]
+        t = np.sign(cross) * np.sqrt(dist2[rows, pick])
+        beyond = ((best == 0) & (u[rows, pick] < 0)) | ((best == last) & (u[rows, pick] > 1))
+        return s, t, ~beyond
 
 
 def densified(polyline: Floats, step: float = BOUNDARY_STEP_M) -> Floats:
     """The polyline with points inserted so no segment is longer than ``step``."""
-    out = [polyline[:1]]
-    for p0, p1 in zip(polyline[:-1], polyline[1:], strict=True):
-        n = max(1, int(math.ceil(math.dist(p0, p1) / step)))
-        q = np.linspace(0.0, 1.0, n + 1)[1:, None]
-        out.append(p0 + (p1 - p0) * q)
-    return np.vstack(out)
+    seg = np.diff(polyline, axis=0)
+    count = np.maximum(1, np.ceil(np.hypot(*seg.T) / step)).astype(int)
+    owner = np.repeat(np.arange(len(seg)), count)
+    first = np.cumsum(count) - count
+    fraction = (np.arange(len(owner)) - first[owner]) / count[owner]
+    inner = polyline[owner] + seg[owner] * fraction[:, None]
+    return np.vstack([inner, polyline[-1:]])
 
 
 def lateral_profile(line: DenseLine, polyline: Floats, stations: Floats) -> Floats:

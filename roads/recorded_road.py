@@ -41,6 +41,7 @@ from scenweave.roads.recorded_geometry import (
     linear_records,
     reference_pieces,
     stations,
+    thinned,
 )
 
 #: bumped whenever the written map changes for the same input (cache keys include it)
@@ -49,6 +50,8 @@ CONVERTER_VERSION = "1"
 SHARED_BORDER_M = 0.1
 #: OpenDRIVE signal type of a traffic light (as CARLA and esmini read it)
 TRAFFIC_LIGHT_TYPE = "1000001"
+#: a reference line is extended where another border's end lies beyond its end by more (m)
+EXTEND_MIN_M = 0.05
 #: a signal stands at least this far inside its road's ends (m)
 SIGNAL_MARGIN_M = 0.01
 
@@ -205,7 +208,8 @@ def group_strips(strips: Sequence[LaneStrip]) -> list[list[LaneStrip]]:
         return other
 
     grouped_right = {r.id for s in strips if (r := right_of(s)) is not None}
-    groups, taken = [], set()
+    groups: list[list[LaneStrip]] = []
+    taken: set[str] = set()
     for head in sorted(strips, key=lambda s: _id_key(s.id)):
         if head.id in grouped_right or head.id in taken:
             continue
@@ -224,9 +228,28 @@ def _id_key(strip_id: str) -> tuple[int, str]:
     return (int(strip_id), "") if strip_id.lstrip("-").isdigit() else (0, strip_id)
 
 
+def extended_reference(strips: Sequence[LaneStrip]) -> Floats:
+    """The leftmost strip's left border, extended straight at either end where another
+    border of the road starts before it or ends after it (a road's lanes start and end on a
+    line square to its reference; a skewed stop line leaves the outer lanes' ends beyond
+    that line). Extensions are :data:`MIN_SPACING_M` at least, so no piece is tiny."""
+    reference = thinned(np.asarray(strips[0].left, float))
+    ends = np.vstack([np.asarray(b, float)[[0, -1]] for s in strips for b in (s.left, s.right)])
+    parts = [reference]
+    for at_end in (False, True):
+        origin = reference[-1] if at_end else reference[0]
+        step = reference[-1] - reference[-2] if at_end else reference[0] - reference[1]
+        outward = step / np.hypot(*step)
+        beyond = float(np.max((ends - origin) @ outward))
+        if beyond > EXTEND_MIN_M:
+            extra = origin + outward * max(beyond + EXTEND_MIN_M, MIN_SPACING_M)
+            parts.insert(len(parts) if at_end else 0, extra[None])
+    return np.vstack(parts)
+
+
 def _shaped(road: _Road) -> _Road:
     """The road's reference line and the lateral position of every border along it."""
-    road.pieces = reference_pieces(np.asarray(road.strips[0].left, float))
+    road.pieces = reference_pieces(extended_reference(road.strips))
     road.line = DenseLine.of(road.pieces)
     road.stations = stations(road.line.length)
     borders = [lateral_profile(road.line, np.asarray(s.left, float), road.stations)
@@ -345,7 +368,8 @@ def _stop_point(light: RecordedLight, strip: LaneStrip) -> Floats:
     for lane, x0, y0, x1, y1 in light.stop_lines:
         if lane == strip.id:
             return np.array([(x0 + x1) / 2, (y0 + y1) / 2])
-    return (np.asarray(strip.left[-1], float) + np.asarray(strip.right[-1], float)) / 2
+    middle: Floats = (np.asarray(strip.left[-1], float) + np.asarray(strip.right[-1], float)) / 2
+    return middle
 
 
 def place_signals(lights: Iterable[RecordedLight], road_of: Mapping[str, _Road]

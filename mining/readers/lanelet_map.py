@@ -15,7 +15,7 @@ import numpy as np
 from commonroad.scenario.lanelet import Lanelet, LaneletNetwork, LaneletType
 from lxml import etree
 
-from scenweave.mining.readers.commonroad import _network, _stop_line, light_phases
+from scenweave.mining.readers.commonroad import _all_floats, _network, _stop_line, light_phases
 from scenweave.mining.tracks import LightPhase
 from scenweave.roads.recorded_road import LaneStrip, RecordedLight
 
@@ -80,9 +80,8 @@ def recorded_lights(network: LaneletNetwork) -> list[RecordedLight]:
 
 def _last_step(root: etree._Element) -> int:
     """The last time step any obstacle of the file is seen at."""
-    steps = root.xpath("dynamicObstacle/initialState/time/exact/text() | "
-                       "dynamicObstacle/trajectory/state/time/exact/text()")
-    return int(max((float(s) for s in steps), default=0.0))
+    steps = _all_floats(root, "time/exact")
+    return int(steps.max()) if len(steps) else 0
 
 
 def read_lanelet_map(path: Path) -> LaneletMap:

@@ -1,0 +1,162 @@
+"""The map check of a converted recorded road: do the lanelets' centre lines land on their own
+road and lane of the OpenDRIVE map, as esmini's RoadManager reads it?
+
+Each lanelet's centre line (midway between its borders) is sampled every
+:data:`SAMPLE_STEP_M` (at 1, 3, 5... m, so no sample sits on the seam between two lanelets),
+with its heading, and located by esmini (``player.road_manager``). A sample counts as on its
+own road and lane when esmini puts it there, or when esmini picked another road overlapping
+there (lanelets overlap inside junctions and esmini keeps the first road it finds, whatever
+the heading) while the sample lies inside its own lane (closer to its centre than half the
+lanelet's width). The *strict* share counts only the first case. The error is the distance
+from the sample to its own lane's centre line in the map (as esmini places lane positions).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from scenweave.player.road_manager import MapProbe, PointGroup, probe_map
+from scenweave.roads.recorded_geometry import Floats
+from scenweave.roads.recorded_road import LaneStrip
+
+SAMPLE_STEP_M = 2.0
+#: a sample within this of its lane's centre is placed well (m)
+CLOSE_M = 0.5
+
+
+@dataclass(frozen=True)
+class CentreSamples:
+    """One lanelet's centre line samples: points, headings and the lanelet's width there."""
+
+    strip: str
+    xy: Floats
+    heading: Floats
+    width: Floats
+
+
+@dataclass(frozen=True)
+class MapCheck:
+    """The map check's numbers for one map (shares in [0, 1], errors in m)."""
+
+    loaded: bool
+    problem: str = ""
+    samples: int = 0
+    own_lane: float = 0.0
+    own_lane_strict: float = 0.0
+    within_close: float = 0.0
+    error_p50: float = float("nan")
+    error_p95: float = float("nan")
+    error_max: float = float("nan")
+    #: the lanelets with samples off their own lane or further than CLOSE_M: (id, count)
+    misplaced: tuple[tuple[str, int], ...] = field(default_factory=tuple)
+
+    def line(self) -> str:
+        if not self.loaded:
+            return f"esmini does not load the map: {self.problem}"
+        return (f"{self.samples} samples: own road and lane {100 * self.own_lane:.1f} % "
+                f"(strict {100 * self.own_lane_strict:.1f} %), within {CLOSE_M} m "
+                f"{100 * self.within_close:.1f} %, error p50/p95/max {self.error_p50:.2f}/"
+                f"{self.error_p95:.2f}/{self.error_max:.2f} m")
+
+
+def _at(polyline: Floats, along: Floats, where: Floats) -> Floats:
+    return np.column_stack([np.interp(where, along, polyline[:, 0]),
+                            np.interp(where, along, polyline[:, 1])])
+
+
+def centre_samples(strip: LaneStrip, step: float = SAMPLE_STEP_M) -> CentreSamples:
+    """The lanelet's centre line every ``step`` metres (its middle, if shorter)."""
+    n = max(len(strip.left), len(strip.right))
+    centre = strip.centre
+    left, right = _resampled(strip.left, n), _resampled(strip.right, n)
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(centre, axis=0).T))])
+    length = float(along[-1])
+    where = np.arange(step / 2, length, step) if length > step else np.array([length / 2])
+    xy = _at(centre, along, where)
+    ahead = _at(centre, along, np.minimum(where + 0.5, length))
+    behind = _at(centre, along, np.maximum(where - 0.5, 0.0))
+    heading = np.arctan2(ahead[:, 1] - behind[:, 1], ahead[:, 0] - behind[:, 0])
+    width = np.hypot(*(_at(left, along, where) - _at(right, along, where)).T)
+    return CentreSamples(strip.id, xy, heading, width)
+
+
+def _resampled(polyline: Floats, n: int) -> Floats:
+    points = np.asarray(polyline, dtype=float)
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    return _at(points, along, np.linspace(0.0, along[-1], n))
+
+
+def distance_to_polyline(points: Floats, line: Floats) -> Floats:
+    """Each point's distance to the nearest point of a polyline (inf for an empty one)."""
+    if len(line) == 0:
+        return np.full(len(points), np.inf)
+    if len(line) == 1:
+        return np.hypot(*(points - line[0]).T)
+    a, seg = line[:-1], np.diff(line, axis=0)
+    rel = points[:, None, :] - a[None]
+    u = np.clip((rel * seg[None]).sum(2) / np.maximum((seg ** 2).sum(1), 1e-12)[None], 0, 1)
+    gap = rel - u[..., None] * seg[None]
+    return np.sqrt((gap ** 2).sum(2).min(axis=1))
+
+
+def judged(probe: MapProbe, samples: Sequence[CentreSamples],
+           lanes: Mapping[str, tuple[int, int]]) -> MapCheck:
+    """The check's numbers from esmini's answers."""
+    if not probe.loaded:
+        return MapCheck(loaded=False, problem=probe.problem)
+    own, strict, errors, misplaced = [], [], [], []
+    for sample, probed, line in zip(samples, probe.groups, probe.centres, strict=True):
+        road, lane = lanes[sample.strip]
+        error = distance_to_polyline(sample.xy, np.asarray(line, dtype=float).reshape(-1, 2))
+        exact = np.array([p.road_id == road and p.lane_id == lane for p in probed])
+        inside = np.array([p.own_road_lane_id == lane for p in probed]) & \
+            (error < sample.width / 2)
+        on = exact | inside
+        own.append(on)
+        strict.append(exact)
+        errors.append(error)
+        bad = int((~on | (error > CLOSE_M)).sum())
+        if bad:
+            misplaced.append((sample.strip, bad))
+    error_all = np.concatenate(errors) if errors else np.zeros(0)
+    if not len(error_all):
+        return MapCheck(loaded=True)
+    return MapCheck(loaded=True, samples=len(error_all),
+                    own_lane=float(np.concatenate(own).mean()),
+                    own_lane_strict=float(np.concatenate(strict).mean()),
+                    within_close=float((error_all <= CLOSE_M).mean()),
+                    error_p50=float(np.percentile(error_all, 50)),
+                    error_p95=float(np.percentile(error_all, 95)),
+                    error_max=float(error_all.max()),
+                    misplaced=tuple(sorted(misplaced, key=lambda m: -m[1])))
+
+
+def _triples(samples: CentreSamples, last: int | None = None
+             ) -> list[tuple[float, float, float]]:
+    rows = range(len(samples.xy)) if last is None else range(len(samples.xy))[-last:]
+    return [(float(samples.xy[k, 0]), float(samples.xy[k, 1]), float(samples.heading[k]))
+            for k in rows]
+
+
+def _lead_in(strip: LaneStrip, samples: Mapping[str, CentreSamples]
+             ) -> list[tuple[float, float, float]]:
+    """The last samples of the lanelet's first predecessor: a car reaches the lanelet from
+    there, and esmini's position object keeps to the road it is on where roads overlap."""
+    before = next((samples[p] for p in strip.predecessors if p in samples), None)
+    return [] if before is None else _triples(before, last=2)
+
+
+def check_map(xodr: Path, strips: Sequence[LaneStrip],
+              lanes: Mapping[str, tuple[int, int]], library: Path | None = None) -> MapCheck:
+    """Sample every lanelet's centre line, locate the samples with esmini on ``xodr`` (in a
+    child process), and judge: see the module docstring."""
+    kept = [s for s in strips if s.id in lanes]
+    samples = [centre_samples(s) for s in kept]
+    by_id = {s.strip: s for s in samples}
+    groups = [PointGroup(*lanes[s.strip], _triples(s), _lead_in(strip, by_id))
+              for strip, s in zip(kept, samples, strict=True)]
+    return judged(probe_map(xodr, groups, library=library), samples, lanes)

@@ -28,7 +28,7 @@ from scenweave.mining.detect import detect  # noqa: E402
 from scenweave.mining.mine import mine_recordings  # noqa: E402
 from scenweave.mining.readers import read_recordings  # noqa: E402
 from scenweave.mining.thresholds import load_thresholds  # noqa: E402
-from scenweave.mining_report import write_mining_report  # noqa: E402
+from scenweave.presentation.mining_report import write_mining_report  # noqa: E402
 
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "ngsim" / "us101"
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from scenweave.errors import InputError
 from scenweave.maneuvers.maneuver import Domain, Maneuver
-from scenweave.maneuvers.plugins import DOCS, PLUGINS_ENV, Registry
+from scenweave.plugins import DOCS, PLUGINS_ENV, Registry
 
 __all__ = ["PLUGINS_ENV", "UnknownManeuver", "by_tag", "codes", "find", "get", "maneuvers",
            "register", "seeding_order", "unregister"]

@@ -13,7 +13,6 @@ a baseline for latency and a way to run the whole benchmark machinery without a 
 from __future__ import annotations
 
 import json
-import re
 import tempfile
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -22,26 +21,12 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.errors import InputError
-from scenweave.files.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
+from scenweave.presentation.bench_report import BENCH_FILE, model_dir_name, write_bench
+from scenweave.presentation.metrics import by_class, metrics
+from scenweave.presentation.report import pct
 from scenweave.progress import progress
-from scenweave.report import (
-    METRICS_HEADER,
-    by_class,
-    figure,
-    latency_s,
-    metrics,
-    metrics_row,
-    page,
-    pct,
-    plot_cumulative,
-    plot_latency_boxplot,
-    plot_latency_per_class,
-    plot_latency_vs_success,
-    projected_curve,
-    table,
-)
 from scenweave.run_folder import SUMMARY_FILE
 from scenweave.runner import run_batch
 
@@ -49,9 +34,6 @@ from scenweave.runner import run_batch
 THESIS_CLASSES = ("BRAKE", "CINF", "CINB", "COUTF", "COUTB", "LCF", "LCB", "FLF", "FLB", "FRF",
                   "FRB")
 REFERENCE = "reference"
-BENCH_FILE = "bench.json"
-BENCH_HTML = "bench.html"
-BOXPLOT_PREFIX = "fig6_3_latency_boxplot_"
 
 
 class BenchError(InputError):
@@ -105,11 +87,6 @@ class BenchResult:
             parts.append(f"{model}: SR {pct(m['success_rate'])}, "
                          f"1st {pct(m['first_attempt_rate'])}, {latency} s")
         return f"bench {self.root.name}: " + "; ".join(parts) + f" -> {self.root / BENCH_FILE}"
-
-
-def model_dir_name(model: str) -> str:
-    """A folder name for a model tag such as ``qwen2.5-coder:7b``."""
-    return re.sub(r"[^A-Za-z0-9_.-]", "_", model)
 
 
 def agent_settings_for(llm: str, replay: Any = None,
@@ -199,83 +176,3 @@ def aggregate(outcomes_by_model: dict[str, list[dict]]) -> dict:
         "error_table": {error: {model: entry["overall"]["error_taxonomy"].get(error, 0)
                                 for model, entry in models.items()} for error in errors},
     }
-
-
-@dataclass
-class Figure:
-    """One SVG chart of the benchmark: its file name in the benchmark folder and its caption."""
-
-    file: str
-    image: bytes
-    caption: str
-    alt: str
-
-
-def figures(summary: dict, outcomes_by_model: dict[str, list[dict]]) -> dict[str, Figure]:
-    """Figs. 6.1, 6.2, 6.3 (one boxplot per model) and 6.4 of the benchmark, in page order;
-    keys as in ``bench.json``'s ``figures``."""
-    overall = {model: entry["overall"] for model, entry in summary["models"].items()}
-    curves = {model: projected_curve([v for v in map(latency_s, outcomes) if v is not None])
-              for model, outcomes in outcomes_by_model.items()}
-    made = {
-        "latency_vs_success": Figure(
-            "fig6_1_latency_vs_success.svg", plot_latency_vs_success(overall),
-            "Latency vs success rate per model (Fig. 6.1).", "latency vs success"),
-        "latency_per_class": Figure(
-            "fig6_2_latency_per_class.svg", plot_latency_per_class(outcomes_by_model),
-            "Mean latency ± std per class and model (Fig. 6.2).", "latency per class"),
-    }
-    for model, outcomes in outcomes_by_model.items():
-        made[f"latency_boxplot/{model}"] = Figure(
-            f"{BOXPLOT_PREFIX}{model_dir_name(model)}.svg", plot_latency_boxplot(outcomes),
-            f"Distribution of latencies per class, {model} (Fig. 6.3).",
-            f"latency boxplot {model}")
-    made["cumulative"] = Figure(
-        "fig6_4_scenarios_per_hour.svg", plot_cumulative(curves),
-        "Projected scenarios over one hour of sequential running per model (Fig. 6.4).",
-        "scenarios per hour")
-    return made
-
-
-def write_bench(root: Path, summary: dict, outcomes_by_model: dict[str, list[dict]]) -> Path:
-    """Write ``bench.json``, the figures (SVG) and ``bench.html`` into ``root``."""
-    made = figures(summary, outcomes_by_model)
-    for made_figure in made.values():
-        write_bytes_atomic(root / made_figure.file, made_figure.image)
-    summary = {**summary, "figures": {key: f.file for key, f in made.items()}}
-    write_json_atomic(root / BENCH_FILE, summary)
-    write_text_atomic(root / BENCH_HTML, render_bench(root.name, summary, made))
-    return root / BENCH_FILE
-
-
-def render_bench(name: str, summary: dict, made: dict[str, Figure]) -> str:
-    """The benchmark as a static HTML page: the thesis tables and figures."""
-    models = list(summary["models"])
-
-    def cell(value: Any, fmt: str) -> str:
-        return "–" if value is None else format(value, fmt)
-
-    def rates(entry: dict, code: str) -> str:
-        group = entry["by_class"].get(code, {})
-        return f"{pct(group.get('success_rate'))} / {pct(group.get('first_attempt_rate'))}"
-
-    per_class_sr = [[code, *(rates(entry, code) for entry in summary["models"].values())]
-                    for code in summary["latency_table"]]
-    parts = [
-        f"<h1>Benchmark {name}</h1>",
-        "<h2>Per model</h2>",
-        table(METRICS_HEADER, [metrics_row(model, entry["overall"])
-                               for model, entry in summary["models"].items()]),
-        "<h2>Mean latency (s/scenario) by class (thesis Table 6.2)</h2>",
-        table(["class", *models], [[code, *(cell(row[m], ".1f") for m in models)]
-                                   for code, row in summary["latency_table"].items()]),
-        "<h2>Success rate / first-attempt rate by class</h2>",
-        table(["class", *models], per_class_sr),
-        "<h2>Error taxonomy, all attempts (thesis Table 6.3)</h2>",
-        table(["error", *models], [[error, *(row[m] for m in models)]
-                                   for error, row in summary["error_table"].items()])
-        if summary["error_table"] else "<p>No errors.</p>",
-        "<h2>Figures</h2>",
-        *(figure(f.image, f"{f.caption} File {f.file}.", f.alt) for f in made.values()),
-    ]
-    return page(f"ScenWeave benchmark {name}", "\n".join(parts))

@@ -23,8 +23,8 @@ from typing import Any
 from scenweave.console import refused_records
 from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
+from scenweave.presentation.report import write_run_report
 from scenweave.progress import progress
-from scenweave.report import write_run_report
 from scenweave.run_folder import (
     RECORDED_NAME,
     RUN_FILE,
@@ -148,7 +148,7 @@ def make_scenario(params: Params, index: int, staging: Path, settings: PipelineS
                   matcher: Any) -> dict:
     """``process_scenario``, then the replay figure the report will show (drawn here, in the
     worker that made the scenario, not serially at the end); its time is ``timings_s.figure``."""
-    from scenweave.replay_figures import draw_replay_figure, is_reported
+    from scenweave.presentation.replay_figures import draw_replay_figure, is_reported
 
     outcome = process_scenario(params, index, staging, settings, matcher)
     if is_reported(outcome, index):
@@ -169,7 +169,7 @@ def _in_this_process(todo: list[tuple[int, Params]], stage: Callable[[Params], P
 _worker_matcher: Any = None
 #: what a scenario's making imports, loaded before the workers fork so each starts warm
 _PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
-                     "scenweave.player", "scenweave.replay_figures")
+                     "scenweave.player", "scenweave.presentation.replay_figures")
 
 
 def _process_in_worker(params: Params, index: int, staging: Path,

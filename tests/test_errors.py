@@ -60,7 +60,7 @@ def test_every_exception_of_ours_has_the_one_root(dotted):
     ("scenweave.sandbox.SandboxUnavailable", InfrastructureError),
     ("scenweave.player.PlayerUnavailable", InfrastructureError),
     ("scenweave.agent.llm.base.LLMTimeout", InfrastructureError),
-    ("scenweave.worker.QueueError", InfrastructureError),
+    ("scenweave.queue.connection.QueueError", InfrastructureError),
     ("scenweave.spawn_db.NoSpawnFits", ScenarioError),
     ("scenweave.agent.code.PatchError", ScenarioError),
     ("scenweave.ingest.issues.RecordIssue", InputError),

@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 UPPER = ("scenweave", "ingest", "agent", "mining", "viewer")
 BOTTOM = ("corpus", "sandbox", "schemas", "judge", "spawn_db", "player", "roads", "maneuvers",
-          "scenario_lib", "files", "errors")
+          "scenario_lib", "plugins", "files", "errors")
 #: our top-level folders, installed as ``scenweave.<folder>`` (``scenweave/`` is the shell)
 FOLDERS = (*UPPER, *BOTTOM)
 
@@ -131,12 +131,46 @@ def test_the_packages_import_each_other_without_a_cycle():
     assert _cycles(packages) == []
 
 
-@pytest.mark.parametrize("package, below", [("maneuvers", {"errors"}), ("files", set()),
+@pytest.mark.parametrize("package, below", [("maneuvers", {"errors", "plugins"}),
+                                            ("plugins", {"errors"}), ("files", set()),
                                             ("errors", set()), ("roads", {"errors", "files"}),
                                             ("scenario_lib", set())])
 def test_the_bottom_layer_imports_nothing_of_ours_but_the_error_root(package, below):
     assert {layer(target) for name, targets in GRAPH.items() if layer(name) == package
             for target in targets} <= {package, *below}
+
+
+#: the shell by job: folder -> the shell modules outside it that it may import. The
+#: presentation (reports, charts, figures) reads run folders and imports no other job; the
+#: queue builds on the batch runner and writes the report; the CLI's commands are above both
+SHELL_JOBS = {
+    "scenweave.presentation": {"scenweave.run_folder"},
+    "scenweave.queue": {"scenweave.run_folder", "scenweave.runner", "scenweave.pipeline",
+                        "scenweave.inputs", "scenweave.progress", "scenweave.presentation"},
+}
+
+
+def _shell_job(module: str) -> str:
+    return next((job for job in (*SHELL_JOBS, "scenweave.commands")
+                 if module == job or module.startswith(job + ".")), module)
+
+
+@pytest.mark.parametrize("job", SHELL_JOBS)
+def test_each_job_of_the_shell_imports_only_what_it_builds_on(job):
+    assert any(_shell_job(name) == job for name in MODULES), f"{job} has no module"
+    outside = sorted((name, target) for name, targets in GRAPH.items()
+                     if _shell_job(name) == job for target in targets
+                     if layer(target) == "scenweave" and _shell_job(target) != job
+                     and _shell_job(target) not in SHELL_JOBS[job])
+    assert outside == []
+
+
+def test_only_the_commands_and_the_queue_import_the_queue():
+    """The batch runner, the pipeline and the presentation never import the queue: a
+    ``scenweave run`` needs no Redis, and the queue's jobs call the runner, not the reverse."""
+    users = sorted({_shell_job(name) for name, targets in GRAPH.items()
+                    if any(_shell_job(t) == "scenweave.queue" for t in targets)})
+    assert set(users) <= {"scenweave.queue", "scenweave.commands"}, users
 
 
 def test_the_scenario_library_imports_only_what_the_sandbox_mounts():
@@ -168,6 +202,15 @@ def test_the_corpus_builds_on_the_scenario_library():
     assert "scenweave.scenario_lib.builder" in used
     assert [(name, target) for name, targets in GRAPH.items() if layer(name) == "scenario_lib"
             for target in targets if layer(target) == "corpus"] == []
+
+
+def test_the_agent_is_handed_placed_params_and_places_nothing():
+    """The spawn stage and the variants (``ingest.variants.vary``) run before the agent, in
+    the pipeline: the agent adapts scripts to the params it is given and imports neither
+    ``ingest`` nor ``spawn_db``."""
+    reached = sorted((name, target) for name, targets in GRAPH.items() if layer(name) == "agent"
+                     for target in targets if layer(target) in ("ingest", "spawn_db"))
+    assert reached == []
 
 
 def test_no_package_imports_another_packages_private_names():

@@ -52,5 +52,5 @@ def test_the_wheel_holds_only_the_scenweave_namespace(tmp_path):
                      "scenweave/roads/maps/Town04.xodr", "scenweave/roads/maps/Town06.xodr",
                      "scenweave/roads/maps/Town10HD.xodr",
                      "scenweave/roads/maps/LICENSE-CARLA-MIT.txt",
-                     "scenweave/templates/report.html"):
+                     "scenweave/presentation/templates/report.html"):
         assert expected in names

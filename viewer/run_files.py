@@ -1,8 +1,8 @@
 """The names of the files a run folder holds, as the application shell writes them.
 
-The shell (``scenweave.run_folder``, ``scenweave.report``) sits above the viewer, which it
-starts, so the viewer cannot import them from there; tests/viewer checks that these names
-match the shell's.
+The shell (``scenweave.run_folder``, ``scenweave.presentation.report``) sits above the
+viewer, which it starts, so the viewer cannot import them from there; tests/viewer checks
+that these names match the shell's.
 """
 
 from __future__ import annotations

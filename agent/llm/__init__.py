@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from scenweave.agent.llm.backends import LLM_BACKENDS, backend_names, find_backend
 from scenweave.agent.llm.base import LLM, LLMReply, LLMTimeout, LLMUnavailable, Prompt
-from scenweave.maneuvers.plugins import DOCS
+from scenweave.plugins import DOCS
 
 if TYPE_CHECKING:
     from scenweave.agent.settings import AgentSettings

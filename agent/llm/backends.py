@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from scenweave.agent.llm.base import LLM
-from scenweave.maneuvers.plugins import Registry
+from scenweave.plugins import Registry
 
 __all__ = ["LLM_BACKENDS", "backend_names", "find_backend"]
 

@@ -6,7 +6,7 @@ and the graph. The built-in ones are declared below exactly as a plugin declares
 from __future__ import annotations
 
 from scenweave.agent.repair.base import Candidate, RepairStrategy, Request
-from scenweave.maneuvers.plugins import DOCS, Registry
+from scenweave.plugins import DOCS, Registry
 
 __all__ = ["REPAIR_STRATEGIES", "Candidate", "RepairStrategy", "Request", "checked_repair",
            "get_strategy", "strategy_names"]

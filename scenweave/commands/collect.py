@@ -15,7 +15,7 @@ import click
 from scenweave import exit_codes
 from scenweave.commands.agent_options import json_option
 from scenweave.console import problem_lines
-from scenweave.worker import QUEUE_ENV
+from scenweave.queue.connection import QUEUE_ENV
 
 QUEUE_HELP = ("Redis URL of the job queue (rediss:// for TLS, a password as "
               "redis://:PASSWORD@host:6379/0) [default: redis://127.0.0.1:6379/0].")
@@ -25,7 +25,7 @@ def collect_run(run_dir: Path, connection: Any, wait: bool, timeout: float | Non
     """Collect (a bar of committed scenarios on a terminal while waiting), say what happened."""
     from tqdm import tqdm
 
-    from scenweave.collector import collect
+    from scenweave.queue.collector import collect
 
     with tqdm(desc="collected", unit="scenario", leave=False,
               disable=not (wait and sys.stderr.isatty())) as bar:
@@ -54,8 +54,8 @@ def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None,
             as_json: bool) -> None:
     """Write the scenario folders the workers handed back into RUN_DIR (atomically, once
     each), then its summary.json and, when every scenario is in, its report.html."""
+    from scenweave.queue.connection import connect
     from scenweave.run_folder import RUN_FILE
-    from scenweave.worker import connect
 
     if not (run_dir / RUN_FILE).is_file():
         raise click.UsageError(f"{run_dir} is not a run folder (no {RUN_FILE}); give the "

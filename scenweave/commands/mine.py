@@ -30,7 +30,7 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str,
     from scenweave.mining.mine import REPORT_NAME, mine_recordings
     from scenweave.mining.readers import read_recordings
     from scenweave.mining.thresholds import ThresholdsError, load_thresholds
-    from scenweave.mining_report import write_mining_report
+    from scenweave.presentation.mining_report import write_mining_report
 
     warnings: list[str] = []
     try:

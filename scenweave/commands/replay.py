@@ -105,7 +105,7 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     if playback is not None:
         playback.write(xosc.parent / REPLAY_NAME)
     if figures and playback is not None:
-        from scenweave.replay_figures import draw_replay_figure
+        from scenweave.presentation.replay_figures import draw_replay_figure
 
         draw_replay_figure(xosc.parent, map_path)
     return {"scenario": xosc.parent.name if xosc.name == "scenario.xosc" else str(xosc),

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from scenweave.commands.agent_options import json_option
-from scenweave.report import write_run_report
+from scenweave.presentation.report import write_run_report
 from scenweave.run_folder import SUMMARY_FILE
 
 
@@ -17,7 +17,7 @@ from scenweave.run_folder import SUMMARY_FILE
 @json_option("the refreshed summary.json")
 def report(run_dir: Path, as_json: bool) -> None:
     """Write RUN_DIR/report.html from the scenario folders (summary.json is refreshed)."""
-    from scenweave.worker import refresh_run
+    from scenweave.queue.collector import refresh_run
 
     if not (run_dir / SUMMARY_FILE).exists() and not any(run_dir.glob("*/status.json")):
         raise click.UsageError(f"{run_dir}: not a run folder (no summary.json, no scenarios)")

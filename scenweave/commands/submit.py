@@ -18,16 +18,11 @@ from scenweave.commands.collect import QUEUE_HELP, collect_run
 from scenweave.commands.run import run as run_command
 from scenweave.console import problem_lines, refused_records
 from scenweave.errors import InputError
-from scenweave.handoff import MIB, Limits
 from scenweave.inputs import InputSelection
-from scenweave.worker import (
-    DEFAULT_MATCHER,
-    QUEUE_ENV,
-    JobOptions,
-    connect,
-    matcher_factory,
-    submit,
-)
+from scenweave.queue.connection import QUEUE_ENV, connect
+from scenweave.queue.handoff import MIB, Limits
+from scenweave.queue.job import DEFAULT_MATCHER, JobOptions, matcher_factory
+from scenweave.queue.submit import submit
 
 #: options of ``scenweave run`` that mean the same here
 SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",

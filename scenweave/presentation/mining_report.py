@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from scenweave.files.atomic import write_text_atomic
-from scenweave.report import Table, render
+from scenweave.presentation.report import Table
+from scenweave.presentation.templating import render
 
 HISTOGRAM_BINS = 12
 SHOWN_SKIPS = 200

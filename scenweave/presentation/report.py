@@ -1,319 +1,50 @@
-"""What a run or a benchmark did, for a reader: metrics over outcomes, figures, ``report.html``.
+"""What a run did, for a reader: ``report.html``, one static, self-contained page.
 
-Everything here works on outcome dicts (``status.json`` of each scenario, the ``scenarios`` of
-``summary.json``), so it runs the same on a ``--no-llm`` run, an agent run and a benchmark.
-The metrics follow thesis §6.1: success rate (SR, the LLM's own success: ``ok`` or
-``repaired``), first-attempt rate, latency per scenario and the error taxonomy; a fallback
-still delivers a scenario, so ``delivered_rate`` counts it too. The HTML page is static and
-self-contained: figures are inline ``data:`` SVG images (the charts drawn with
-``scenweave.charts``, the replay figures by ``replay_figures``), links are relative to the run
-folder. It is rendered from ``templates/run_report.html`` (Jinja2, every value escaped); this
-module only computes what the page and its charts show.
+The numbers are ``metrics``' (thesis §6.1), the charts ``run_charts``', the replay figures
+``replay_figures``'; figures are inline ``data:`` SVG images, links are relative to the run
+folder. The page is rendered from ``templates/run_report.html`` (Jinja2, every value
+escaped); this module only computes what the page shows.
 """
 
 from __future__ import annotations
 
 import base64
 import json
-import math
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
-import markupsafe
-
-from scenweave.charts import (
-    SERIES_COLOURS,
-    Chart,
-    Entry,
-    Panel,
-    Plot,
-    category_label_depth,
-    padded,
-    render_svg,
-)
 from scenweave.files.atomic import write_text_atomic
+from scenweave.presentation.metrics import (
+    by_class,
+    latency_s,
+    metrics,
+    observed_curve,
+    projected_curve,
+    rate,
+)
+from scenweave.presentation.run_charts import (
+    SVG,
+    plot_cumulative,
+    plot_latency_boxplot,
+    plot_latency_per_class,
+)
+from scenweave.presentation.templating import render
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
-from scenweave.templating import render, templates
 
 REPORT_FILE = "report.html"
 REPLAY_JSON, REPLAY_FIGURE = "replay.json", "replay.svg"
 SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE,
                   REPLAY_JSON, REPLAY_FIGURE)
-HOUR_S = 3600.0
 #: replay figures embedded in a run's report: every failed replay, up to this many passing
 #: ones per class, at most this many in all
 REPLAY_PASSING_PER_CLASS = 1
 REPLAY_FIGURES_MAX = 40
 
 
-# --- metrics -------------------------------------------------------------------------------
-
-def latency_s(outcome: dict) -> float | None:
-    """Wall-clock seconds one scenario took (``timings_s.total``), or None if unknown."""
-    total = (outcome.get("timings_s") or {}).get("total")
-    return float(total) if isinstance(total, int | float) else None
-
-
-def percentile(values: list[float], q: float) -> float | None:
-    """The ``q``-th percentile (0..100) by linear interpolation; None for no values."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    rank = (len(ordered) - 1) * q / 100.0
-    low, high = math.floor(rank), math.ceil(rank)
-    return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
-
-
-def _rounded(value: float | None) -> float | None:
-    return None if value is None else round(value, 4)
-
-
-def latency_stats(values: list[float]) -> dict:
-    """Mean, standard deviation, p50, p95, min and max of latencies in seconds."""
-    if not values:
-        return {"mean": None, "std": None, "p50": None, "p95": None, "min": None, "max": None}
-    mean = sum(values) / len(values)
-    std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
-    return {"mean": round(mean, 4), "std": round(std, 4),
-            "p50": _rounded(percentile(values, 50)), "p95": _rounded(percentile(values, 95)),
-            "min": round(min(values), 4), "max": round(max(values), 4)}
-
-
-def metrics(outcomes: list[dict]) -> dict:
-    """Thesis §6.1 metrics over a group of outcomes (a run, a class, a model)."""
-    n = len(outcomes)
-    counts = Counter(o.get("status", "failed") for o in outcomes)
-    latencies = [v for v in (latency_s(o) for o in outcomes) if v is not None]
-    tokens_in = sum(int(o.get("tokens_in") or 0) for o in outcomes)
-    tokens_out = sum(int(o.get("tokens_out") or 0) for o in outcomes)
-    taxonomy = Counter(t for o in outcomes for t in o.get("error_taxonomy") or [])
-    return {
-        "n": n,
-        "counts": {s: counts.get(s, 0) for s in STATUSES},
-        "success_rate": _rate(counts["ok"] + counts["repaired"], n),
-        "delivered_rate": _rate(n - counts["failed"], n),
-        "first_attempt_rate": _rate(sum(bool(o.get("first_attempt_success"))
-                                        for o in outcomes), n),
-        "mean_attempts": round(sum(o.get("attempts") or 0 for o in outcomes) / n, 3) if n else None,
-        "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
-        "latency_s": latency_stats(latencies),
-        "per_hour": scenarios_per_hour(latencies),
-        "tokens_in": tokens_in, "tokens_out": tokens_out,
-        "tokens_per_scenario": round((tokens_in + tokens_out) / n, 1) if n else None,
-        "error_taxonomy": dict(sorted(taxonomy.items())),
-        "errors_total": sum(taxonomy.values()),
-    }
-
-
-def by_class(outcomes: Iterable[dict]) -> dict[str, list[dict]]:
-    """Outcomes grouped by manoeuvre class, classes sorted."""
-    groups: dict[str, list[dict]] = {}
-    for o in outcomes:
-        groups.setdefault(o.get("maneuver_class", "?"), []).append(o)
-    return dict(sorted(groups.items()))
-
-
-def projected_curve(latencies: list[float], horizon_s: float = HOUR_S,
-                    max_points: int = 2000) -> list[tuple[float, int]]:
-    """(time, scenarios finished) of one sequential pipeline over ``horizon_s`` (Fig. 6.4).
-
-    The observed latencies are repeated in order until the horizon, as if one pipeline
-    instance kept running on the same mix of classes. At most ``max_points`` points are kept
-    (every k-th scenario, and the last one), so a fast run does not make a million points.
-    """
-    usable = [v for v in latencies if v > 0]
-    if not usable:
-        return []
-    expected = horizon_s / (sum(usable) / len(usable))
-    step = max(1, math.ceil(expected / max_points))
-    curve: list[tuple[float, int]] = []
-    clock, count = 0.0, 0
-    while True:
-        for value in usable:
-            if clock + value > horizon_s:
-                if not curve or curve[-1][1] != count:
-                    curve.append((clock, count))
-                return curve
-            clock += value
-            count += 1
-            if count % step == 0:
-                curve.append((clock, count))
-
-
-def scenarios_per_hour(latencies: list[float]) -> float | None:
-    """Scenarios one sequential pipeline makes per hour at these latencies."""
-    usable = [v for v in latencies if v > 0]
-    return round(HOUR_S * len(usable) / sum(usable), 1) if usable else None
-
-
-def observed_curve(run_dir: Path, outcomes: list[dict]) -> list[tuple[float, int]]:
-    """(seconds since the run's first start, scenarios finished) at each commit, from the files.
-
-    A scenario's ``status.json`` is written when it is committed, so its modification time
-    is the finish time; the start of the run is the earliest finish minus its latency.
-    """
-    points = []
-    for o in outcomes:
-        path = Path(run_dir) / safe_name(o["scenario_id"]) / STATUS_FILE
-        if path.exists():
-            points.append((path.stat().st_mtime, latency_s(o) or 0.0))
-    if not points:
-        return []
-    start = min(end - took for end, took in points)
-    return [(t, n) for n, t in enumerate(sorted(end - start for end, _ in points), start=1)]
-
-
-# --- figures (SVG, drawn by scenweave.charts) -----------------------------------------------
-
-SVG = "image/svg+xml"
-#: the charts' frame: pixels left of it (tick labels, axis name), above it, right of it; its
-#: height; the width of one class (per series) in a chart by class, and the least width
-CHART_LEFT, CHART_TOP, CHART_RIGHT, CHART_FRAME_HEIGHT = 62.0, 14.0, 16.0, 300.0
-CLASS_PX, CHART_MIN_PX = 55.0, 640.0
-#: below the frame of a chart with numbers on its x axis (tick labels and the axis name)
-NUMBERS_BELOW_PX = 40.0
-BOX_WIDTH = 0.5
-MEDIAN_COLOUR = "#ff7f0e"
-
-
-@dataclass(frozen=True)
-class BoxStats:
-    """What a box of a box plot shows: the quartiles, the whiskers (the furthest values within
-    1.5 interquartile ranges of the box) and the values beyond them."""
-
-    q1: float
-    median: float
-    q3: float
-    low: float
-    high: float
-    fliers: list[float]
-
-
-def box_stats(values: list[float], reach: float = 1.5) -> BoxStats:
-    """The box of ``values`` (at least one), quartiles as ``percentile`` computes them."""
-    if not values:
-        raise ValueError("a box of no values")
-    q1, median, q3 = (cast(float, percentile(values, q)) for q in (25, 50, 75))
-    iqr = q3 - q1
-    inside = [v for v in values if q1 - reach * iqr <= v <= q3 + reach * iqr]
-    return BoxStats(q1, median, q3, min(inside), max(inside),
-                    sorted(v for v in values if v < min(inside) or v > max(inside)))
-
-
-def _frame(width: float) -> tuple[float, float, float, float]:
-    return (CHART_LEFT, CHART_TOP, width - CHART_LEFT - CHART_RIGHT, CHART_FRAME_HEIGHT)
-
-
-def _svg_bytes(title: str, width: float, below: float, panel: Panel) -> bytes:
-    """One panel as an SVG document of ``width`` px, ``below`` px under its frame."""
-    height = CHART_TOP + CHART_FRAME_HEIGHT + below
-    return render_svg(Chart(title, round(width), round(height), [panel])).encode("utf-8")
-
-
-def _by_class_layout(classes: list[str], per_class: int) -> tuple[float, float]:
-    """(width, pixels below the frame) of a chart with one column of ``per_class`` per class."""
-    width = max(CHART_MIN_PX, CLASS_PX * len(classes) * max(1, per_class) + CHART_LEFT
-                + CHART_RIGHT)
-    return width, category_label_depth(classes) + 8
-
-
-def _class_ticks(classes: list[str]) -> list[tuple[float, str]]:
-    return list(enumerate(classes))
-
-
-def plot_latency_vs_success(per_model: dict[str, dict]) -> bytes:
-    """Fig. 6.1: mean latency against success rate, one labelled point per model."""
-    plot = Plot("latency-vs-success", _frame(CHART_MIN_PX))
-    for i, (model, m) in enumerate(per_model.items()):
-        mean, rate = m["latency_s"]["mean"] or 0.0, 100 * (m["success_rate"] or 0.0)
-        plot.mark(mean, rate, "circle", SERIES_COLOURS[i % len(SERIES_COLOURS)], 8.0,
-                  group=("model", model), cls="point")
-        plot.annotate(mean, rate, model, cls="model")
-    means = [m["latency_s"]["mean"] or 0.0 for m in per_model.values()]
-    panel = plot.finish(plot.auto_scales(padded(means, 0.1), (-5.0, 105.0)),
-                        x_label="mean latency (s/scenario)", y_label="success rate (%)")
-    return _svg_bytes("Latency vs success rate per model", CHART_MIN_PX, NUMBERS_BELOW_PX, panel)
-
-
-def plot_latency_per_class(series: dict[str, list[dict]]) -> bytes:
-    """Fig. 6.2: mean latency ± standard deviation per class, one bar group per series."""
-    classes = sorted({o.get("maneuver_class", "?") for group in series.values() for o in group})
-    width, below = _by_class_layout(classes, len(series))
-    plot = Plot("latency-per-class", _frame(width))
-    bar = 0.8 / max(1, len(series))
-    for i, (name, group) in enumerate(series.items()):
-        colour = SERIES_COLOURS[i % len(SERIES_COLOURS)]
-        grouped = by_class(group)
-        for k, code in enumerate(classes):
-            stats = latency_stats([v for v in map(latency_s, grouped.get(code, []))
-                                   if v is not None])
-            mean, std = stats["mean"] or 0.0, stats["std"] or 0.0
-            left, shown = k - 0.4 + i * bar, ("bar", f"{name} {code}: {mean:.2f} ± {std:.2f} s")
-            plot.rect(left, left + bar, 0.0, mean, colour, group=shown, cls="mean")
-            if std:
-                plot.error_bar(left + bar / 2, mean - std, mean + std, "black", group=shown,
-                               cls="error-bar")
-        if len(series) > 1:
-            plot.legend.append(Entry(name, colour, patch=True, opacity=1.0))
-    low, high = min([0.0, *plot.y_values]), max([0.0, *plot.y_values])
-    scales = plot.auto_scales((-0.6, len(classes) - 0.4), (low, high * 1.05 or 1.0))
-    panel = plot.finish(scales, y_label="latency (s/scenario)", grid="y",
-                        categories=_class_ticks(classes))
-    return _svg_bytes("Mean latency ± standard deviation per class", width, below, panel)
-
-
-def plot_latency_boxplot(outcomes: list[dict]) -> bytes:
-    """Fig. 6.3: the distribution of latencies per class: a box from the first to the third
-    quartile with the median across it, whiskers to the furthest values within 1.5
-    interquartile ranges, the values beyond as circles."""
-    grouped = by_class(outcomes)
-    classes = list(grouped)
-    width, below = _by_class_layout(classes, 1)
-    plot = Plot("latency-boxplot", _frame(width))
-    half, cap = BOX_WIDTH / 2, BOX_WIDTH / 4
-    for k, (code, group) in enumerate(grouped.items()):
-        box = box_stats([v for v in map(latency_s, group) if v is not None] or [0.0])
-        shown = ("box", code)
-        plot.rect(k - half, k + half, box.q1, box.q3, "none", "black", 1.0, group=shown,
-                  cls="quartiles")
-        plot.segment(k - half, box.median, k + half, box.median, MEDIAN_COLOUR, 1.5,
-                     group=shown, cls="median")
-        for end, edge in ((box.low, box.q1), (box.high, box.q3)):
-            plot.segment(k, edge, k, end, "black", 1.0, group=shown, cls="whisker")
-            plot.segment(k - cap, end, k + cap, end, "black", 1.0, group=shown, cls="cap")
-        for value in box.fliers:
-            plot.mark(k, value, "circle", "black", 5.0, fill="none", edge_width=0.8,
-                      group=shown, cls="flier")
-    scales = plot.auto_scales((-0.6, len(classes) - 0.4))
-    panel = plot.finish(scales, y_label="latency (s/scenario)", grid="y",
-                        categories=_class_ticks(classes))
-    return _svg_bytes("Distribution of latencies per class", width, below, panel)
-
-
-def plot_cumulative(series: dict[str, list[tuple[float, int]]]) -> bytes:
-    """Fig. 6.4: cumulative scenarios over time, one step curve per series of (time, count)."""
-    plot = Plot("cumulative", _frame(CHART_MIN_PX))
-    drawn = [(name, curve) for name, curve in series.items() if curve]
-    for i, (name, curve) in enumerate(drawn):
-        colour = SERIES_COLOURS[i % len(SERIES_COLOURS)]
-        plot.step([0.0] + [t / 60 for t, _ in curve], [0] + [n for _, n in curve], colour, 1.5,
-                  group=("series", name), cls="curve")
-        plot.legend.append(Entry(f"{name}: {curve[-1][1]} in {curve[-1][0] / 60:.1f} min",
-                                 colour))
-    if not drawn:
-        plot.note("no scenario finished")
-    panel = plot.finish(plot.auto_scales(), x_label="time (min)", y_label="scenarios finished")
-    return _svg_bytes("Cumulative scenarios over time", CHART_MIN_PX, NUMBERS_BELOW_PX, panel)
-
-
 # --- the data the templates show -----------------------------------------------------------
-
-def _rate(part: int, whole: int) -> float | None:
-    return round(part / whole, 4) if whole else None
-
 
 def pct(value: float | None) -> str:
     """A rate as a whole percentage, ``–`` for none."""
@@ -357,29 +88,6 @@ class Figure:
     @property
     def data_uri(self) -> str:
         return f"data:{self.media_type};base64,{base64.b64encode(self.image).decode('ascii')}"
-
-
-def _macros() -> Any:
-    return templates().get_template("macros.html").module
-
-
-def table(header: list[str], rows: list[list[Any]], text_columns: int = 1,
-          row_classes: list[str] | None = None,
-          column_classes: dict[int, str] | None = None) -> str:
-    """An HTML table (cells escaped), for pages that are not a template of their own."""
-    return str(_macros().table(Table(header, rows, text_columns, column_classes or {},
-                                     row_classes)))
-
-
-def figure(image: bytes, caption: str, alt: str, media_type: str = SVG) -> str:
-    """An inline figure with a caption, for pages that are not a template of their own."""
-    return str(_macros().figure(Figure(image, caption, alt, media_type)))
-
-
-def page(title: str, body: str) -> str:
-    """The report page around ``body``, HTML made by the caller from ``table`` and ``figure``
-    (``bench.html``); the reports of a run and of mining are templates of their own."""
-    return render("report.html", title=title, body=markupsafe.Markup(body))
 
 
 def metrics_row(name: str, m: dict) -> list[Any]:
@@ -462,11 +170,6 @@ def variant_table(varied: list[dict]) -> Table:
     return Table(["scenario", "kept", "asked", "variants"], rows, column_classes={3: "text"})
 
 
-def _variant_table(varied: list[dict]) -> str:
-    """The variants table as HTML."""
-    return str(_macros().table(variant_table(varied)))
-
-
 def _placed(variant: dict) -> str:
     """What a kept variant was asked to change: `` (road 35 lane -1)`` for the lane,
     `` (npc car → van)`` for a vehicle model; nothing for what the LLM chose itself."""
@@ -498,20 +201,20 @@ def replay_counts(outcomes: Iterable[dict]) -> tuple[int, int]:
 def replay_rate(outcomes: Iterable[dict]) -> str:
     """``passed/played (pct)``, ``–`` when none was played."""
     passed, played = replay_counts(outcomes)
-    return f"{passed}/{played} ({pct(_rate(passed, played))})" if played else "–"
+    return f"{passed}/{played} ({pct(rate(passed, played))})" if played else "–"
 
 
 def _replay_overview(run_dir: Path, replayed: list[dict]) -> dict[str, Any]:
     """The replay sections: how many played and passed, the findings counted, the errors
     against the recorded series, and the replay figures."""
-    from scenweave.replay_figures import is_current
+    from scenweave.presentation.replay_figures import is_current
 
     passed, played = replay_counts(replayed)
     codes = Counter(c for o in replayed for c in o["replay"].get("codes") or [])
     picks = replay_figure_picks(
         replayed, drawn=lambda o: is_current(run_dir / safe_name(o["scenario_id"]), o))
     return {
-        "played": played, "passed": passed, "rate": pct(_rate(passed, played)),
+        "played": played, "passed": passed, "rate": pct(rate(passed, played)),
         "engine": sum(not o["replay"].get("played", True) for o in replayed),
         "findings": Table(["replay finding", "scenarios"],
                           [[code, n] for code, n in sorted(codes.items())]),
@@ -576,7 +279,7 @@ def _replay_svg(folder: Path, status: dict) -> bytes | str | None:
     """The folder's ``replay.svg`` (drawn when missing or not drawn from the present
     ``replay.json`` and verdict); the reason as text when it cannot be drawn; None without a
     replay."""
-    from scenweave.replay_figures import draw_replay_figure, is_current
+    from scenweave.presentation.replay_figures import draw_replay_figure, is_current
 
     source, picture = folder / REPLAY_JSON, folder / REPLAY_FIGURE
     if not source.exists():

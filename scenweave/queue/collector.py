@@ -12,18 +12,23 @@ are gone (a flushed Redis, a cancelled job): those are named, to be submitted ag
 
 from __future__ import annotations
 
+import fcntl
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from scenweave.handoff import ParcelError, unpack
 from scenweave.pipeline import base_outcome
-from scenweave.run_folder import RUN_FILE, STATUS_FILE, RunFolder
-from scenweave.worker import QueueError, RunKeys, expected_scenarios, job_id, refresh_run, run_lock
+from scenweave.presentation.report import write_run_report
+from scenweave.queue.connection import QueueError, RunKeys, job_id
+from scenweave.queue.handoff import ParcelError, unpack
+from scenweave.run_folder import RUN_FILE, STATUS_FILE, SUMMARY_FILE, RunFolder
+from scenweave.runner import summarize
 
+LOCK_FILE = ".collect.lock"
 #: RQ job states from which a job without a hand-back will never hand one back
 GONE_STATES = ("failed", "stopped", "canceled")
 
@@ -170,3 +175,45 @@ def _gone(connection: Any, folder: RunFolder, pending: set[str]) -> set[str]:
         if status is None or status in GONE_STATES:
             gone.add(scenario_id)
     return gone
+
+
+# --- the run's summary and report -------------------------------------------------------
+
+@contextmanager
+def run_lock(run_dir: Path) -> Iterator[None]:
+    """The run folder's lock: collectors and summary writers take turns."""
+    with open(run_dir / LOCK_FILE, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def refresh_run(run_dir: Path) -> dict:
+    """Rewrite the run's ``summary.json``; write ``report.html`` once every scenario is in.
+
+    Collectors and summary writers take turns (a lock file in the run folder), so the last
+    one to write has seen every committed scenario.
+    """
+    folder = RunFolder(Path(run_dir))
+    with run_lock(folder.root):
+        run = _read_json(folder.root / RUN_FILE)
+        issues = run.get("input_issues", _read_json(folder.root / SUMMARY_FILE).get("input_issues"))
+        summary = summarize(folder, issues or [])
+        folder.write(SUMMARY_FILE, summary)
+        if summary["total"] >= expected_scenarios(folder.root):
+            write_run_report(folder.root)
+    return summary
+
+
+def expected_scenarios(run_dir: Path) -> int:
+    """How many scenarios the run has (``run.json``)."""
+    return int(_read_json(Path(run_dir) / RUN_FILE).get("scenarios") or 0)
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return {}

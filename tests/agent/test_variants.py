@@ -190,10 +190,10 @@ def test_compare_names_what_changed(varied):
 
 
 def test_the_report_lists_each_records_variants(varied):
-    from scenweave.report import _variant_table
+    from scenweave.presentation.report import variant_table
 
     outcome, _ = varied
-    html = _variant_table([outcome])
+    html = " ".join(str(cell) for row in variant_table([outcome]).rows for cell in row)
     before, after = _variant(outcome, 2)["asked"]["npc_vehicle_type"]
     assert outcome["scenario_id"] in html and "v01 weather" in html
     assert f"v02 vehicles (npc {before} → {after})" in html

@@ -15,7 +15,7 @@ from lxml import etree
 
 from scenweave.bench import BenchError, BenchSettings, agent_settings_for, aggregate, run_bench
 from scenweave.cli import cli
-from scenweave.report import percentile, projected_curve
+from scenweave.presentation.metrics import percentile, projected_curve
 
 SVG = "{http://www.w3.org/2000/svg}"
 

@@ -56,7 +56,7 @@ def test_without_the_plugin_the_class_is_unknown_in_one_line(tmp_path):
 
 def test_the_old_variable_still_loads_the_class_with_one_warning(monkeypatch):
     """``$SCENWEAVE_MANEUVERS`` (the first plugin mechanism) works for one more release."""
-    from scenweave.maneuvers import plugins
+    from scenweave import plugins
 
     monkeypatch.setattr(plugins, "_warned_deprecated", False)
     monkeypatch.setenv(plugins.DEPRECATED_ENV, str(TOY))

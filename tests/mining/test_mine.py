@@ -11,7 +11,7 @@ from scenweave.cli import cli
 from scenweave.ingest import extract_params, load_records
 from scenweave.mining.mine import REPORT_NAME, mine_recordings
 from scenweave.mining.thresholds import load_thresholds
-from scenweave.mining_report import write_mining_report
+from scenweave.presentation.mining_report import write_mining_report
 from tests.mining.synthetic import braking, car, recording, steady, switch
 
 
@@ -84,9 +84,9 @@ def test_the_replay_figure_of_a_mined_record_draws_what_was_recorded(tmp_path, e
     folder = tmp_path / "runs" / "fig" / record["scenario_id"]
     recorded = json.loads((folder / "recorded.json").read_text())
     assert recorded == record["series"]
-    from scenweave.replay_figures import _Facts
+    from scenweave.presentation.replay_facts import ReplayFacts
 
-    times, speeds = _Facts.read(folder).recorded_curve("npc_speed_ms")
+    times, speeds = ReplayFacts.read(folder).recorded_curve("npc_speed_ms")
     assert 2.0 <= times[0] < 2.1  # the event starts when the scenario's manoeuvre does
     assert speeds[0] == record["series"]["npc_speed_ms"][0]
     from lxml import etree

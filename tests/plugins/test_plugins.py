@@ -11,14 +11,13 @@ from pathlib import Path
 
 import pytest
 
-from scenweave import maneuvers
+from scenweave import maneuvers, plugins
 from scenweave.agent import AgentSettings
 from scenweave.agent.llm import backend_names, get_llm
 from scenweave.agent.repair import get_strategy, strategy_names
 from scenweave.cli import main
 from scenweave.errors import InputError
-from scenweave.maneuvers import plugins
-from scenweave.worker import matcher_factory, matcher_for, matcher_names
+from scenweave.queue.job import matcher_factory, matcher_for, matcher_names
 
 TOY = Path(__file__).with_name("toy_plugin.py")
 

@@ -19,7 +19,7 @@ import pytest
 from scenweave.agent import AgentSettings
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
-from scenweave.report import REPORT_FILE
+from scenweave.presentation.report import REPORT_FILE
 from scenweave.run_folder import safe_name
 from scenweave.runner import run_batch
 from scenweave.sandbox import SandboxSettings

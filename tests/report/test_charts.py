@@ -1,4 +1,4 @@
-"""The run and benchmark charts (``report.plot_*``, drawn with ``scenweave.charts``): each is a
+"""The run and benchmark charts (``run_charts.plot_*``, drawn with ``charts``): each is a
 well-formed SVG, a record's text in it is shown and never run, and what it draws lands where
 the data says (read back through the chart's own y axis: its grid lines and tick labels)."""
 
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from scenweave.charts import Scale, nice_ticks, path_data, steps_after
-from scenweave.report import (
+from scenweave.presentation.charts import Scale, nice_ticks, path_data, steps_after
+from scenweave.presentation.metrics import metrics
+from scenweave.presentation.run_charts import (
     box_stats,
-    metrics,
     plot_cumulative,
     plot_latency_boxplot,
     plot_latency_per_class,

@@ -1,4 +1,5 @@
-"""Replay pictures (``scenweave.replay_figures``) and the replay part of a run's ``report.html``.
+"""Replay pictures (``presentation.replay_figures``) and the replay part of a run's
+``report.html``.
 
 A tiny ``--no-llm`` run is played in the real esmini; one of its scenarios is then made a
 failed replay by hand (a collision written into its ``replay.json`` and ``status.json``), as
@@ -20,15 +21,15 @@ from lxml import etree
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
 from scenweave.player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
-from scenweave.replay_figures import (
-    FAIL_COLOUR,
+from scenweave.presentation.replay_facts import FAIL_COLOUR
+from scenweave.presentation.replay_figures import (
     FIGURE_NAME,
     FIGURE_PX,
     draw_replay_figure,
     figure_source,
     is_current,
 )
-from scenweave.report import (
+from scenweave.presentation.report import (
     REPORT_FILE,
     pct,
     replay_figure_picks,

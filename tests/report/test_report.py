@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from scenweave.cli import cli
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
-from scenweave.report import REPORT_FILE, write_run_report
+from scenweave.presentation.report import REPORT_FILE, write_run_report
 from scenweave.runner import run_batch
 from tests.report.chromium import dump_dom, screenshot
 

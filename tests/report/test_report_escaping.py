@@ -8,8 +8,10 @@ import json
 import lxml.html
 import pytest
 
-from scenweave.mining_report import write_mining_report
-from scenweave.report import REPORT_FILE, page, table, write_run_report
+from scenweave.presentation.bench_report import render_bench
+from scenweave.presentation.metrics import metrics
+from scenweave.presentation.mining_report import write_mining_report
+from scenweave.presentation.report import REPORT_FILE, write_run_report
 from scenweave.run_folder import RUN_FILE, STATUS_FILE, SUMMARY_FILE, safe_name
 
 SCRIPT_ID = "BRAKE_<script>alert('id')</script>"
@@ -97,9 +99,14 @@ def test_a_recording_s_script_is_shown_as_text_in_the_mining_report(tmp_path):
     assert "900x real time" in html
 
 
-def test_a_page_built_from_tables_escapes_the_cells_not_the_body():
-    html = page("<script>title</script>", table(["name"], [["<script>cell</script>"], [None]]))
+def test_the_bench_page_escapes_its_name_models_and_errors():
+    model, error = "<script>model</script>", "<script>error</script>"
+    summary = {"models": {model: {"overall": metrics([]), "by_class": {}}},
+               "latency_table": {"BRAKE": {model: None}}, "error_table": {error: {model: 2}}}
+    html = render_bench("<script>bench</script>", summary, {})
     parsed = lxml.html.fromstring(html)
     assert not parsed.xpath("//script")
-    assert [td.text_content() for td in parsed.xpath("//td")] == ["<script>cell</script>", ""]
-    assert parsed.xpath("//title")[0].text == "<script>title</script>"
+    assert parsed.xpath("//title")[0].text == "ScenWeave benchmark <script>bench</script>"
+    assert parsed.xpath("//h1")[0].text == "Benchmark <script>bench</script>"
+    cells = [td.text_content() for td in parsed.xpath("//td")]
+    assert model in cells and error in cells and "–" in cells

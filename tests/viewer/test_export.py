@@ -91,7 +91,7 @@ def test_a_scenario_is_watchable_from_its_replay_json_alone(viewer_runs, tmp_pat
 
 def test_the_viewer_reads_the_files_the_shell_writes():
     from scenweave.agent.variants import REFERENCE_NAME, VARIANT_FILE, VARIANTS_DIR
-    from scenweave.report import REPORT_FILE
+    from scenweave.presentation.report import REPORT_FILE
     from scenweave.run_folder import RECORDED_NAME, RUN_FILE, STATUS_FILE, SUMMARY_FILE
 
     assert (run_files.RUN_NAME, run_files.SUMMARY_NAME, run_files.STATUS_NAME,

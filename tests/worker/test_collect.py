@@ -11,10 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from scenweave.collector import collect
-from scenweave.handoff import Limits, ParcelError, pack, unpack
+from scenweave.queue.collector import collect
+from scenweave.queue.connection import RunKeys, connect
+from scenweave.queue.handoff import Limits, ParcelError, pack, unpack
+from scenweave.queue.job import hand_back
 from scenweave.run_folder import RUN_FILE, RunFolder
-from scenweave.worker import RunKeys, connect, hand_back
 
 RUN_ID = "handback"
 

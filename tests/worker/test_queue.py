@@ -13,12 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from scenweave.cli import cli
-from scenweave.collector import collect
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import is_infrastructure_error
+from scenweave.queue.collector import collect
+from scenweave.queue.connection import QueueError, connect
 from scenweave.run_folder import safe_name
 from scenweave.testing.redis_server import free_port
-from scenweave.worker import QueueError, connect
 from tests.replies import right_replies
 from tests.worker.conftest import GATED_MATCHER
 from tests.worker.records import BRAKE, LCF, POISONED

@@ -18,9 +18,9 @@ import pytest
 from click.testing import CliRunner
 
 from scenweave.cli import cli
-from scenweave.collector import collect
+from scenweave.queue.collector import collect
+from scenweave.queue.connection import QueueError, connect, redacted
 from scenweave.testing.redis_server import RedisServer
-from scenweave.worker import QueueError, connect, redacted
 from tests.worker.conftest import REPO
 
 PASSWORD = "s3cret-queue"

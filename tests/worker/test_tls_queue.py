@@ -17,8 +17,8 @@ import pytest
 from click.testing import CliRunner
 
 from scenweave.cli import cli
+from scenweave.queue.connection import QueueError, connect
 from scenweave.testing.redis_server import free_port
-from scenweave.worker import QueueError, connect
 from tests.worker.conftest import REPO
 
 PASSWORD = "tls-queue-secret"

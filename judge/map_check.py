@@ -13,6 +13,9 @@ from the sample to its own lane's centre line in the map (as esmini places lane 
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from scenweave.player.road_manager import MapProbe, PointGroup, probe_map
-from scenweave.roads.recorded_geometry import Floats
+from scenweave.roads.recorded_geometry import Floats, Mask
 from scenweave.roads.recorded_road import LaneStrip
 
 SAMPLE_STEP_M = 2.0
@@ -53,6 +56,10 @@ class MapCheck:
     error_max: float = float("nan")
     #: the lanelets with samples off their own lane or further than CLOSE_M: (id, count)
     misplaced: tuple[tuple[str, int], ...] = field(default_factory=tuple)
+    #: per sample: error (m), on its own road and lane, strictly so (for pooling checks)
+    errors: Floats = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    own: Mask = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    strict: Mask = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
 
     def line(self) -> str:
         if not self.loaded:
@@ -122,17 +129,35 @@ def judged(probe: MapProbe, samples: Sequence[CentreSamples],
         bad = int((~on | (error > CLOSE_M)).sum())
         if bad:
             misplaced.append((sample.strip, bad))
-    error_all = np.concatenate(errors) if errors else np.zeros(0)
-    if not len(error_all):
+    return _summary(np.concatenate(errors) if errors else np.zeros(0),
+                    np.concatenate(own) if own else np.zeros(0, bool),
+                    np.concatenate(strict) if strict else np.zeros(0, bool),
+                    tuple(sorted(misplaced, key=lambda m: -m[1])))
+
+
+def _summary(errors: Floats, own: Mask, strict: Mask,
+             misplaced: tuple[tuple[str, int], ...] = ()) -> MapCheck:
+    if not len(errors):
         return MapCheck(loaded=True)
-    return MapCheck(loaded=True, samples=len(error_all),
-                    own_lane=float(np.concatenate(own).mean()),
-                    own_lane_strict=float(np.concatenate(strict).mean()),
-                    within_close=float((error_all <= CLOSE_M).mean()),
-                    error_p50=float(np.percentile(error_all, 50)),
-                    error_p95=float(np.percentile(error_all, 95)),
-                    error_max=float(error_all.max()),
-                    misplaced=tuple(sorted(misplaced, key=lambda m: -m[1])))
+    return MapCheck(loaded=True, samples=len(errors), own_lane=float(own.mean()),
+                    own_lane_strict=float(strict.mean()),
+                    within_close=float((errors <= CLOSE_M).mean()),
+                    error_p50=float(np.percentile(errors, 50)),
+                    error_p95=float(np.percentile(errors, 95)),
+                    error_max=float(errors.max()), misplaced=misplaced,
+                    errors=errors, own=own, strict=strict)
+
+
+def pooled(checks: Sequence[MapCheck]) -> MapCheck:
+    """One check over the samples of several maps (a map that did not load counts as not
+    loaded, with the first such map's reason)."""
+    broken = [c for c in checks if not c.loaded]
+    if broken:
+        return MapCheck(loaded=False, problem=broken[0].problem)
+    return _summary(np.concatenate([c.errors for c in checks] or [np.zeros(0)]),
+                    np.concatenate([c.own for c in checks] or [np.zeros(0, bool)]),
+                    np.concatenate([c.strict for c in checks] or [np.zeros(0, bool)]),
+                    tuple(m for c in checks for m in c.misplaced))
 
 
 def _triples(samples: CentreSamples, last: int | None = None
@@ -160,3 +185,42 @@ def check_map(xodr: Path, strips: Sequence[LaneStrip],
     groups = [PointGroup(*lanes[s.strip], _triples(s), _lead_in(strip, by_id))
               for strip, s in zip(kept, samples, strict=True)]
     return judged(probe_map(xodr, groups, library=library), samples, lanes)
+
+
+@dataclass(frozen=True)
+class CarlaMapCheck:
+    """What CARLA's own OpenDRIVE parser (``carla.Map``, no server needed) makes of a map."""
+
+    waypoints: int
+    nan_waypoints: int
+    #: share of the lanelet centre samples CARLA's nearest driving waypoint puts on their own
+    #: road and lane
+    own_lane: float
+
+    def line(self) -> str:
+        return (f"CARLA: {self.waypoints} waypoints, {self.nan_waypoints} NaN, centre samples "
+                f"on their own road and lane {100 * self.own_lane:.1f} %")
+
+
+def carla_map_check(xodr_text: str, strips: Sequence[LaneStrip],
+                    lanes: Mapping[str, tuple[int, int]], name: str = "recorded"
+                    ) -> CarlaMapCheck | None:
+    """Parse the map with the ``carla`` client package and ask where the centre samples lie
+    (CARLA's frame flips y); ``None`` where the package is not installed."""
+    if importlib.util.find_spec("carla") is None:
+        return None
+    carla = importlib.import_module("carla")
+    world_map = carla.Map(name, xodr_text)
+    waypoints = world_map.generate_waypoints(2.0)
+    nan = sum(1 for w in waypoints if not all(math.isfinite(v) for v in (
+        w.transform.location.x, w.transform.location.y, w.transform.rotation.yaw)))
+    hits, total = 0, 0
+    for strip in strips:
+        if strip.id not in lanes:
+            continue
+        for x, y in centre_samples(strip).xy:
+            found = world_map.get_waypoint(carla.Location(x=float(x), y=-float(y), z=0.0),
+                                           project_to_road=True)
+            total += 1
+            hits += found is not None and (found.road_id, found.lane_id) == lanes[strip.id]
+    return CarlaMapCheck(len(waypoints), nan, hits / total if total else 0.0)

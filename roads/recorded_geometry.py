@@ -27,6 +27,7 @@ import numpy.typing as npt
 from scipy.spatial import cKDTree
 
 Floats = npt.NDArray[np.float64]
+Mask = npt.NDArray[np.bool_]
 
 #: boundary vertices closer than this to the previous kept one are dropped (m)
 MIN_SPACING_M = 0.5
@@ -196,16 +197,23 @@ def densified(polyline: Floats, step: float = BOUNDARY_STEP_M) -> Floats:
     return np.vstack([inner, polyline[-1:]])
 
 
-def lateral_profile(line: DenseLine, polyline: Floats, stations: Floats) -> Floats:
-    """``t`` of ``polyline`` at each of ``stations`` (``s`` along ``line``): the polyline's
-    densified points projected on the line, interpolated in ``s``; held at the ends where the
-    polyline starts after or ends before the line."""
-    s, t, within = line.project(densified(np.asarray(polyline, dtype=float)))
-    keep = within & (s > 0) & (s < line.length)
-    if keep.sum() < 2:
-        keep = np.ones(len(s), dtype=bool)
-    order = np.argsort(s[keep], kind="stable")
-    return np.interp(stations, s[keep][order], t[keep][order])
+def lateral_profiles(line: DenseLine, polylines: list[Floats], stations: Floats
+                     ) -> list[Floats]:
+    """``t`` of each polyline at each of ``stations`` (``s`` along ``line``): the polyline's
+    densified points projected on the line (all polylines in one query), interpolated in
+    ``s``; held at the ends where a polyline starts after or ends before the line."""
+    dense = [densified(np.asarray(p, dtype=float)) for p in polylines]
+    s_all, t_all, within_all = line.project(np.vstack(dense))
+    bounds = np.cumsum([len(d) for d in dense])[:-1]
+    profiles = []
+    for s, t, within in zip(np.split(s_all, bounds), np.split(t_all, bounds),
+                            np.split(within_all, bounds), strict=True):
+        keep = within
+        if keep.sum() < 2:
+            keep = np.ones(len(s), dtype=bool)
+        order = np.argsort(s[keep], kind="stable")
+        profiles.append(np.interp(stations, s[keep][order], t[keep][order]))
+    return profiles
 
 
 def simplified(s: Floats, values: Floats, tolerance: float = WIDTH_TOLERANCE_M) -> Floats:

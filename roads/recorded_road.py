@@ -37,7 +37,7 @@ from scenweave.roads.recorded_geometry import (
     DenseLine,
     Floats,
     Piece,
-    lateral_profile,
+    lateral_profiles,
     linear_records,
     reference_pieces,
     stations,
@@ -252,11 +252,9 @@ def _shaped(road: _Road) -> _Road:
     road.pieces = reference_pieces(extended_reference(road.strips))
     road.line = DenseLine.of(road.pieces)
     road.stations = stations(road.line.length)
-    borders = [lateral_profile(road.line, np.asarray(s.left, float), road.stations)
-               for s in road.strips]
-    borders.append(lateral_profile(road.line, np.asarray(road.strips[-1].right, float),
-                                   road.stations))
-    road.borders = borders
+    borders = [np.asarray(s.left, float) for s in road.strips]
+    borders.append(np.asarray(road.strips[-1].right, float))
+    road.borders = lateral_profiles(road.line, borders, road.stations)
     return road
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from commonroad.scenario.lanelet import Lanelet, LaneletNetwork, LaneletType
 from lxml import etree
 
-from scenweave.mining.readers.commonroad import _all_floats, _network, _stop_line, light_phases
+from scenweave.mining.readers.commonroad import _network, _stop_line, light_phases
 from scenweave.mining.tracks import LightPhase
 from scenweave.roads.recorded_road import LaneStrip, RecordedLight
 
@@ -79,9 +79,12 @@ def recorded_lights(network: LaneletNetwork) -> list[RecordedLight]:
 
 
 def _last_step(root: etree._Element) -> int:
-    """The last time step any obstacle of the file is seen at."""
-    steps = _all_floats(root, "time/exact")
-    return int(steps.max()) if len(steps) else 0
+    """The last time step any obstacle of the file is seen at (each obstacle's last state:
+    reading every state's time costs more than the rest of the map)."""
+    found = root.xpath("dynamicObstacle/initialState/time/exact/text() | "
+                       "dynamicObstacle/trajectory/state[last()]/time/exact/text()")
+    texts = found if isinstance(found, list) else []
+    return int(max((float(t) for t in texts if isinstance(t, str)), default=0.0))
 
 
 def read_lanelet_map(path: Path) -> LaneletMap:

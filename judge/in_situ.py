@@ -292,16 +292,24 @@ def _fit_findings(verdict: InSituVerdict) -> list[Finding]:
 
 def _collision_findings(playback: Playback, paths: dict[str, RecordedPath],
                         skip: Collection[str], verdict: InSituVerdict) -> list[Finding]:
-    found: list[Finding] = []
-    for time_s, a, b in playback.collisions:
+    """One finding per pair and stretch of time esmini saw them touch where the record
+    shows them apart."""
+    step = (playback.times[1] - playback.times[0]) if len(playback.times) > 1 else 0.0
+    unrecorded: dict[tuple[str, str], list[list[float]]] = {}
+    for time_s, a, b in sorted(playback.collisions, key=lambda c: (c[1], c[2], c[0])):
         if a in skip or b in skip:
             continue
         if a in paths and b in paths and _recorded_touch(paths[a], paths[b], time_s):
             verdict.recorded_collisions.append((time_s, a, b))
             continue
-        found.append(Finding("IN_SITU_COLLISION", f"at {time_s:.2f} s: {a} and {b} collide; "
-                             "the record shows them apart"))
-    return found
+        stretches = unrecorded.setdefault((a, b), [])
+        if stretches and time_s - stretches[-1][1] <= step + TIME_MATCH_S:
+            stretches[-1][1] = time_s
+        else:
+            stretches.append([time_s, time_s])
+    return [Finding("IN_SITU_COLLISION", f"{a} and {b} collide from {first:.2f} s to "
+                    f"{last:.2f} s; the record shows them apart")
+            for (a, b), stretches in sorted(unrecorded.items()) for first, last in stretches]
 
 
 def _recorded_touch(a: RecordedPath, b: RecordedPath, time_s: float) -> bool:

@@ -156,7 +156,7 @@ def choose(recording: Recording, window: EventWindow, context_s: float = 3.0) ->
     if ego is None:
         raise InSituRefused(f"{source}: track {window.ego} (the event's ego) is not in the "
                             "recording")
-    start = max(window.start_s - context_s, float(ego.t[0]))
+    start = _on_grid(ego.t, max(window.start_s - context_s, float(ego.t[0])))
     end = min(window.end_s + context_s, float(ego.t[-1]))
     dt = recording.dt or 0.1
     vehicles, record, held = [], [], 0
@@ -171,6 +171,12 @@ def choose(recording: Recording, window: EventWindow, context_s: float = 3.0) ->
         record.append(path)
         held += backward
     return InSituChoice(source, window.ego, start, end, vehicles, record, held, dt)
+
+
+def _on_grid(times: np.ndarray, at_s: float) -> float:
+    """The first recorded time at or after ``at_s``: scenario times are then the recording's
+    own steps, which the player's clock lands on."""
+    return float(times[min(int(np.searchsorted(times, at_s - 1e-6)), len(times) - 1)])
 
 
 def _check_track(source: str, track: Track, inside: np.ndarray, dt: float) -> None:
@@ -202,7 +208,7 @@ def _vehicle(track: Track, inside: np.ndarray, start: float,
                               t.tolist(), held_x, held_y, h.tolist(), properties)
     path = RecordedPath(name, t.tolist(), x.tolist(), y.tolist(), h.tolist(), track.length_m,
                         track.width_m)
-    return vehicle, path, sum(held)
+    return vehicle, path, int(sum(held))
 
 
 def light_controllers(lights: Sequence[TrafficLight], signals: Mapping[str, Sequence[str]],

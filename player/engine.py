@@ -169,9 +169,11 @@ def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_
                                         ELEMENT_TYPES.get(kind, str(kind)),
                                         ELEMENT_STATES.get(state, str(state))))
 
+    # --traj_filter 0: esmini merges trajectory vertices closer than 0.1 m by default, which
+    # turns a recorded creep into jumps of 0.1 m and more (in-situ scenarios play every vertex)
     args = [b"esmini", b"--osc", xosc_path.encode(), b"--headless", b"--fixed_timestep",
             str(time_step_s).encode(), b"--collision", b"--disable_stdout",
-            b"--logfile_path", log_path.encode()]
+            b"--traj_filter", b"0", b"--logfile_path", log_path.encode()]
     argv = (ctypes.c_char_p * len(args))(*args)
     started = time.perf_counter()
     if lib.SE_InitWithArgs(len(args), argv) != 0:

@@ -44,9 +44,11 @@ from scenweave.scenario_lib.vehicles import PERFORMANCE_MAX_SPEED_MS, VEHICLE_MO
 #: a time condition is "greater than" and the player's clock lands on recorded times: a
 #: trigger set this much before a time fires at it (s)
 TRIGGER_EPS_S = 1e-3
-#: how far apart the parking slots of a row are (m), and how many slots make a row
-PARKING_SPACING_M = 15.0
+#: parked cars stand this far apart bumper to bumper (m), rows of this many, rows this far
+#: apart (m)
+PARKING_GAP_M = 5.0
 PARKING_ROW = 40
+PARKING_ROW_SPACING_M = 20.0
 #: the scenario's decimals: positions to the millimetre, headings to 1e-4 rad, times to 1 ms
 POSITION_DIGITS = 3
 HEADING_DIGITS = 4
@@ -153,10 +155,10 @@ def in_situ_scenario(scene: InSituScene) -> xosc.Scenario:
     init = xosc.Init()
     act = xosc.Act("in_situ_act", at_time("act_start", 0),
                    at_time("act_stop", scene.duration_s, "stop"))
-    for slot, vehicle in enumerate(scene.vehicles):
+    slots = _parking_slots(scene.parking, scene.vehicles)
+    for vehicle, parked in zip(scene.vehicles, slots, strict=True):
         external = scene.external and vehicle.name == HERO
         entities.add_scenario_object(vehicle.name, _vehicle(vehicle, scene, external))
-        parked = _parking_slot(scene.parking, slot)
         _init_actions(init, vehicle, parked, external)
         group = _maneuver_group(vehicle, parked, scene, external)
         if group is not None:
@@ -178,13 +180,18 @@ def _vehicle(vehicle: RecordedVehicle, scene: InSituScene, external: bool) -> xo
     model = VEHICLE_MODELS[known_type(vehicle.vehicle_type)]
     box = xosc.BoundingBox(vehicle.width_m, vehicle.length_m, model.height_m, 0, 0,
                            model.height_m / 2)
-    front = xosc.Axle(0.5, 0.7, vehicle.width_m * 0.85, vehicle.length_m * 0.3, 0.35)
-    rear = xosc.Axle(0.0, 0.7, vehicle.width_m * 0.85, -vehicle.length_m * 0.3, 0.35)
+    # the rear axle at x = 0: esmini moves the reference point (and the box) onto a rear axle
+    # placed anywhere else, and the recorded centre must stay the reference point
+    front = xosc.Axle(0.5, 0.7, vehicle.width_m * 0.85, vehicle.length_m * 0.6, 0.35)
+    rear = xosc.Axle(0.0, 0.7, vehicle.width_m * 0.85, 0.0, 0.35)
     entry = xosc.Vehicle(model.blueprint, xosc.VehicleCategory[model.category], box, front, rear,
                          PERFORMANCE_MAX_SPEED_MS, PERFORMANCE_ACCELERATION_MS2,
                          PERFORMANCE_ACCELERATION_MS2)
     if vehicle.name == HERO:
         entry.add_property("type", "ego_vehicle")
+    # esmini turns a car at each vertex by default ("corner"); "segment" interpolates the
+    # heading from one recorded sample's to the next, so at a sample it is the recorded one
+    entry.add_property("plineInterpolation", "segment")
     for key, value in vehicle.properties.items():
         entry.add_property(key, value)
     if external and scene.reference_file:
@@ -198,10 +205,18 @@ def _pose(vehicle: RecordedVehicle, k: int) -> xosc.WorldPosition:
                               round(vehicle.heading[k], HEADING_DIGITS))
 
 
-def _parking_slot(first: tuple[float, float], slot: int) -> xosc.WorldPosition:
-    row, column = divmod(slot, PARKING_ROW)
-    return xosc.WorldPosition(first[0] + column * PARKING_SPACING_M,
-                              first[1] - row * PARKING_SPACING_M, 0, 0)
+def _parking_slots(first: tuple[float, float],
+                   vehicles: Sequence[RecordedVehicle]) -> list[xosc.WorldPosition]:
+    """One slot per vehicle, in rows of ``PARKING_ROW`` along +x, each car
+    ``PARKING_GAP_M`` behind the one before whatever their lengths (a bus is 15 m long)."""
+    slots, x, y = [], first[0], first[1]
+    for slot, vehicle in enumerate(vehicles):
+        if slot and slot % PARKING_ROW == 0:
+            x, y = first[0], y - PARKING_ROW_SPACING_M
+        x += vehicle.length_m / 2
+        slots.append(xosc.WorldPosition(round(x, POSITION_DIGITS), y, 0, 0))
+        x += vehicle.length_m / 2 + PARKING_GAP_M
+    return slots
 
 
 def _speed(speed_ms: float) -> xosc.AbsoluteSpeedAction:
@@ -289,21 +304,43 @@ def _controller(controller: SignalController) -> xosc.TrafficSignalController:
 
 def hold_backward(x: Sequence[float], y: Sequence[float],
                   heading: Sequence[float]) -> tuple[list[float], list[float], list[bool]]:
-    """The positions a trajectory plays: every recorded step's backward part (against the
-    heading) dropped, so a standing car whose recorded position jitters backwards holds where
-    it is instead of reversing (NGSIM: up to 0.45 m in 0.1 s); sideways jitter and every
-    forward step stay. Also, per sample, whether it lies off the record (held)."""
-    out_x, out_y, held = [float(x[0])], [float(y[0])], [False]
+    """The positions a trajectory plays: the recorded ones moved along the heading as little
+    as possible (least squares) for the car never to step backwards. Where a standing car's
+    recorded position jitters backwards (NGSIM: up to 1 m and back within a second, its
+    ``velocity`` saying it drives on), the car holds between the jittered positions instead
+    of reversing; sideways jitter and every stretch that moves forward stay as recorded.
+
+    The progress along the heading, summed step by step, is fitted by the closest
+    non-decreasing sequence (pool-adjacent-violators); each position moves along its heading
+    by the fit's difference. Also, per sample, whether it lies off the record (held)."""
+    if not len(x):
+        return [], [], []
+    progress = [0.0]
     for k in range(1, len(x)):
-        ux, uy = math.cos(heading[k]), math.sin(heading[k])
-        dx, dy = x[k] - out_x[-1], y[k] - out_y[-1]
-        along = dx * ux + dy * uy
-        if along < -BACKWARD_EPS_M:
-            dx, dy = dx - along * ux, dy - along * uy
-        out_x.append(out_x[-1] + dx)
-        out_y.append(out_y[-1] + dy)
-        held.append(math.hypot(out_x[-1] - x[k], out_y[-1] - y[k]) > BACKWARD_EPS_M)
+        step = ((x[k] - x[k - 1]) * math.cos(heading[k])
+                + (y[k] - y[k - 1]) * math.sin(heading[k]))
+        progress.append(progress[-1] + step)
+    fitted = _non_decreasing(progress)
+    out_x, out_y, held = [], [], []
+    for k, (want, got) in enumerate(zip(fitted, progress, strict=True)):
+        shift = want - got if abs(want - got) > BACKWARD_EPS_M else 0.0
+        out_x.append(float(x[k]) + shift * math.cos(heading[k]))
+        out_y.append(float(y[k]) + shift * math.sin(heading[k]))
+        held.append(bool(shift != 0.0))
     return out_x, out_y, held
+
+
+def _non_decreasing(values: Sequence[float]) -> list[float]:
+    """The non-decreasing sequence closest to ``values`` in least squares (pool adjacent
+    violators: a block that falls below the one before merges with it into their mean)."""
+    blocks: list[list[float]] = []  # [mean, count]
+    for value in values:
+        blocks.append([value, 1.0])
+        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
+            mean, count = blocks.pop()
+            total = blocks[-1][1] + count
+            blocks[-1] = [(blocks[-1][0] * blocks[-1][1] + mean * count) / total, total]
+    return [mean for mean, count in blocks for _ in range(int(count))]
 
 
 def reference_csv(vehicle: RecordedVehicle) -> str:

@@ -76,7 +76,8 @@ def test_boxes_are_the_recorded_size_centred_on_the_reference_point(written):
     assert float(truck.find("BoundingBox/Dimensions").get("length")) == 12.0
     hero = root.find("Entities/ScenarioObject[@name='hero']/Vehicle")
     properties = {p.get("name"): p.get("value") for p in hero.iter("Property")}
-    assert properties == {"type": "ego_vehicle", "track_id": "7"}
+    assert properties == {"type": "ego_vehicle", "plineInterpolation": "segment",
+                          "track_id": "7"}
 
 
 def test_a_late_vehicle_waits_parked_and_leaves_when_its_track_ends(written):
@@ -126,20 +127,27 @@ def test_the_reference_is_the_recorded_trajectory():
 
 
 def test_standstill_jitter_is_held_and_forward_steps_kept():
-    x = [10.0, 10.2, 9.9, 10.25, 10.1, 11.0]
-    y = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0]
-    heading = [0.0] * 6
+    x = [10.0, 10.2, 9.9, 10.25, 10.1, 11.0, 12.0]
+    y = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0]
+    heading = [0.0] * 7
     held_x, held_y, held = hold_backward(x, y, heading)
     assert all(b >= a for a, b in zip(held_x, held_x[1:], strict=False))  # never backwards
-    assert held_x == pytest.approx([10.0, 10.2, 10.2, 10.25, 10.25, 11.0])
+    # the closest such path: each backward step split evenly between its two samples
+    assert held_x == pytest.approx([10.0, 10.05, 10.05, 10.175, 10.175, 11.0, 12.0])
     assert held_y == pytest.approx(y)  # sideways jitter stays
-    assert held == [False, False, True, False, True, False]
+    assert held == [False, True, True, True, True, False, False]
+
+
+def test_a_record_that_never_reverses_is_played_as_recorded():
+    x = [0.0, 0.0, 0.5, 1.5, 1.5, 3.0]
+    held_x, held_y, held = hold_backward(x, [1.0] * 6, [0.0] * 6)
+    assert held_x == x and held_y == [1.0] * 6 and not any(held)
 
 
 def test_a_heading_against_the_motion_holds_along_the_heading():
     heading = [math.pi] * 3  # driving towards -x
     held_x, _, held = hold_backward([5.0, 4.0, 4.3], [0.0] * 3, heading)
-    assert held_x == pytest.approx([5.0, 4.0, 4.0]) and held == [False, False, True]
+    assert held_x == pytest.approx([5.0, 4.15, 4.15]) and held == [False, True, True]
 
 
 def test_a_vehicle_without_a_size_or_samples_is_no_trajectory():

@@ -56,6 +56,8 @@ class MapResult:
     cached_s: float
     check: MapCheck
     carla: CarlaMapCheck | None
+    #: lanelet links the map could not express
+    unlinked: int = 0
 
 
 def location(path: Path) -> str:
@@ -81,7 +83,8 @@ def measure_map(file: Path, cache: Path, with_carla: bool) -> MapResult:
     check = check_map(road.xodr, strips, road.lanes)
     carla = carla_map_check(road.xodr.read_text(encoding="utf-8"), strips, road.lanes) \
         if with_carla else None
-    return MapResult(file, location(file), wall_s, cpu_s, cached_s, check, carla)
+    return MapResult(file, location(file), wall_s, cpu_s, cached_s, check, carla,
+                     len(road.unlinked))
 
 
 def map_line(name: str, check: MapCheck, wall_s: float, cpu_s: float, cached_s: float,
@@ -104,7 +107,8 @@ def map_section(files: list[Path], with_carla: bool) -> bool:
             result = measure_map(file, Path(cache), with_carla)
             results.append(result)
             print(map_line(file.name, result.check, result.wall_s, result.cpu_s,
-                           result.cached_s, "yes" if result.check.loaded else "NO"))
+                           result.cached_s, "yes" if result.check.loaded else "NO")
+                  + f"; lanelet links lost {result.unlinked}")
             if result.carla is not None:
                 print(f"    {result.carla.line()}")
     met = True

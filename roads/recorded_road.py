@@ -266,6 +266,7 @@ class _Links:
 
     roads: list[_Road]
     road_of: dict[str, _Road]
+    by_id: dict[int, _Road] = field(default_factory=dict)
     succ: dict[int, set[int]] = field(default_factory=dict)
     pred: dict[int, set[int]] = field(default_factory=dict)
     junctions: dict[int, list[_Road]] = field(default_factory=dict)
@@ -273,7 +274,7 @@ class _Links:
     @classmethod
     def of(cls, roads: list[_Road]) -> _Links:
         road_of = {s.id: r for r in roads for s in r.strips}
-        links = cls(roads, road_of)
+        links = cls(roads, road_of, {r.id: r for r in roads})
         for road in roads:
             links.succ[road.id] = {road_of[n].id for s in road.strips for n in s.successors
                                    if n in road_of} - {road.id}
@@ -283,12 +284,13 @@ class _Links:
         return links
 
     def _is_connector(self, road: _Road) -> bool:
-        """A road between a split and what follows it, or a merge and what leads into it."""
-        preds, succs = self.pred[road.id], self.succ[road.id]
-        if len(preds) > 1 or len(succs) > 1:
-            return False
-        return any(len(self.succ[p]) > 1 for p in preds) or \
-            any(len(self.pred[s]) > 1 for s in succs)
+        """A road after a split (its predecessor continues into several roads) or before a
+        merge (its successor continues from several): OpenDRIVE links such a predecessor or
+        successor to a junction, whose connecting roads these are. Every road after a split
+        is one, and every road before a merge, so a road's several successors (predecessors)
+        always share one junction."""
+        return any(len(self.succ[p]) > 1 for p in self.pred[road.id]) or \
+            any(len(self.pred[s]) > 1 for s in self.succ[road.id])
 
     def _find_junctions(self) -> None:
         connectors = [r for r in self.roads if self._is_connector(r)]
@@ -318,20 +320,18 @@ class _Links:
     def end_link(self, road: _Road, forward: bool) -> tuple[str, int, str] | None:
         """``(elementType, elementId, contactPoint)`` of the road's successor (``forward``)
         or predecessor, or ``None`` where it has none the map can express."""
-        ends = sorted(self.succ[road.id] if forward else self.pred[road.id])
-        contact = "start" if forward else "end"
-        by_id = {r.id: r for r in self.roads}
+        ends = [self.by_id[e] for e in sorted(self.succ[road.id] if forward
+                                              else self.pred[road.id])]
         if not ends:
             return None
-        if road.junction < 0:
-            junctions = {by_id[e].junction for e in ends}
-            if len(junctions) == 1 and min(junctions) >= 0:
-                return "junction", min(junctions), ""
-        if len(ends) == 1:
-            other = by_id[ends[0]]
-            back = self.pred[other.id] if forward else self.succ[other.id]
-            if road.junction >= 0 or other.junction >= 0 or back == {road.id}:
-                return "road", other.id, contact
+        if len(ends) == 1 and (road.junction >= 0 or ends[0].junction < 0):
+            # from a connecting road to the next road, or between two plain roads
+            back = self.pred[ends[0].id] if forward else self.succ[ends[0].id]
+            if road.junction >= 0 or back == {road.id}:
+                return "road", ends[0].id, "start" if forward else "end"
+        junctions = {e.junction for e in ends}
+        if len(junctions) == 1 and min(junctions) >= 0:
+            return "junction", min(junctions), ""
         return None
 
     def lane_link(self, strip: LaneStrip, forward: bool, road_id: int) -> int | None:
@@ -463,22 +463,26 @@ def _write_signals(element: etree._Element, placed: list[tuple[SignalPlacement, 
 
 
 def _write_junctions(root: etree._Element, links: _Links) -> None:
+    """Each junction with a connection from every road that links to it (ahead) to each of
+    that road's successors, lane by lane."""
+    elements = {j: _sub(root, "junction", id=j, name=f"junction {j}")
+                for j in sorted(links.junctions)}
     number = 0
-    for junction_id, members in sorted(links.junctions.items()):
-        junction = _sub(root, "junction", id=junction_id, name=f"junction {junction_id}")
-        for road in members:
-            for incoming_id in sorted(links.pred[road.id]):
-                incoming = next(r for r in links.roads if r.id == incoming_id)
-                if incoming.junction == junction_id:
-                    continue
-                number += 1
-                connection = _sub(junction, "connection", id=number, incomingRoad=incoming_id,
-                                  connectingRoad=road.id, contactPoint="start")
-                for strip in road.strips:
-                    origin = links.lane_link(strip, False, incoming_id)
-                    if origin is not None:
-                        ends = {"from": origin, "to": road.lane_id(strip.id)}
-                        _sub(connection, "laneLink", **ends)
+    for incoming in links.roads:
+        end = links.end_link(incoming, forward=True)
+        if end is None or end[0] != "junction":
+            continue
+        for connecting_id in sorted(links.succ[incoming.id]):
+            connecting = links.by_id[connecting_id]
+            number += 1
+            connection = _sub(elements[end[1]], "connection", id=number,
+                              incomingRoad=incoming.id, connectingRoad=connecting_id,
+                              contactPoint="start")
+            for strip in connecting.strips:
+                origin = links.lane_link(strip, False, incoming.id)
+                if origin is not None:
+                    ends = {"from": origin, "to": connecting.lane_id(strip.id)}
+                    _sub(connection, "laneLink", **ends)
 
 
 def _document(roads: list[_Road], links: _Links,

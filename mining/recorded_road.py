@@ -1,12 +1,12 @@
-"""The road a recording was made on, as an OpenDRIVE file: converted once per file content and
-cached, with what a scenario on it needs (lanelet -> road and lane, lights -> signals and
-their recorded cycles).
+"""The road a recording was made on (CommonRoad XML, highD), as an OpenDRIVE file:
+converted once per file content and cached, with what a scenario on it needs (lanelet ->
+road and lane, lights -> signals and their recorded cycles).
 
 ``road_for(source, cache_dir)`` is the entry point. The cache entry is a folder named by the
-sha256 of the source file's bytes and :data:`CACHE_VERSION`, holding ``road.xodr`` and
-``road.json`` (written last, atomically: a folder without it is incomplete and rewritten).
-A network that cannot be converted raises :class:`RecordedRoadError` naming the file and the
-lanelet.
+sha256 of the source file's bytes (with highD's recordingMeta) and :data:`CACHE_VERSION`,
+holding ``road.xodr`` and ``road.json`` (written last, atomically: a folder without it is
+incomplete and rewritten). A network that cannot be converted raises
+:class:`RecordedRoadError` naming the file and the lanelet.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Any
 from lxml import etree
 
 from scenweave.files.atomic import write_bytes_atomic, write_json_atomic
-from scenweave.mining.readers.lanelet_map import LaneletMap, read_lanelet_map
+from scenweave.mining.readers.lanelet_map import LaneletMap, companions, read_road_network
 from scenweave.mining.tracks import LightPhase
 from scenweave.roads.errors import RecordedRoadError
 from scenweave.roads.recorded_road import CONVERTER_VERSION, ConvertedRoad, convert
@@ -91,13 +91,12 @@ def cache_key(content: bytes) -> str:
 
 
 def read_network(source: Path) -> LaneletMap:
-    """The file's lane network; :class:`RecordedRoadError` naming the file where it cannot
-    be read."""
+    """The file's lane network (CommonRoad XML, highD); :class:`RecordedRoadError` naming
+    the file where it cannot be read."""
     try:
-        return read_lanelet_map(source)
+        return read_road_network(source)
     except READ_ERRORS as err:
-        raise RecordedRoadError(f"{source}: not a readable CommonRoad lane network: "
-                                f"{err}") from err
+        raise RecordedRoadError(f"{source}: not a readable lane network: {err}") from err
 
 
 def converted(lanelet_map: LaneletMap) -> ConvertedRoad:
@@ -123,7 +122,7 @@ def road_for(source: Path, cache_dir: Path) -> RecordedRoadMap:
     for this file content and read back from the cache after."""
     source = Path(source)
     try:
-        content = source.read_bytes()
+        content = b"".join(p.read_bytes() for p in (source, *companions(source)))
     except OSError as err:
         raise RecordedRoadError(f"{source}: cannot be read: {err.strerror or err}") from err
     folder = Path(cache_dir) / cache_key(content)

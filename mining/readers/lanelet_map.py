@@ -1,9 +1,14 @@
 """A recording's lane network in the neutral model of ``roads.recorded_road``: CommonRoad
 lanelets (read with ``commonroad-io``) become :class:`LaneStrip`\\ s, its traffic lights
 :class:`RecordedLight`\\ s with their stop lines, their recorded cycles :class:`LightPhase`\\ s.
+Only the map is read from a CommonRoad file (obstacles and planning problems are taken out of
+the XML first, as the trajectory reader does).
 
-Only the map is read here (obstacles and planning problems are taken out of the XML first, as
-the trajectory reader does), so converting a recording's road costs no trajectory parsing.
+highD has no lanelets: its lanes are straight, between the recording's lane markings
+(``upperLaneMarkings``, ``lowerLaneMarkings``), as long as the stretch its vehicles drive. Its
+strips are named by highD's ``laneId`` (upper carriageway 2, 3...; lower carriageway after a
+gap of one), as its tracks name their lanes, in the reader's frame (the file's, y growing
+downwards), so tracks and map line up.
 """
 
 from __future__ import annotations
@@ -15,10 +20,13 @@ import numpy as np
 from commonroad.scenario.lanelet import Lanelet, LaneletNetwork, LaneletType
 from lxml import etree
 
+from scenweave.mining.readers import commonroad, highd
 from scenweave.mining.readers.commonroad import _network, _stop_line, light_phases
 from scenweave.mining.tracks import LightPhase
 from scenweave.roads.recorded_road import LaneStrip, RecordedLight
 
+#: a highD lane reaches this far beyond the first and last vehicle position (m)
+HIGHD_MARGIN_M = 10.0
 #: CommonRoad lanelet types that are no lane for cars, as OpenDRIVE lane types
 LANE_TYPES = {LaneletType.SIDEWALK: "sidewalk", LaneletType.CROSSWALK: "sidewalk",
               LaneletType.BICYCLE_LANE: "biking", LaneletType.SHOULDER: "shoulder",
@@ -102,3 +110,64 @@ def read_lanelet_map(path: Path) -> LaneletMap:
     return LaneletMap(source=str(path),
                       strips=tuple(lane_strip(ll) for ll in network.lanelets),
                       lights=tuple(recorded_lights(network)), phases=phases, dt=dt)
+
+
+def _straight(x_from: float, x_to: float, y: float) -> np.ndarray:
+    return np.array([[x_from, y], [x_to, y]], dtype=float)
+
+
+def highd_strips(upper: np.ndarray, lower: np.ndarray, x_min: float, x_max: float
+                 ) -> list[LaneStrip]:
+    """The straight lanes between highD's markings (sorted y, the file's frame): the upper
+    carriageway drives towards -x, the lower towards +x; ids are highD's laneIds."""
+    strips = []
+    upper_ids = [str(i + 2) for i in range(len(upper) - 1)]
+    for i, lane in enumerate(upper_ids):  # towards -x: left is -y, the smaller marking
+        strips.append(LaneStrip(
+            lane, _straight(x_max, x_min, upper[i]), _straight(x_max, x_min, upper[i + 1]),
+            left_neighbour=upper_ids[i - 1] if i else None, left_same_direction=True,
+            right_neighbour=upper_ids[i + 1] if i + 1 < len(upper_ids) else None,
+            right_same_direction=True))
+    lower_ids = [str(len(upper) + 2 + j) for j in range(len(lower) - 1)]
+    for j, lane in enumerate(lower_ids):  # towards +x: left is +y, the larger marking
+        strips.append(LaneStrip(
+            lane, _straight(x_min, x_max, lower[j + 1]), _straight(x_min, x_max, lower[j]),
+            left_neighbour=lower_ids[j + 1] if j + 1 < len(lower_ids) else None,
+            left_same_direction=True, right_neighbour=lower_ids[j - 1] if j else None,
+            right_same_direction=True))
+    return strips
+
+
+def read_highd_map(path: Path) -> LaneletMap:
+    """The straight lanes of a highD recording (its ``NN_tracks.csv``)."""
+    number = highd.TRACKS.match(path.name)
+    if number is None:
+        raise ValueError(f"{path.name}: a highD tracks file is named NN_tracks.csv")
+    fps, upper, lower = highd._recording(path, number.group(1), [])
+    tracks = highd.read(path).tracks
+    if not tracks:
+        raise ValueError(f"{path.name}: no vehicle says how long the road is")
+    x_min = min(float(t.x.min()) - t.length_m for t in tracks) - HIGHD_MARGIN_M
+    x_max = max(float(t.x.max()) + t.length_m for t in tracks) + HIGHD_MARGIN_M
+    return LaneletMap(source=str(path), strips=tuple(highd_strips(upper, lower, x_min, x_max)),
+                      lights=(), phases={}, dt=1.0 / fps)
+
+
+def read_road_network(path: Path) -> LaneletMap:
+    """The lane network of any file a trajectory reader takes that carries one: CommonRoad
+    XML, highD; ``ValueError`` for another format."""
+    path = Path(path)
+    if highd.sniff(path):
+        return read_highd_map(path)
+    if commonroad.sniff(path):
+        return read_lanelet_map(path)
+    raise ValueError("no lane network in this format (CommonRoad XML and highD carry one)")
+
+
+def companions(path: Path) -> list[Path]:
+    """The files a recording's lane network is read from besides ``path`` (highD's
+    recordingMeta), for a cache key."""
+    number = highd.TRACKS.match(Path(path).name)
+    if number is None:
+        return []
+    return [Path(path).with_name(f"{number.group(1)}_recordingMeta.csv")]

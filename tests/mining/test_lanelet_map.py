@@ -1,7 +1,7 @@
-"""A recording's road (mining.readers.lanelet_map, mining.recorded_road): CommonRoad lanelets
-read into strips, converted once per file content and cached, refused by file and lanelet; on
-the shared NGSIM files (skipped where ../shared is absent) the map check's targets; CARLA's
-parser where the ``carla`` package is installed."""
+"""A recording's road (mining.readers.lanelet_map, mining.recorded_road): CommonRoad
+lanelets and highD's lane markings read into strips, converted once per file content and
+cached, refused by file and lanelet; on the shared NGSIM files (skipped where ../shared is
+absent) the map check's targets; CARLA's parser where the ``carla`` package is installed."""
 
 from __future__ import annotations
 
@@ -13,9 +13,11 @@ from pathlib import Path
 import pytest
 
 from scenweave.judge.map_check import carla_map_check, check_map
-from scenweave.mining.readers.lanelet_map import read_lanelet_map
+from scenweave.mining.readers import highd
+from scenweave.mining.readers.lanelet_map import read_lanelet_map, read_road_network
 from scenweave.mining.recorded_road import XODR_NAME, road_for
 from scenweave.player import PlayerUnavailable, find_esmini
+from scenweave.player.road_manager import PointGroup, probe_map
 from scenweave.roads.errors import RecordedRoadError
 from tests.mining.road_fixture import write_road_fixture
 
@@ -89,7 +91,7 @@ def test_a_network_that_cannot_be_converted_names_file_and_lanelet(tmp_path: Pat
 def test_a_file_that_is_no_lane_network_is_refused_by_name(tmp_path: Path) -> None:
     junk = tmp_path / "junk.xml"
     junk.write_text("<commonRoad><lanelet id='1'>", encoding="utf-8")
-    with pytest.raises(RecordedRoadError, match=f"^{junk}: not a readable CommonRoad"):
+    with pytest.raises(RecordedRoadError, match=f"^{junk}: not a readable lane network"):
         road_for(junk, tmp_path / "cache")
     with pytest.raises(RecordedRoadError, match="cannot be read"):
         road_for(tmp_path / "missing.xml", tmp_path / "cache")
@@ -133,3 +135,33 @@ def test_carla_parses_the_maps_without_nan(fixture_file: Path, tmp_path: Path) -
         assert carla is not None
         assert carla.waypoints > 0 and carla.nan_waypoints == 0, file.name
         assert carla.own_lane > 0.95, (file.name, carla.line())
+
+
+HIGHD = Path(__file__).resolve().parent / "data" / "highd" / "01_tracks.csv"
+
+
+def test_highd_lanes_are_straight_strips_between_the_markings(tmp_path: Path) -> None:
+    """Upper markings 1, 4.5, 8 (laneIds 2, 3, towards -x), lower 12, 15.5, 19 (5, 6,
+    towards +x); one road per carriageway, and each vehicle's positions land on the lane its
+    track names."""
+    road = road_for(HIGHD, tmp_path)
+    assert road.lanes == {"2": (1, -1), "3": (1, -2), "6": (2, -1), "5": (2, -2)}
+    network = read_road_network(HIGHD)
+    by_id = {s.id: s for s in network.strips}
+    assert by_id["3"].left[:, 1].tolist() == [4.5, 4.5]
+    assert by_id["3"].right[:, 1].tolist() == [8.0, 8.0]
+    assert by_id["3"].left[0, 0] > by_id["3"].left[1, 0]  # towards -x
+    assert by_id["5"].left[:, 1].tolist() == [15.5, 15.5]
+    assert road_for(HIGHD, tmp_path).cached
+    _esmini_or_skip()
+    check = check_map(road.xodr, network.strips, road.lanes)
+    assert check.own_lane == 1.0 and check.error_max < 0.01
+    groups, expected = [], []
+    for track in highd.read(HIGHD).tracks:
+        for x, y, heading, lane in zip(track.x, track.y, track.heading, track.lane,
+                                       strict=True):
+            groups.append(PointGroup(*road.lanes[lane], [(x, y, heading)]))
+            expected.append(road.lanes[lane])
+    probe = probe_map(road.xodr, groups)
+    found = [(g[0].road_id, g[0].lane_id) for g in probe.groups]
+    assert found == expected

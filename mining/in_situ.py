@@ -32,12 +32,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from scenweave.errors import InputError
 from scenweave.files import write_json_atomic, write_text_atomic
 from scenweave.judge.in_situ import InSituVerdict, RecordedPath, judge_in_situ
 from scenweave.mining.detect import Event
-from scenweave.mining.tracks import Recording, Track, TrafficLight
+from scenweave.mining.tracks import Floats, Recording, Track, TrafficLight
 from scenweave.scenario_lib.builder import HERO, write_scenario
 from scenweave.scenario_lib.trajectories import (
     InSituScene,
@@ -59,6 +60,10 @@ REPLAY_NAME = "replay.json"
 REFERENCE_NAME = "hero_reference.csv"
 #: a step longer than this many recording steps is a gap in the track
 GAP_STEPS = 1.5
+#: a trajectory vertex is left out where the line between its neighbours passes within this
+#: of it (m; rad for the heading): the player's speed over a step then differs from the
+#: recorded positions' change by at most 2 x this / the step (0.1 m/s at 0.1 s)
+THIN_TOLERANCE = 0.005
 #: parked cars wait this far beyond the recorded traffic (m)
 PARKING_OFFSET_M = 150.0
 
@@ -203,12 +208,43 @@ def _vehicle(track: Track, inside: np.ndarray, start: float,
     t = np.round(track.t[inside] - start, 3)
     x, y, h = track.x[inside], track.y[inside], track.heading[inside]
     held_x, held_y, held = hold_backward(x, y, h)
+    keep = thinned(t, np.asarray(held_x), np.asarray(held_y), h)
     properties = {"track_id": track.id} if name == HERO else {}
     vehicle = RecordedVehicle(name, track.vehicle_type, track.length_m, track.width_m,
-                              t.tolist(), held_x, held_y, h.tolist(), properties)
+                              t[keep].tolist(), np.asarray(held_x)[keep].tolist(),
+                              np.asarray(held_y)[keep].tolist(), h[keep].tolist(), properties)
     path = RecordedPath(name, t.tolist(), x.tolist(), y.tolist(), h.tolist(), track.length_m,
                         track.width_m)
     return vehicle, path, int(sum(held))
+
+
+def thinned(t: Floats, x: Floats, y: Floats, heading: Floats,
+            tolerance: float = THIN_TOLERANCE) -> npt.NDArray[np.intp]:
+    """The samples a trajectory needs: those the straight line in time between their
+    neighbours kept misses by more than ``tolerance`` (m, and rad for the heading); the rest
+    the player interpolates as recorded (Douglas-Peucker in time). esmini places every vertex
+    on the road network when it loads a scenario, most of an in-situ replay's cost, and a car
+    driving steadily needs few."""
+    turn = np.unwrap(heading)
+    keep = np.zeros(len(t), dtype=bool)
+    keep[[0, -1]] = True
+    spans = [(0, len(t) - 1)]
+    while spans:
+        first, last = spans.pop()
+        if last - first < 2:
+            continue
+        inner = slice(first + 1, last)
+        share = (t[inner] - t[first]) / (t[last] - t[first])
+        miss = np.maximum(
+            np.hypot(x[first] + share * (x[last] - x[first]) - x[inner],
+                     y[first] + share * (y[last] - y[first]) - y[inner]),
+            np.abs(turn[first] + share * (turn[last] - turn[first]) - turn[inner]))
+        worst = int(np.argmax(miss))
+        if miss[worst] > tolerance:
+            split = first + 1 + worst
+            keep[split] = True
+            spans += [(first, split), (split, last)]
+    return np.flatnonzero(keep)
 
 
 def light_controllers(lights: Sequence[TrafficLight], signals: Mapping[str, Sequence[str]],
@@ -271,8 +307,9 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
         scenario = write_scenario(in_situ_scenario(scene), staging / SCENARIO_NAME)
         _place_road(road.xodr, staging / ROAD_NAME)
         if settings.external_ego:
-            hero = next(v for v in choice.vehicles if v.name == HERO)
-            write_text_atomic(staging / REFERENCE_NAME, reference_csv(hero))
+            hero = next(p for p in choice.record if p.name == HERO)
+            write_text_atomic(staging / REFERENCE_NAME,
+                              reference_csv(hero.t, hero.x, hero.y, hero.heading))
         written = time.perf_counter()
         result = InSituResult(folder, folder / SCENARIO_NAME, choice)
         if settings.replay:

@@ -343,11 +343,12 @@ def _non_decreasing(values: Sequence[float]) -> list[float]:
     return [mean for mean, count in blocks for _ in range(int(count))]
 
 
-def reference_csv(vehicle: RecordedVehicle) -> str:
-    """The recorded trajectory as CSV (``t,x,y,h``): the reference an externally driven hero
-    is measured against."""
-    rows = ["t,x,y,h"] + [f"{t:.3f},{x:.3f},{y:.3f},{h:.4f}" for t, x, y, h in
-                          zip(vehicle.times, vehicle.x, vehicle.y, vehicle.heading, strict=True)]
+def reference_csv(times: Sequence[float], x: Sequence[float], y: Sequence[float],
+                  heading: Sequence[float]) -> str:
+    """A recorded trajectory as CSV (``t,x,y,h``): the reference an externally driven hero
+    is measured against, every recorded sample."""
+    rows = ["t,x,y,h"] + [f"{t:.3f},{a:.3f},{b:.3f},{h:.4f}" for t, a, b, h in
+                          zip(times, x, y, heading, strict=True)]
     return "\n".join(rows) + "\n"
 
 

@@ -121,7 +121,8 @@ def test_the_external_hero_is_handed_to_the_stack_and_keeps_its_reference(writte
 
 def test_the_reference_is_the_recorded_trajectory():
     vehicle = _vehicle("hero", 0.0, 3)
-    assert reference_csv(vehicle).splitlines() == [
+    assert reference_csv(vehicle.times, vehicle.x, vehicle.y,
+                         vehicle.heading).splitlines() == [
         "t,x,y,h", "0.000,0.000,-1.750,0.0000", "0.100,1.000,-1.750,0.0000",
         "0.200,2.000,-1.750,0.0000"]
 

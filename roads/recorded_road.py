@@ -15,9 +15,10 @@ driving direction, its predecessors, successors and side neighbours) and
   else, links to it directly. Where strips split or merge, the roads between the branching
   point and the next road become a junction's connecting roads (a junction per group of
   connectors sharing an incoming or outgoing road), and the roads around link to the junction.
-- A light becomes one dynamic ``signal`` (type 1000001) per strip it governs, on that strip's
-  road and lane at its stop line, ``s`` always within ``[0, length)`` (esmini aborts the whole
-  process on a signal past its road's end).
+- A light becomes one dynamic ``signal`` (type 1000001, no ``value``: esmini looks light types
+  up as ``type[.subtype][-value]`` and aborts on an unknown one) per strip it governs, on that
+  strip's road and lane at its stop line, ``s`` always within ``[0, length)`` (esmini aborts
+  the whole process on a signal past its road's end).
 
 Only numpy and the error root are imported; reading a format into strips is the readers' job.
 """
@@ -45,7 +46,7 @@ from scenweave.roads.recorded_geometry import (
 )
 
 #: bumped whenever the written map changes for the same input (cache keys include it)
-CONVERTER_VERSION = "1"
+CONVERTER_VERSION = "2"
 #: two strips share a road where their common border differs by less than this (m)
 SHARED_BORDER_M = 0.1
 #: OpenDRIVE signal type of a traffic light (as CARLA and esmini read it)
@@ -458,7 +459,7 @@ def _write_signals(element: etree._Element, placed: list[tuple[SignalPlacement, 
         signal = _sub(signals, "signal", s=placement.s, t=t, id=placement.signal_id,
                       name=f"light {placement.light_id}", dynamic="yes", orientation="+",
                       zOffset=3.0, country="OpenDRIVE", type=TRAFFIC_LIGHT_TYPE, subtype="-1",
-                      value=-1.0, height=1.0, width=0.4)
+                      height=1.0, width=0.4)
         _sub(signal, "validity", fromLane=placement.lane_id, toLane=placement.lane_id)
 
 

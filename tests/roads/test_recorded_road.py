@@ -5,6 +5,7 @@ by esmini's real RoadManager (judge.map_check)."""
 from __future__ import annotations
 
 import math
+import subprocess
 from dataclasses import replace
 from pathlib import Path
 
@@ -14,7 +15,7 @@ from lxml import etree
 
 from scenweave.judge.map_check import check_map
 from scenweave.player import PlayerUnavailable, find_esmini
-from scenweave.roads import load_opendrive
+from scenweave.roads import advance_along_lane, load_opendrive
 from scenweave.roads.errors import RecordedRoadError
 from scenweave.roads.recorded_road import ConvertedRoad, RecordedLight, convert
 from tests.roads.recorded_network import HALF, LANE, lights, strips
@@ -154,3 +155,67 @@ def test_a_collapsed_lanelet_and_a_doubled_id_are_refused_by_name() -> None:
         convert(collapsed)
     with pytest.raises(RecordedRoadError, match=r"^lanelet 3: its id is used twice"):
         convert([*strips(), strips()[2]])
+
+
+SIGNAL_SCENARIO = """<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="0" date="2026-01-01T00:00:00" description="l" author="t"/>
+  <ParameterDeclarations/>
+  <CatalogLocations/>
+  <RoadNetwork>
+    <LogicFile filepath="{xodr}"/>
+    <TrafficSignals>
+      <TrafficSignalController name="light500">
+        <Phase name="green" duration="1"><TrafficSignalState trafficSignalId="{signal}"
+          state="off;off;on"/></Phase>
+        <Phase name="red" duration="1"><TrafficSignalState trafficSignalId="{signal}"
+          state="on;off;off"/></Phase>
+      </TrafficSignalController>
+    </TrafficSignals>
+  </RoadNetwork>
+  <Entities/>
+  <Storyboard>
+    <Init><Actions><GlobalAction><InfrastructureAction><TrafficSignalAction>
+      <TrafficSignalStateAction name="{signal}" state="on;off;off"/>
+    </TrafficSignalAction></InfrastructureAction></GlobalAction></Actions></Init>
+    <StopTrigger><ConditionGroup><Condition name="end" delay="0" conditionEdge="none">
+      <ByValueCondition><SimulationTimeCondition value="3" rule="greaterThan"/></ByValueCondition>
+    </Condition></ConditionGroup></StopTrigger>
+  </Storyboard>
+</OpenSCENARIO>
+"""
+
+
+def test_esmini_drives_the_recorded_light_as_a_three_lamp_signal(xodr: Path,
+                                                                 converted: ConvertedRoad,
+                                                                 tmp_path: Path) -> None:
+    """The signal is a traffic light esmini knows (type 1000001 without ``value``: with
+    CARLA's ``value="-1"`` esmini finds no such light type and aborts on the first state
+    set), so a TrafficSignalController and a TrafficSignalStateAction on it play."""
+    _esmini_or_skip()
+    (placed,) = converted.signals
+    scenario = tmp_path / "lights.xosc"
+    scenario.write_text(SIGNAL_SCENARIO.format(xodr=xodr, signal=placed.signal_id),
+                        encoding="utf-8")
+    log = tmp_path / "esmini.log"
+    done = subprocess.run([str(find_esmini().home / "bin" / "esmini"), "--headless", "--osc",
+                           str(scenario), "--fixed_timestep", "0.1", "--disable_stdout",
+                           "--logfile_path", str(log)], capture_output=True, timeout=60,
+                          cwd=tmp_path, check=False)
+    text = log.read_text(encoding="utf-8", errors="replace")
+    assert done.returncode == 0, text
+    assert "not supported" not in text and "[error]" not in text
+
+
+def test_links_carry_a_lane_through_the_merge_and_the_junction(xodr: Path,
+                                                              converted: ConvertedRoad) -> None:
+    """Followed with the project's own lane graph: the middle lane from x = 10 runs through
+    the merge's connecting road (lanelet 7) and the junction straight on (10, then 12)."""
+    lanes = converted.lanes
+    start_road, start_lane = lanes["2"]
+    for distance, lanelet in ((60, "5"), (100, "7"), (150, "9"), (200, "10"), (240, "12")):
+        road, lane, _ = advance_along_lane(start_road, start_lane, 10.0, distance,
+                                           map_path=xodr)
+        assert (int(road), lane) == lanes[lanelet], distance
+    road, lane, _ = advance_along_lane(*lanes["3"], 10.0, 100.0, map_path=xodr)
+    assert (int(road), lane) == lanes["8"]  # the flared lane goes on into the merge

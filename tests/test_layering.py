@@ -140,6 +140,15 @@ def test_the_bottom_layer_imports_nothing_of_ours_but_the_error_root(package, be
             for target in targets} <= {package, *below}
 
 
+def test_the_road_model_reads_no_recording_format():
+    """roads/ writes recorded lane networks from its own neutral model (LaneStrip); reading a
+    format into it (CommonRoad, highD) is the mining readers' job."""
+    readers = [name for name in MODULES if layer(name) == "roads" and any(
+        isinstance(node, (ast.Import, ast.ImportFrom)) and "commonroad" in ast.unparse(node)
+        for node in ast.walk(ast.parse(MODULES[name].read_text(encoding="utf-8"))))]
+    assert readers == []
+
+
 #: the shell by job: folder -> the shell modules outside it that it may import. The
 #: presentation (reports, charts, figures) reads run folders and imports no other job; the
 #: queue builds on the batch runner and writes the report; the CLI's commands are above both

@@ -47,10 +47,9 @@ HEADING_TOL_RAD = 0.05
 SPEED_TOL_MS = 0.1
 #: under this share of samples within a tolerance is an error
 MIN_SHARE = 0.995
-#: the first samples of a vehicle show how it started (its Init speed, then the step in
-#: which the trajectory action starts, whose speed esmini reports doubled):
-#: speeds are compared from this sample of its life on
-SPEED_FROM_SAMPLE = 3
+#: speeds are compared from this sample of a vehicle's life on (the first has no recorded
+#: step before it)
+SPEED_FROM_SAMPLE = 1
 #: recorded boxes closer than this count as touching (m): a collision within it is recorded
 TOUCH_MARGIN_M = 0.1
 #: a collision is looked for in the record this long around its time (s)
@@ -241,7 +240,9 @@ def recorded_speeds(path: RecordedPath) -> tuple[Floats, npt.NDArray[np.bool_]]:
 
 def _speed_fit(fit: Fit, path: RecordedPath, index: npt.NDArray[np.intp],
                played_speed: Floats) -> None:
-    """Speeds from ``SPEED_FROM_SAMPLE`` on, where the scenario follows the record's step."""
+    """Speeds from ``SPEED_FROM_SAMPLE`` on, where the scenario follows the record's step.
+    esmini's speed at a sample is the distance moved over the step before it, as the
+    record's is."""
     if len(path.t) < 2:
         return
     speeds, noise = recorded_speeds(path)
@@ -249,7 +250,9 @@ def _speed_fit(fit: Fit, path: RecordedPath, index: npt.NDArray[np.intp],
     usable = (k >= 0) & ~noise
     usable[:max(SPEED_FROM_SAMPLE - 1, 0)] = False
     fit.backward_samples = int(noise.sum())
-    difference = np.abs(played_speed[k[usable]] - speeds[usable])
+    # esmini signs a speed by the segment's direction against the heading: a standing car's
+    # sideways jitter (kept; only backward steps are held) may come out negative
+    difference = np.abs(np.abs(played_speed[k[usable]]) - speeds[usable])
     fit.speed_samples = int(usable.sum())
     fit.speed_within = int((difference <= SPEED_TOL_MS).sum())
     if len(difference):

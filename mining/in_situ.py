@@ -26,7 +26,7 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -58,6 +58,8 @@ CHOICE_NAME = "in_situ.json"
 JUDGE_NAME = "judge.json"
 REPLAY_NAME = "replay.json"
 REFERENCE_NAME = "hero_reference.csv"
+#: the batch's report beside the in-situ folders of ``scenweave mine --in-situ``
+REPORT_NAME = "in_situ_report.json"
 #: a step longer than this many recording steps is a gap in the track
 GAP_STEPS = 1.5
 #: a trajectory vertex is left out where the line between its neighbours passes within this
@@ -291,9 +293,10 @@ def scene_of(recording: Recording, choice: InSituChoice, road: RecordedRoad,
 
 
 def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_dir: Path,
-                  road: RecordedRoad, settings: InSituSettings | None = None) -> InSituResult:
-    """Write ``<out_dir>/in_situ/`` for ``event`` of ``recording`` (see the module's
-    docstring); played and judged unless ``settings.replay`` is off. Raises
+                  road: RecordedRoad, settings: InSituSettings | None = None,
+                  name: str = FOLDER) -> InSituResult:
+    """Write ``<out_dir>/<name>/`` (default ``in_situ``) for ``event`` of ``recording`` (see
+    the module's docstring); played and judged unless ``settings.replay`` is off. Raises
     :class:`InSituRefused` (one line) for input it cannot play; the folder is then not
     written. ``PlayerUnavailable`` when a replay is asked for and there is no esmini."""
     settings = settings or InSituSettings()
@@ -301,8 +304,8 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
     window = window_of(event)
     choice = choose(recording, window, settings.context_s)
     scene = scene_of(recording, choice, road, window, settings.external_ego)
-    folder = Path(out_dir) / FOLDER
-    staging = Path(tempfile.mkdtemp(prefix=f".{FOLDER}.", dir=_made(Path(out_dir))))
+    folder = Path(out_dir) / name
+    staging = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=_made(Path(out_dir))))
     try:
         scenario = write_scenario(in_situ_scenario(scene), staging / SCENARIO_NAME)
         _place_road(road.xodr, staging / ROAD_NAME)
@@ -313,7 +316,8 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
         written = time.perf_counter()
         result = InSituResult(folder, folder / SCENARIO_NAME, choice)
         if settings.replay:
-            result.verdict = _play_and_judge(scenario, road.xodr, choice, settings, staging)
+            result.verdict, result.timings_s["replay"] = _play_and_judge(
+                scenario, road.xodr, choice, settings, staging)
         write_json_atomic(staging / CHOICE_NAME, {**choice.to_dict(),
                                                   **scenario_summary(scene)})
         _publish(staging, folder)
@@ -321,16 +325,16 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
         shutil.rmtree(staging, ignore_errors=True)
         raise
     result.folder = folder
-    result.timings_s = {"write": round(written - started, 4),
-                        "total": round(time.perf_counter() - started, 4)}
+    result.timings_s.update({"write": round(written - started, 4),
+                             "total": round(time.perf_counter() - started, 4)})
     return result
 
 
 def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
-                    settings: InSituSettings, staging: Path) -> InSituVerdict:
+                    settings: InSituSettings, staging: Path) -> tuple[InSituVerdict, float]:
     """Play the staged scenario on the whole road (a trajectory's reach cannot be bounded, so
     the player's map cut would only cost the time to find that out) at the recording's step,
-    judge it, and keep the playback and the verdict beside it."""
+    judge it, and keep the playback and the verdict beside it; also the replay's seconds."""
     from scenweave import player  # loads esmini's bindings only when asked to play
 
     replay = player.ReplaySettings(time_step_s=choice.step_s, wall_time_s=settings.wall_time_s,
@@ -342,7 +346,7 @@ def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
     playback.write(staging / REPLAY_NAME)
     write_json_atomic(staging / JUDGE_NAME, {**verdict.to_dict(),
                                              "timings_s": playback.timings_s})
-    return verdict
+    return verdict, float(playback.timings_s.get("total", 0.0))
 
 
 def _made(folder: Path) -> Path:
@@ -385,3 +389,58 @@ def road_of(source: str | Path, cache_dir: Path) -> RecordedRoad:
         raise InSituRefused(str(err)) from err
     return RecordedRoad(road.xodr, {light.light_id: tuple(light.signal_ids)
                                     for light in road.lights})
+
+
+@dataclass
+class InSituBatch:
+    """What ``write_in_situ_records`` wrote and refused (one line each)."""
+
+    written: list[InSituResult] = field(default_factory=list)
+    refused: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        def entry(result: InSituResult) -> dict[str, Any]:
+            verdict = result.verdict
+            judged = {} if verdict is None else {
+                "passed": verdict.passed,
+                "position_share": round(verdict.overall.position_share, 5),
+                "worst_position_m": round(verdict.overall.worst_position_m, 4),
+                "errors": sorted({f.code for f in verdict.findings if f.severity == "error"})}
+            return {"folder": str(result.folder), "vehicles": len(result.choice.vehicles),
+                    **judged}
+
+        return {"written": [entry(r) for r in self.written], "refused": self.refused}
+
+
+def write_in_situ_records(records: Iterable[Mapping[str, Any]], out_dir: Path, cache_dir: Path,
+                          settings: InSituSettings | None = None) -> InSituBatch:
+    """The in-situ scenario of every mined record, each in ``<out_dir>/<scenario_id>/``, with
+    ``in_situ_report.json`` beside them. Each recording is read again and its road converted
+    once (cached in ``cache_dir``); a record that cannot be played in situ is one refused line
+    naming its scenario, the file and the track or lanelet, and the batch goes on."""
+    from scenweave.mining.readers import read_file
+
+    batch = InSituBatch()
+    by_file: dict[str, list[Mapping[str, Any]]] = {}
+    for record in records:
+        source = str((record.get("provenance") or {}).get("file", ""))
+        by_file.setdefault(source, []).append(record)
+    for source, mined in by_file.items():
+        recording = read_file(Path(source)) if source else None
+        try:
+            if recording is None or not recording.tracks:
+                why = "; ".join(recording.warnings) if recording else "no provenance file"
+                raise InSituRefused(f"{source or '?'}: no recording to play in situ ({why})")
+            road = road_of(source, cache_dir)
+        except InSituRefused as err:
+            batch.refused += [f"{r.get('scenario_id', '?')}: {err}" for r in mined]
+            continue
+        for record in mined:
+            scenario_id = str(record.get("scenario_id", "record"))
+            try:
+                batch.written.append(write_in_situ(recording, record, out_dir, road, settings,
+                                                   name=scenario_id))
+            except InSituRefused as err:
+                batch.refused.append(f"{scenario_id}: {err}")
+    write_json_atomic(Path(out_dir) / REPORT_NAME, batch.to_dict())
+    return batch

@@ -153,7 +153,9 @@ def in_situ_scenario(scene: InSituScene) -> xosc.Scenario:
         raise ValueError("vehicle names must be unique")
     entities = xosc.Entities()
     init = xosc.Init()
-    act = xosc.Act("in_situ_act", at_time("act_start", 0),
+    # a time condition is "greater than": the act starts at the first step only when its
+    # time lies before 0 (at 0 it would start, and its events run, one step late)
+    act = xosc.Act("in_situ_act", at_time("act_start", -scene.step_s),
                    at_time("act_stop", scene.duration_s, "stop"))
     slots = _parking_slots(scene.parking, scene.vehicles)
     for vehicle, parked in zip(scene.vehicles, slots, strict=True):
@@ -269,7 +271,7 @@ def _maneuver_group(vehicle: RecordedVehicle, parked: xosc.WorldPosition, scene:
         follow.add_action(f"{vehicle.name}_appears", xosc.TeleportAction(_pose(vehicle, 0)))
     follow.add_action(f"{vehicle.name}_trajectory", _follow(vehicle))
     follow.add_trigger(at_time(f"{vehicle.name}_start",
-                               max(vehicle.start_s - scene.step_s - TRIGGER_EPS_S, 0.0)))
+                               vehicle.start_s - scene.step_s - TRIGGER_EPS_S))
     maneuver.add_event(follow)
     if vehicle.end_s < scene.duration_s - TRIGGER_EPS_S:
         leave = xosc.Event(f"{vehicle.name}_leaves", xosc.Priority.parallel)

@@ -12,6 +12,7 @@ from scenweave import exit_codes
 from scenweave.commands.agent_options import class_codes, json_option
 from scenweave.console import counted_lines
 from scenweave.progress import progress
+from scenweave.schemas.scenario_folder import MINING_REPORT_NAME
 
 
 @click.command("mine")
@@ -21,13 +22,18 @@ from scenweave.progress import progress
 @click.option("--thresholds", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="Detection thresholds JSON (default: mining/thresholds.json).")
 @click.option("--classes", callback=class_codes, help="Only these classes, e.g. BRAKE,CINF.")
+@click.option("--in-situ", "in_situ", is_flag=True,
+              help="Also write each record's in-situ scenario (its recorded road and every "
+                   "recorded vehicle, played in esmini and judged) into OUT/in_situ/.")
+@click.option("--context-s", type=click.FloatRange(min=0.0), default=3.0, show_default=True,
+              help="With --in-situ: seconds of recording kept before and after each event.")
 @json_option("the mining report")
 def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str, ...],
-         as_json: bool) -> None:
+         in_situ: bool, context_s: float, as_json: bool) -> None:
     """Read CommonRoad XML, NGSIM CSV or highD files (a file or a folder), find the
     manoeuvres of the MOOVE classes in them and write each as a canonical record. Exit status
     1 when an event found was refused or no record was written."""
-    from scenweave.mining.mine import REPORT_NAME, mine_recordings
+    from scenweave.mining.mine import mine_recordings
     from scenweave.mining.readers import read_recordings
     from scenweave.mining.thresholds import ThresholdsError, load_thresholds
     from scenweave.presentation.mining_report import write_mining_report
@@ -40,26 +46,53 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str,
     report = mine_recordings(progress(read_recordings(data), desc="mining"), out_dir, limits,
                              classes)
     report.warnings[:0] = warnings
-    html = write_mining_report(out_dir / REPORT_NAME)
+    html = write_mining_report(out_dir / MINING_REPORT_NAME)
+    batch = _in_situ(out_dir, context_s) if in_situ and sum(report.written.values()) else None
     if as_json:
-        click.echo(json.dumps(report.to_dict(), indent=1))
+        click.echo(json.dumps(report.to_dict() | ({"in_situ": batch.to_dict()} if batch else {}),
+                              indent=1))
     else:
         _tell(report, out_dir, html)
+        if batch is not None:
+            _tell_in_situ(batch, out_dir)
     # an event found but refused counts as a problem, as does an input nothing was read from
-    exit_codes.finish(not sum(report.written.values()) or bool(report.skipped))
+    exit_codes.finish(not sum(report.written.values()) or bool(report.skipped)
+                      or bool(batch and batch.refused))
+
+
+def _in_situ(out_dir: Path, context_s: float) -> Any:
+    """Every written record's in-situ scenario in OUT/in_situ/ (roads cached in
+    $SCENWEAVE_HOME/roads)."""
+    from scenweave.agent.home import home
+    from scenweave.ingest import load_records
+    from scenweave.mining.in_situ import FOLDER, InSituSettings, write_in_situ_records
+
+    records = progress(list(load_records(out_dir)), desc="in situ")
+    return write_in_situ_records(records, out_dir / FOLDER, home() / "roads",
+                                 InSituSettings(context_s=context_s))
+
+
+def _tell_in_situ(batch: Any, out_dir: Path) -> None:
+    from scenweave.mining.in_situ import FOLDER, REPORT_NAME
+
+    passed = sum(1 for r in batch.written if r.verdict is not None and r.verdict.passed)
+    click.echo(f"in situ: {len(batch.written)} scenarios ({passed} played as recorded), "
+               f"{len(batch.refused)} refused -> {out_dir / FOLDER}")
+    if batch.refused:
+        for line in counted_lines(f"refused in situ: {len(batch.refused)}", batch.refused,
+                                  str(out_dir / FOLDER / REPORT_NAME)):
+            click.echo(line, err=True)
 
 
 def _tell(report: Any, out_dir: Path, html: Path) -> None:
     """The summary line, then what was refused and the warnings, a few of each."""
-    from scenweave.mining.mine import REPORT_NAME
-
     by_class = ", ".join(f"{c} {n}" for c, n in sorted(report.written.items())) or "none"
     rate = report.vehicle_hours / report.seconds if report.seconds else 0.0
     click.echo(f"mine: {sum(report.written.values())} records ({by_class}) from "
                f"{len(report.files)} files, {report.vehicle_hours:.2f} vehicle-hours in "
                f"{report.seconds:.1f} s ({rate:.2f} vehicle-hours/s), "
                f"{len(report.skipped)} refused -> {out_dir} (open {html})")
-    where = str(out_dir / REPORT_NAME)
+    where = str(out_dir / MINING_REPORT_NAME)
     lines = []
     if report.skipped:
         lines += counted_lines(

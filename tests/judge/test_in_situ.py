@@ -64,8 +64,8 @@ def test_speed_is_judged_against_the_recorded_positions_change():
     playback.tracks["hero"]["speed"][10] += 0.5
     verdict = judge_in_situ(playback, record)
     fit = verdict.vehicles["hero"]
-    assert fit.speed_samples == 18  # from the third sample: the start is not compared
-    assert fit.speed_within == 17 and fit.worst_speed_at_s == pytest.approx(1.0)
+    assert fit.speed_samples == 20  # every step of the record
+    assert fit.speed_within == 19 and fit.worst_speed_at_s == pytest.approx(1.0)
     assert [f.code for f in verdict.findings] == ["IN_SITU_SPEED"]
 
 
@@ -78,7 +78,7 @@ def test_standstill_noise_is_named_not_compared():
     # the scenario holds the first three samples between 5.0 and 4.7: three steps are noise
     assert fit.backward_samples == 3
     assert fit.worst_position_m == pytest.approx(0.3) and fit.position_within == 5
-    assert fit.speed_samples == 2 and fit.speed_within == 2
+    assert fit.speed_samples == 2 and fit.speed_within == 2  # the two steps after the hold
 
 
 def test_a_collision_the_record_lacks_is_an_error_and_one_it_shows_is_not():

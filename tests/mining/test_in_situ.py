@@ -242,3 +242,37 @@ def test_a_commonroad_recording_plays_in_situ_on_its_converted_road(esmini, data
     signal_ids = {s.get("trafficSignalId") for c in controllers for s in c.iter(
         "TrafficSignalState")}
     assert signal_ids and signal_ids <= {i for ids in road.signals.values() for i in ids}
+
+
+def test_a_batch_of_records_goes_on_past_refusals(esmini, data, tmp_path):
+    """One record plays, one names a track its recording lacks, one a file whose road cannot
+    be converted: two one-line refusals, the batch goes on, the report says it all."""
+    _converter()
+    from scenweave.mining.in_situ import REPORT_NAME, write_in_situ_records
+    from scenweave.mining.readers import read_file
+
+    source = data / "commonroad_small.xml"
+    ego = max(read_file(source).tracks, key=lambda t: t.duration_s)
+    bad = tmp_path / "USA_Bad-1_1_T-1.xml"
+    root = etree.parse(str(source)).getroot()
+    for point in root.find("lanelet").findall("leftBound/point"):
+        point.find("x").text, point.find("y").text = "0.0", "0.0"
+    bad.write_bytes(etree.tostring(root))
+
+    def record(name: str, file: object, track: str) -> dict:
+        return {"scenario_id": name, "provenance": {"file": str(file), "tracks": {"ego": track},
+                                                    "start_s": 1.0, "end_s": 2.0}}
+
+    records = [record("good", source, ego.id), record("lost", source, "nobody"),
+               record("unconvertible", bad, ego.id)]
+    batch = write_in_situ_records(records, tmp_path / "in_situ", tmp_path / "cache")
+    assert [r.folder.name for r in batch.written] == ["good"]
+    assert (tmp_path / "in_situ" / "good" / "scenario.xosc").is_file()
+    assert len(batch.refused) == 2 and all("\n" not in line for line in batch.refused)
+    lost, unconvertible = sorted(batch.refused)
+    assert lost.startswith("lost: ") and str(source) in lost and "track nobody" in lost
+    assert unconvertible.startswith("unconvertible: ") and str(bad) in unconvertible
+    assert "lanelet" in unconvertible
+    report = json.loads((tmp_path / "in_situ" / REPORT_NAME).read_text())
+    assert report["refused"] == batch.refused and report["written"][0]["passed"] is True
+

@@ -89,17 +89,21 @@ def thinned(points: Floats, min_spacing: float = MIN_SPACING_M) -> Floats:
     return np.asarray(kept, dtype=float)
 
 
-def _tangents(points: Floats) -> Floats:
+def tangents(points: Floats) -> Floats:
     """Unit tangent at each vertex: the mean of the unit directions of the segments meeting
-    there (the segment's own at the ends)."""
+    there; at an end, the neighbour's tangent mirrored about the end segment (a polyline
+    sampled from an arc then starts along the arc, not along its first chord)."""
     seg = np.diff(points, axis=0)
     unit = seg / np.hypot(*seg.T)[:, None]
-    tangents = np.vstack([unit[:1], unit[:-1] + unit[1:], unit[-1:]])
-    norm = np.hypot(*tangents.T)
+    summed = np.vstack([unit[:1], unit[:-1] + unit[1:], unit[-1:]])
+    norm = np.hypot(*summed.T)
     bad = norm < 1e-9  # a reversal: fall back on the incoming segment
-    tangents[bad] = np.vstack([unit[:1], unit])[bad]
+    summed[bad] = np.vstack([unit[:1], unit])[bad]
     norm[bad] = 1.0
-    result: Floats = tangents / norm[:, None]
+    result: Floats = summed / norm[:, None]
+    if len(points) > 2:  # at the ends, the next tangent mirrored about the end chord
+        for end, chord, inner in ((0, unit[0], result[1]), (-1, unit[-1], result[-2])):
+            result[end] = 2 * float(chord @ inner) * chord - inner
     return result
 
 
@@ -114,12 +118,12 @@ def reference_pieces(boundary: Floats) -> list[Piece]:
     """The smooth reference line through a boundary polyline (see the module docstring).
     ``boundary`` must have two points at least :data:`MIN_SPACING_M` apart."""
     points = thinned(np.asarray(boundary, dtype=float))
-    tangents = _tangents(points)
+    directions = tangents(points)
     pieces, s = [], 0.0
     for k in range(len(points) - 1):
         p0, p1 = points[k], points[k + 1]
         chord = float(math.dist(p0, p1))
-        m0, m1 = tangents[k] * chord, tangents[k + 1] * chord
+        m0, m1 = directions[k] * chord, directions[k + 1] * chord
         delta = p1 - p0
         c = 3 * delta - 2 * m0 - m1
         d = -2 * delta + m0 + m1

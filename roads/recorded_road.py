@@ -42,6 +42,7 @@ from scenweave.roads.recorded_geometry import (
     linear_records,
     reference_pieces,
     stations,
+    tangents,
     thinned,
 )
 
@@ -237,10 +238,10 @@ def extended_reference(strips: Sequence[LaneStrip]) -> Floats:
     reference = thinned(np.asarray(strips[0].left, float))
     ends = np.vstack([np.asarray(b, float)[[0, -1]] for s in strips for b in (s.left, s.right)])
     parts = [reference]
+    ends_tangent = tangents(reference)[[0, -1]]
     for at_end in (False, True):
         origin = reference[-1] if at_end else reference[0]
-        step = reference[-1] - reference[-2] if at_end else reference[0] - reference[1]
-        outward = step / np.hypot(*step)
+        outward = ends_tangent[1] if at_end else -ends_tangent[0]
         beyond = float(np.max((ends - origin) @ outward))
         if beyond > EXTEND_MIN_M:
             extra = origin + outward * max(beyond + EXTEND_MIN_M, MIN_SPACING_M)

@@ -47,7 +47,7 @@ from scenweave.roads.recorded_geometry import (
 )
 
 #: bumped whenever the written map changes for the same input (cache keys include it)
-CONVERTER_VERSION = "2"
+CONVERTER_VERSION = "3"
 #: two strips share a road where their common border differs by less than this (m)
 SHARED_BORDER_M = 0.1
 #: OpenDRIVE signal type of a traffic light (as CARLA and esmini read it)

@@ -6,8 +6,9 @@ map check (``judge.map_check``: lanelet centre lines sampled every 2 m, located 
 RoadManager in a child process; own road and lane, strictly as esmini's first pick and
 counting overlapping roads; within 0.5 m; error p50/p95/max), whether esmini loads the map,
 the conversion time uncached (read the lane network, convert, write; wall and CPU seconds)
-and cached, and, where the ``carla`` package is installed, CARLA's parse (NaN waypoints, its
-own lane lookup). Targets: own road and lane >= 99.5 % (US-101) and >= 98 % (urban), within
+and cached, the recorded vehicles' positions (every 5th step, each located on its own) on
+a driving lane, and, where the ``carla`` package is installed, CARLA's parse (NaN waypoints,
+its own lane lookup). Targets: own road and lane >= 99.5 % (US-101) and >= 98 % (urban), within
 0.5 m >= 99.5 % / 98 %, esmini loads 100 %, conversion <= 1 s per recording.
 
 Replay section, per location and overall: every record ``scenweave mine`` writes from the
@@ -34,6 +35,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypeVar
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # before benchmarks/, whose ingest.py would shadow the package
 
@@ -42,9 +45,11 @@ from scenweave.judge.in_situ import POSITION_FAR_M, Fit  # noqa: E402
 from scenweave.judge.map_check import (  # noqa: E402
     CarlaMapCheck,
     MapCheck,
+    PositionsCheck,
     carla_map_check,
     check_map,
     pooled,
+    positions_on_driving_lanes,
 )
 from scenweave.mining.in_situ import (  # noqa: E402
     InSituRefused,
@@ -55,7 +60,7 @@ from scenweave.mining.in_situ import (  # noqa: E402
     write_in_situ,
 )
 from scenweave.mining.mine import mine_recordings  # noqa: E402
-from scenweave.mining.readers import read_recordings  # noqa: E402
+from scenweave.mining.readers import read_file, read_recordings  # noqa: E402
 from scenweave.mining.readers.lanelet_map import read_lanelet_map  # noqa: E402
 from scenweave.mining.recorded_road import RecordedRoadMap, road_for  # noqa: E402
 from scenweave.mining.thresholds import load_thresholds  # noqa: E402
@@ -65,6 +70,8 @@ LOCATIONS = {"us101": "US-101", "lankershim": "Lankershim", "peachtree": "Peacht
 #: (own road and lane, within 0.5 m) a location's maps must reach
 TARGETS = {"US-101": (0.995, 0.995), "Lankershim": (0.98, 0.98), "Peachtree": (0.98, 0.98)}
 CONVERSION_TARGET_S = 1.0
+#: every how many steps a vehicle's recorded position is located on the map
+POSITION_EVERY = 5
 T = TypeVar("T")
 
 
@@ -81,6 +88,8 @@ class MapResult:
     carla: CarlaMapCheck | None
     #: lanelet links the map could not express
     unlinked: int = 0
+    #: the recorded vehicles' positions (every POSITION_EVERY-th step) on driving lanes
+    positions: PositionsCheck | None = None
 
 
 def location(path: Path) -> str:
@@ -106,8 +115,10 @@ def measure_map(file: Path, cache: Path, with_carla: bool) -> MapResult:
     check = check_map(road.xodr, strips, road.lanes)
     carla = carla_map_check(road.xodr.read_text(encoding="utf-8"), strips, road.lanes) \
         if with_carla else None
+    tracks = [np.column_stack([t.x, t.y, t.heading])[::POSITION_EVERY]
+              for t in read_file(file).tracks]
     return MapResult(file, location(file), wall_s, cpu_s, cached_s, check, carla,
-                     len(road.unlinked))
+                     len(road.unlinked), positions_on_driving_lanes(road.xodr, tracks))
 
 
 def map_line(name: str, check: MapCheck, wall_s: float, cpu_s: float, cached_s: float,
@@ -121,6 +132,16 @@ def map_line(name: str, check: MapCheck, wall_s: float, cpu_s: float, cached_s: 
             f"convert {wall_s:.2f} s wall / {cpu_s:.2f} s CPU, cached {1000 * cached_s:.1f} ms")
 
 
+def positions_text(results: list[MapResult]) -> str:
+    """The recorded positions' share on driving lanes, over several files."""
+    checks = [r.positions for r in results if r.positions is not None and r.positions.loaded]
+    count = sum(c.positions for c in checks)
+    if not count:
+        return ""
+    share = sum(c.on_driving_lane * c.positions for c in checks) / count
+    return f"; vehicle positions on a driving lane {100 * share:.2f} % of {count}"
+
+
 def map_section(files: list[Path], with_carla: bool) -> bool:
     """Print the map lines; whether every target was met."""
     print("== map: lanelet centre lines on the converted road.xodr (esmini RoadManager) ==")
@@ -131,7 +152,7 @@ def map_section(files: list[Path], with_carla: bool) -> bool:
             results.append(result)
             print(map_line(file.name, result.check, result.wall_s, result.cpu_s,
                            result.cached_s, "yes" if result.check.loaded else "NO")
-                  + f"; lanelet links lost {result.unlinked}")
+                  + f"; lanelet links lost {result.unlinked}" + positions_text([result]))
             if result.carla is not None:
                 print(f"    {result.carla.line()}")
     met = True
@@ -143,7 +164,7 @@ def map_section(files: list[Path], with_carla: bool) -> bool:
         worst_wall, worst_cpu = max(r.wall_s for r in mine), max(r.cpu_s for r in mine)
         print(map_line(f"{place} ({len(mine)} files)", check, worst_wall, worst_cpu,
                        max(r.cached_s for r in mine), f"{loaded}/{len(mine)}")
-              + " (times: the slowest file)")
+              + " (times: the slowest file)" + positions_text(mine))
         own_target, close_target = TARGETS.get(place, (0.98, 0.98))
         ok = check.loaded and loaded == len(mine) and check.own_lane >= own_target and \
             check.within_close >= close_target and worst_cpu <= CONVERSION_TARGET_S

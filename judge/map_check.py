@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenweave.player.road_manager import MapProbe, PointGroup, probe_map
+from scenweave.player.road_manager import ANY_DRIVING, NO_ROAD, MapProbe, PointGroup, probe_map
 from scenweave.roads.recorded_geometry import Floats, Mask
 from scenweave.roads.recorded_road import LaneStrip
 
@@ -185,6 +185,33 @@ def check_map(xodr: Path, strips: Sequence[LaneStrip],
     groups = [PointGroup(*lanes[s.strip], _triples(s), _lead_in(strip, by_id))
               for strip, s in zip(kept, samples, strict=True)]
     return judged(probe_map(xodr, groups, library=library), samples, lanes)
+
+
+@dataclass(frozen=True)
+class PositionsCheck:
+    """Where recorded vehicle positions land on the map, as esmini locates them."""
+
+    loaded: bool
+    positions: int = 0
+    #: share of positions on a lane a car drives on (inside the road, esmini's lane type)
+    on_driving_lane: float = 0.0
+    problem: str = ""
+
+
+def positions_on_driving_lanes(xodr: Path, tracks: Sequence[Floats],
+                               library: Path | None = None) -> PositionsCheck:
+    """Locate each of the tracks' positions (rows ``x, y, heading``) on its own, and count
+    those on a driving lane. On its own: a position object that follows a car keeps to its
+    road while the car is within 2 m of that road's edge (esmini's tracking), which would
+    count a car crossing into an overlapping lanelet as off the lanes."""
+    groups = [PointGroup(NO_ROAD, 0, [(float(x), float(y), float(h))])
+              for track in tracks for x, y, h in track]
+    probe = probe_map(xodr, groups, library=library)
+    if not probe.loaded:
+        return PositionsCheck(False, problem=probe.problem)
+    types = [p.in_lane_type for group in probe.groups for p in group]
+    on = sum(1 for t in types if t & ANY_DRIVING)
+    return PositionsCheck(True, len(types), on / len(types) if types else 0.0)
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,10 @@ from typing import Any
 from scenweave.player.locate import find_esmini
 
 LIBRARY = "libesminiRMLib.so"
+#: a group's road when it expects none
+NO_ROAD = -1
+#: esmini's Lane::LaneType bits of the lanes a car drives on (esminiRMLib.hpp's example)
+ANY_DRIVING = 1966594
 #: spacing of the lane centre lines sampled for the caller (m)
 CENTRE_STEP_M = 0.25
 #: how long loading a map and probing its points may take (s)
@@ -67,7 +71,8 @@ class PositionData(ctypes.Structure):
 
 @dataclass(frozen=True)
 class PointGroup:
-    """Points ``(x, y, heading)`` expected on one road and lane."""
+    """Points ``(x, y, heading)`` expected on one road and lane (road ``NO_ROAD``: only
+    where esmini puts them is asked)."""
 
     road_id: int
     lane_id: int
@@ -85,10 +90,13 @@ class ProbedPoint:
     road_id: int
     lane_id: int
     lane_offset: float
-    #: located on the expected road only: lane, offset from its centre, s
+    #: located on the expected road only: lane, offset from its centre, s (zeros where the
+    #: group expects no road)
     own_road_lane_id: int
     own_road_offset: float
     own_road_s: float
+    #: esmini's Lane::LaneType bits of the lane the point is in (1: none, outside the lanes)
+    in_lane_type: int = 1
 
 
 @dataclass
@@ -132,7 +140,7 @@ def probe_map(xodr: Path, groups: list[PointGroup], library: Path | None = None,
         return MapProbe(False, str(answer.get("problem", "RM_Init failed")))
     centres = {(road, lane): [(x, y) for x, y in line] for road, lane, line in answer["centres"]}
     return MapProbe(True, "", [[ProbedPoint(*p) for p in g] for g in answer["groups"]],
-                    [centres[(g.road_id, g.lane_id)] for g in groups])
+                    [centres.get((g.road_id, g.lane_id), []) for g in groups])
 
 
 def _why(done: subprocess.CompletedProcess[bytes], log: Path) -> str:
@@ -158,6 +166,7 @@ def _bind(path: str) -> ctypes.CDLL:
     lib.RM_GetPositionData.argtypes = [ctypes.c_int, ctypes.POINTER(PositionData)]
     lib.RM_GetRoadLength.argtypes = [ctypes.c_uint32]
     lib.RM_GetRoadLength.restype = ctypes.c_double
+    lib.RM_GetInLaneType.argtypes = [ctypes.c_int]
     return lib
 
 
@@ -172,10 +181,14 @@ def _probe_group(lib: ctypes.CDLL, road_id: int, lane_id: int, points: list[list
         lib.RM_SetWorldXYHPosition(located, x, y, h)
         lib.RM_GetPositionData(located, ctypes.byref(data))
         found = [int(data.roadId), int(data.laneId), float(data.laneOffset)]
+        lane_type = int(lib.RM_GetInLaneType(located))
+        if road_id == NO_ROAD:
+            out.append([*found, 0, 0.0, 0.0, lane_type])
+            continue
         lib.RM_SetWorldXYHPosition(restricted, x, y, h)
         lib.RM_SetRoadId(restricted, road_id)
         lib.RM_GetPositionData(restricted, ctypes.byref(data))
-        out.append([*found, int(data.laneId), float(data.laneOffset), float(data.s)])
+        out.append([*found, int(data.laneId), float(data.laneOffset), float(data.s), lane_type])
     for handle in (located, restricted):
         lib.RM_DeletePosition(handle)
     return out
@@ -204,7 +217,8 @@ def child_main(request_path: str, reply_path: str) -> None:
     if lib.RM_Init(request["xodr"].encode()) != 0:
         reply: dict[str, Any] = {"loaded": False, "problem": "RM_Init refused the map"}
     else:
-        lanes = sorted({(road, lane) for road, lane, _, _ in request["groups"]})
+        lanes = sorted({(road, lane) for road, lane, _, _ in request["groups"]
+                        if road != NO_ROAD})
         reply = {"loaded": True,
                  "groups": [_probe_group(lib, road, lane, points, lead_in)
                             for road, lane, points, lead_in in request["groups"]],

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from scenweave.judge.map_check import check_map
+from scenweave.judge.map_check import check_map, positions_on_driving_lanes
 from scenweave.player import PlayerUnavailable, find_esmini
 from scenweave.roads import advance_along_lane, load_opendrive
 from scenweave.roads.errors import RecordedRoadError
@@ -219,3 +219,12 @@ def test_links_carry_a_lane_through_the_merge_and_the_junction(xodr: Path,
         assert (int(road), lane) == lanes[lanelet], distance
     road, lane, _ = advance_along_lane(*lanes["3"], 10.0, 100.0, map_path=xodr)
     assert (int(road), lane) == lanes["8"]  # the flared lane goes on into the merge
+
+
+def test_recorded_positions_are_counted_on_driving_lanes(xodr: Path) -> None:
+    _esmini_or_skip()
+    inside = np.array([[20.0, 0.0, 0.0], [120.0, 0.0, 0.0], [215.0, 40.0, math.pi / 2]])
+    outside = np.array([[20.0, 30.0, 0.0]])  # 30 m beside the road
+    check = positions_on_driving_lanes(xodr, [inside, outside])
+    assert check.loaded and check.positions == 4
+    assert check.on_driving_lane == pytest.approx(0.75)

@@ -159,10 +159,10 @@ VARIANT_CHANGES = {
 }
 
 
-def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = None,
-                   edits: bool = False) -> Prompt:
+def variant_prompt(params: Mapping[str, Any], code: str, aspect: str,
+                   asked: Mapping[str, Any] | None = None, edits: bool = False) -> Prompt:
     """A variant of the delivered scenario script that changes one ``aspect`` only;
-    ``asked``: the record as the variant must play it (``agent.variants.asked_params``), whose
+    ``asked``: the record as the variant must play it (``ingest.variants.vary``), whose
     changed values the request lists. ``edits``: ask for JSON line edits of the script (the
     ``patch`` strategy, held to its grammar) instead of the whole script."""
     asked = asked or params
@@ -184,7 +184,7 @@ def variant_prompt(params: dict, code: str, aspect: str, asked: dict | None = No
     return Prompt(SYSTEM, user, params.get("scenario_id", ""), purpose)
 
 
-def value_changes(before: dict, after: dict) -> str:
+def value_changes(before: Mapping[str, Any], after: Mapping[str, Any]) -> str:
     """``- key: old -> new`` (Python literals, as a script writes them) for each value of
     ``after`` that ``before`` holds otherwise; ``- key: new`` for one it does not hold."""
     return "\n".join(

@@ -10,24 +10,12 @@ only when
   against the record's params as the variant was asked to change them, with its own weather);
 - no kept variant of the record is the same file.
 
-The weather is the LLM's to choose. A vehicle model, background traffic and the lane touch
-values the record's other values depend on, or must keep clear of it, so ScenWeave works out
-what the record becomes first (``asked_params``) and hands the LLM the values that change:
-
-- another model for one vehicle keeps the free space between the bumpers the record fixes
-  (``ingest.extract.with_vehicle_type``), so the reference-point gaps move, and the scenario
-  is placed anew from the same spawn point (``SpawnMatcher.place_at``);
-- background traffic: one vehicle in a same-direction lane the record neither starts in nor
-  moves into, a little ahead of the ego at its speed (``SpawnMatcher.background``; the
-  reference scripts play it through ``scenario_lib.builder.make_scenario``);
-- the lane: the spawn stage places the record one lane over (``SpawnMatcher.lane_over``), its
-  gaps measured along the new lanes.
-
-The reference script played with those values (``reference.xosc`` beside the variant, its
+The weather is the LLM's to choose. What a vehicle model, background traffic and the lane
+make of the record is worked out before the agent (``ingest.variants.vary``, called by the
+pipeline): the agent gets those params (``judge.variation.Asked``) and hands the LLM the values
+that change. The reference script played with them (``reference.xosc`` beside the variant, its
 params in ``params.json``) is what such a variant must match in everything the record fixes.
-Where the record has no room one lane over (``VARY_NO_LANE``), no vehicle but the ego
-(``VARY_NO_VEHICLE``), or no room for the other model or a free lane (``VARY_NO_ROOM``), no
-LLM call is spent.
+A variant the record leaves no room for comes with its reason and costs no LLM call.
 
 With the ``patch`` strategy the LLM answers with JSON line edits of the delivered script, held
 to the same grammar as its repairs, instead of the whole script.
@@ -50,110 +38,56 @@ from scenweave.agent.edits import apply_edits
 from scenweave.agent.prompts import variant_prompt
 from scenweave.agent.run import shared_llm, shared_sandbox
 from scenweave.agent.settings import AgentSettings
-from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, XOSC_NAME, Trace
+from scenweave.agent.trace import Trace
 from scenweave.corpus.worked_example import provenance, worked_example
-from scenweave.errors import ScenarioError
-from scenweave.ingest.extract import with_vehicle_type
-from scenweave.judge.variation import ASPECTS, compare
-from scenweave.player import REPLAY_NAME, Playback
-from scenweave.scenario_lib.vehicles import known_type
+from scenweave.judge.variation import Asked, compare
 from scenweave.schemas.params import Params
-from scenweave.spawn_db.errors import SpawnDbError
+from scenweave.schemas.scenario_folder import (
+    CODE_NAME,
+    PARAMS_NAME,
+    REFERENCE_NAME,
+    VARIANT_NAME,
+    VARIANTS_DIR,
+    XOSC_NAME,
+)
 
-VARIANTS_DIR = "variants"
-VARIANT_FILE = "variant.json"
-#: the reference script played with the values a variant was asked to change
-REFERENCE_NAME = "reference.xosc"
 #: where ``variant.json`` says a lane variant put the record
 PLACEMENT_KEYS = ("spawn_id", "ego_road_id", "ego_lane_id", "ego_s")
 #: the repair strategy whose variants are JSON line edits of the script (held to a grammar)
 EDIT_STRATEGY = "patch"
-#: the vehicle models a vehicles variant gives a recorded actor, in turn
-VEHICLE_TYPES = ("car", "van", "truck")
 
 
-class NotAsked(ScenarioError):
-    """A variant of this aspect cannot be made of the record; ``code`` says why."""
-
-    def __init__(self, code: str, message: str):
-        super().__init__(message)
-        self.code = code
-
-
-def make_variants(params: dict, out_dir: Path, settings: AgentSettings, count: int,
-                  replay: Any, parametric: bool, trace: Trace, matcher: Any) -> list[dict]:
-    """``count`` variants of the scenario in ``out_dir``; what each changed, kept or not.
+def make_variants(params: Params, asked: list[Asked], out_dir: Path, settings: AgentSettings,
+                  replay: Any, parametric: bool, trace: Trace) -> list[dict]:
+    """One variant of the scenario in ``out_dir`` per ``asked`` (what each is to play, in
+    order); what each changed, kept or not.
 
     ``parametric``: the delivered script is the reference (a fallback), which reads params;
     the variants then start from the record's worked example (its values written in, the
     same scenario), so that each is a change of values, as when the LLM delivered.
-    ``matcher``: the spawn stage that placed ``params`` (``SpawnMatcher``).
     """
     code = (worked_example(corpus.retrieve(params).script_path, params) if parametric
             else (out_dir / CODE_NAME).read_text(encoding="utf-8"))
     given = provenance(params)
     seen = {_digest(out_dir / XOSC_NAME)}
     found = []
-    for number in range(1, count + 1):
-        aspect = ASPECTS[(number - 1) % len(ASPECTS)]
+    for number, ask in enumerate(asked, start=1):
         folder = out_dir / VARIANTS_DIR / f"v{number:02d}"
         folder.mkdir(parents=True, exist_ok=True)
-        variant: dict[str, Any] = {"id": folder.name, "aspect": aspect, "kept": False,
+        variant: dict[str, Any] = {"id": folder.name, "aspect": ask.aspect, "kept": False,
                                    "changed": [], "asked": {}, "errors": []}
-        try:
-            asked = asked_params(params, aspect, matcher, (number - 1) // len(ASPECTS))
-        except NotAsked as err:
-            variant["errors"] = [f"{err.code}: {err}"]
+        if ask.params is None:
+            variant["errors"] = [ask.error or "not asked"]
         else:
-            variant |= _variant(params, asked, code, aspect, given, folder, out_dir, settings,
-                                replay, seen)
-        (folder / VARIANT_FILE).write_text(json.dumps(variant, indent=1), encoding="utf-8")
+            variant |= _variant(params, ask.params, code, ask.aspect, given, folder, out_dir,
+                                settings, replay, seen)
+        (folder / VARIANT_NAME).write_text(json.dumps(variant, indent=1), encoding="utf-8")
         trace.event("variant", **variant)
         found.append(variant)
     return found
 
 
-def asked_params(params: dict, aspect: str, matcher: Any, round_number: int = 0) -> dict:
-    """The record as a variant of ``aspect`` must play it (``round_number``: how many of this
-    aspect were asked before): as it is for the weather, which the LLM chooses; with one
-    vehicle another model, with a background vehicle in a lane the record leaves free, or one
-    lane over. Raises :class:`NotAsked`."""
-    if aspect == "lane":
-        try:
-            return matcher.lane_over(params, round_number)
-        except SpawnDbError as err:
-            raise NotAsked("VARY_NO_LANE", str(err)) from err
-    if aspect == "traffic":
-        try:
-            return matcher.background(params, round_number)
-        except SpawnDbError as err:
-            raise NotAsked("VARY_NO_ROOM", str(err)) from err
-    if aspect != "vehicles":
-        return params
-    actors = _vehicle_actors(params)
-    if not actors:
-        raise NotAsked("VARY_NO_VEHICLE", "the record has no vehicle but the ego")
-    actor = actors[round_number % len(actors)]
-    others = [t for t in VEHICLE_TYPES if t != known_type(params[f"{actor}_vehicle_type"])]
-    model = others[(round_number // len(actors)) % len(others)]
-    try:
-        return matcher.place_at(with_vehicle_type(params, actor, model))
-    except SpawnDbError as err:
-        raise NotAsked("VARY_NO_ROOM", str(err)) from err
-
-
-def _vehicle_actors(params: Mapping[str, Any]) -> list[str]:
-    """The params prefixes of the recorded actors besides the ego (each has a model)."""
-    actors = []
-    for key in params:
-        actor = key.removesuffix("_vehicle_type")
-        present = params.get("has_npc") if actor == "npc" else params.get(f"{actor}_present")
-        if key.endswith("_vehicle_type") and present:
-            actors.append(actor)
-    return actors
-
-
-def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict,
+def _variant(params: Params, asked: Params, code: str, aspect: str, given: dict,
              folder: Path, out_dir: Path, settings: AgentSettings, replay: Any,
              seen: set[str]) -> dict:
     found: dict[str, Any] = {"asked": _changes(params, asked)}
@@ -191,7 +125,7 @@ def _variant(params: dict, asked: dict, code: str, aspect: str, given: dict,
     return found | {"changed": variation.changed, "kept": not errors, "errors": errors}
 
 
-def _changes(params: Mapping[str, Any], asked: dict) -> dict[str, list]:
+def _changes(params: Params, asked: Params) -> dict[str, list]:
     """``key: [old, new]`` of each value ``asked`` changes."""
     return {key: [params.get(key), value] for key, value in asked.items()
             if params.get(key) != value}
@@ -208,8 +142,7 @@ def _replay_errors(scenario: Path, params: Mapping[str, Any], replay: Any) -> li
     weather = ScenarioDoc(etree.parse(str(scenario))).weather_name
     judged = cast(Params, {**params, "weather_key": weather or params["weather_key"]})
     result = validate_xosc(scenario, judged, replay=replay)
-    if isinstance(result.playback, Playback):  # what it played, beside it (replay.json)
-        result.playback.write(scenario.with_name(REPLAY_NAME))
+    result.write_replay(scenario.parent)  # what it played and the verdict, beside it
     return [f"{f.code}: {f.message}" for f in result.errors if f.severity == "error"]
 
 

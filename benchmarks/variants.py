@@ -1,7 +1,7 @@
 """What ``run --vary`` keeps when the model is right: every record of the sample data goes
 through the agent with recorded replies a perfect model would give (the faithful script, then
 the weather changed, and the vehicle model, the background vehicle and the lane changed to the
-values ``agent.variants.asked_params`` hands the LLM), with the real sandbox, validator and
+values ``ingest.variants.vary`` asks of the variant), with the real sandbox, validator and
 esmini replay.
 
 Prints per class and aspect how many variants were kept, and why the others were not (where
@@ -33,10 +33,10 @@ def fenced(code: str) -> str:
 
 def right_replies(raw: Path, map_name: str | None) -> dict[str, list[str]]:
     """scenario id -> what a perfect model answers: the faithful script, then each aspect
-    (vehicles and lane: the values ``asked_params`` hands the LLM, written in)."""
+    (vehicles and lane: the values ``ingest.variants.vary`` asks, written in)."""
     from scenweave import corpus
-    from scenweave.agent.variants import NotAsked, asked_params
     from scenweave.corpus.worked_example import worked_example
+    from scenweave.ingest.variants import NotAsked, vary
     from scenweave.inputs import InputSelection, load_input
     from scenweave.runner import default_matcher, round_robin
     from scenweave.spawn_db import SpawnDbError
@@ -54,7 +54,7 @@ def right_replies(raw: Path, map_name: str | None) -> dict[str, list[str]]:
         answers = [right, right.replace(f'"{placed["weather_key"]}"', f'"{weather}"')]
         for aspect in ("vehicles", "traffic", "lane"):
             try:
-                answers.append(worked_example(script, asked_params(placed, aspect, matcher)))
+                answers.append(worked_example(script, vary(placed, aspect, 0, matcher)))
             except NotAsked:
                 continue  # no LLM call is made for it
         replies[params["scenario_id"]] = [fenced(answer) for answer in answers]

@@ -17,7 +17,7 @@ from scenweave.ingest.phases import SPEED_TOL_MS, NoProfile, fit_end_values, fit
 from scenweave.maneuvers.free_ride import SLOTS
 from scenweave.maneuvers.maneuver import RecordFieldError
 from scenweave.scenario_lib.phases import PHASED_ACTORS, is_single_ramp, profile_of
-from scenweave.scenario_lib.vehicles import bumper_gap_m, reference_gap_m
+from scenweave.scenario_lib.vehicles import reference_gap_m
 from scenweave.schemas.params import Params, ParamsInvalid, checked
 
 HIGHWAY_MANEUVER_START_S = 2.0
@@ -86,33 +86,17 @@ def _gaps_to_reference_points(params: dict) -> None:
     """Bumper gaps of the file -> the reference-point gaps params hold (docs/params.md)."""
     for prefix in ("npc", *SLOTS):
         kind = params.get(f"{prefix}_vehicle_type")
-        for key in _gap_keys(prefix):
+        for key in gap_keys(prefix):
             present = prefix == "npc" or params.get(f"{prefix}_present")
             if present and isinstance(params.get(key), float | int):
                 params[key] = reference_gap_m(params[key], kind)
 
 
-def _gap_keys(prefix: str) -> tuple[str, ...]:
+def gap_keys(prefix: str) -> tuple[str, ...]:
     """The params keys holding the gaps between the ego and the highway actor ``prefix``."""
     if prefix not in ("npc", *SLOTS):
         return ()
     return f"{prefix}_distance_m", f"{prefix}_end_distance_m", f"{prefix}_distance_end_m"
-
-
-def with_vehicle_type(params: Mapping[str, Any], prefix: str, vehicle_type: str) -> Params:
-    """``params`` with actor ``prefix`` (``npc``, a free-ride slot, ``lead``, ...) driving
-    another model: the free space between the facing bumpers, which the record fixes, is
-    kept, so the reference-point gaps params hold move by the change in length; the values
-    that follow are derived anew (``finish``). The spawn keys are the caller's to redo."""
-    changed = {**params, f"{prefix}_vehicle_type": vehicle_type}
-    before = params.get(f"{prefix}_vehicle_type")
-    for key in _gap_keys(prefix):
-        value = params.get(key)
-        bumpers = (bumper_gap_m(value, before)
-                   if isinstance(value, float | int) and not isinstance(value, bool) else None)
-        if bumpers is not None:
-            changed[key] = reference_gap_m(bumpers, vehicle_type)
-    return finish(changed)
 
 
 def record_conventions(record: dict) -> dict:

@@ -4,7 +4,7 @@ A variant (``scenweave run --vary N``) may change only what the record does not 
 weather and time of day (the ``EnvironmentAction``), the vehicle models of the record's
 actors (their ``Vehicle``), background traffic (entities the faithful scenario does not
 have), and the lane (a recorded actor's start lane); all but the weather only as asked, to
-the values ScenWeave worked out (``agent.variants.asked_params``), which the ``reference``
+the values ScenWeave worked out (``ingest.variants.vary``), which the ``reference``
 script played with them shows. Everything the record fixes must stay: the map, every recorded
 actor's start (``Init``), the stories of the recorded actors and the stop trigger, as the
 faithful scenario has them, or, for a variant made as asked, as the reference has them
@@ -21,6 +21,7 @@ from pathlib import Path
 from lxml import etree
 
 from scenweave.judge.findings import Finding
+from scenweave.schemas.params import Params
 
 #: what a variant may change, by what the reader sees
 ASPECTS = ("weather", "vehicles", "traffic", "lane")
@@ -30,6 +31,24 @@ UNASKED_WHY = {
     "traffic": "an added vehicle must keep clear of the record, where the spawn stage puts it",
     "lane": "the record fits one lane over only where the spawn stage places it",
 }
+
+
+def aspect_of(number: int) -> tuple[str, int]:
+    """The aspect variant ``number`` (from 1) changes, ``ASPECTS`` in turn, and how many of
+    that aspect were asked before it (its round)."""
+    return ASPECTS[(number - 1) % len(ASPECTS)], (number - 1) // len(ASPECTS)
+
+
+@dataclass(frozen=True)
+class Asked:
+    """What a variant is asked to play, worked out before the agent writes it
+    (``ingest.variants.vary``): the record's params as the variant must play them, or, where
+    the record leaves no room for a variant of this aspect, ``error`` (``CODE: why``), and no
+    LLM call is spent on it."""
+
+    aspect: str
+    params: Params | None
+    error: str | None = None
 
 
 @dataclass

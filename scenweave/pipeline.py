@@ -15,11 +15,15 @@ import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
 from scenweave.errors import InfrastructureError, ParamsError
 from scenweave.schemas.params import Params
+
+if TYPE_CHECKING:
+    from scenweave.judge.variation import Asked
+    from scenweave.spawn_db.registry import Matcher
 
 __all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
            "process_scenario"]
@@ -41,7 +45,7 @@ class PipelineSettings:
 
 
 def process_scenario(params: Params, index: int, out_dir: Path, settings: PipelineSettings,
-                     matcher: Any) -> dict:
+                     matcher: Matcher) -> dict:
     """Make, validate and describe one scenario in ``out_dir``; return its outcome."""
     started = time.perf_counter()
     timings: dict[str, float] = {}
@@ -125,8 +129,8 @@ def _reference_scenario(params: Params, out_dir: Path, settings: PipelineSetting
     }
 
 
-def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
-                    timings: dict, trace: Trace, matcher: Any) -> dict:
+def _agent_scenario(params: Params, out_dir: Path, settings: PipelineSettings,
+                    timings: dict, trace: Trace, matcher: Matcher) -> dict:
     from scenweave import agent
 
     result = _timed(timings, "agent",
@@ -136,9 +140,26 @@ def _agent_scenario(params: dict, out_dir: Path, settings: PipelineSettings,
         from scenweave.agent.variants import make_variants
 
         outcome["variants"] = _timed(timings, "vary", lambda: make_variants(
-            params, out_dir, settings.agent, settings.vary, settings.replay,
-            parametric=bool(outcome.get("fallback")), trace=trace, matcher=matcher))
+            params, asked_variants(params, settings.vary, matcher), out_dir, settings.agent,
+            settings.replay, parametric=bool(outcome.get("fallback")), trace=trace))
     return outcome
+
+
+def asked_variants(placed: Params, count: int, matcher: Matcher) -> list[Asked]:
+    """What each of ``count`` variants of a delivered scenario is to play, worked out before
+    the agent writes them (``judge.variation.ASPECTS`` in turn): the record as
+    ``ingest.variants.vary`` makes it, or why no variant of that aspect can be asked."""
+    from scenweave.ingest.variants import NotAsked, vary
+    from scenweave.judge.variation import Asked, aspect_of
+
+    asked = []
+    for number in range(1, count + 1):
+        aspect, round_number = aspect_of(number)
+        try:
+            asked.append(Asked(aspect, vary(placed, aspect, round_number, matcher)))
+        except NotAsked as err:
+            asked.append(Asked(aspect, None, f"{err.code}: {err}"))
+    return asked
 
 
 def _timed(timings: dict, name: str, work: Callable[[], Any]) -> Any:

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from scenweave.console import refused_records
 from scenweave.inputs import InputSelection, LoadedInput, load_input
@@ -34,6 +34,10 @@ from scenweave.run_folder import (
     Started,
 )
 from scenweave.schemas.params import Params
+
+if TYPE_CHECKING:
+    from scenweave.spawn_db import SpawnMatcher
+    from scenweave.spawn_db.registry import Matcher
 
 
 @dataclass
@@ -82,7 +86,7 @@ def spawn_db_cache() -> Path:
     return home() / "cache" / "spawn_db"
 
 
-def default_matcher(map_name: str | None = None) -> Any:
+def default_matcher(map_name: str | None = None) -> SpawnMatcher:
     """The spawn matcher of ``map_name`` (a bundled town or an ``.xodr`` path; None: Town04).
 
     Its spawn database is the shipped one for Town04, otherwise built on first use and cached
@@ -97,7 +101,7 @@ def default_matcher(map_name: str | None = None) -> Any:
 
 def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: PipelineSettings,
               run_id: str | None = None, retry_failed: bool = False,
-              matcher: Any = None, jobs: int = 1) -> RunResult:
+              matcher: Matcher | None = None, jobs: int = 1) -> RunResult:
     """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists.
 
     ``jobs`` > 1 makes the scenarios in that many fresh processes (each gets the matcher once);
@@ -114,7 +118,7 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
 
 
 def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
-              settings: PipelineSettings, matcher: Any, retry_failed: bool,
+              settings: PipelineSettings, matcher: Matcher, retry_failed: bool,
               jobs: int) -> RunResult:
     todo = []
     for index, params in round_robin(loaded.params):
@@ -145,7 +149,7 @@ def _staging(folder: RunFolder, recorded: dict[str, dict], params: Mapping[str, 
 
 
 def make_scenario(params: Params, index: int, staging: Path, settings: PipelineSettings,
-                  matcher: Any) -> dict:
+                  matcher: Matcher) -> dict:
     """``process_scenario``, then the replay figure the report will show (drawn here, in the
     worker that made the scenario, not serially at the end); its time is ``timings_s.figure``."""
     from scenweave.presentation.replay_figures import draw_replay_figure, is_reported
@@ -159,14 +163,15 @@ def make_scenario(params: Params, index: int, staging: Path, settings: PipelineS
 
 
 def _in_this_process(todo: list[tuple[int, Params]], stage: Callable[[Params], Path],
-                     settings: PipelineSettings, matcher: Any
+                     settings: PipelineSettings, matcher: Matcher
                      ) -> Iterator[tuple[Params, Path, dict]]:
     for index, params in todo:
         staging = stage(params)
         yield params, staging, make_scenario(params, index, staging, settings, matcher)
 
 
-_worker_matcher: Any = None
+#: the batch's matcher, set before the workers fork: they inherit it instead of unpickling it
+_worker_matcher: Matcher | None = None
 #: what a scenario's making imports, loaded before the workers fork so each starts warm
 _PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
                      "scenweave.player", "scenweave.presentation.replay_figures")
@@ -174,11 +179,13 @@ _PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
 
 def _process_in_worker(params: Params, index: int, staging: Path,
                        settings: PipelineSettings) -> dict:
+    if _worker_matcher is None:
+        raise RuntimeError("_in_processes sets the batch's matcher before it forks the workers")
     return make_scenario(params, index, staging, settings, _worker_matcher)
 
 
 def _in_processes(todo: list[tuple[int, Params]], stage: Callable[[Params], Path],
-                  settings: PipelineSettings, matcher: Any,
+                  settings: PipelineSettings, matcher: Matcher,
                   jobs: int) -> Iterator[tuple[Params, Path, dict]]:
     """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
 

@@ -62,10 +62,6 @@ NEEDS_POINTS_MAX = {"highway": 20.0, "urban": 20.0 + 30.0 + 15.0}
 FREE_RIDE_SLOTS = {"center": None, "right": "right", "left": "left"}
 #: lane walks for the lane-change check are made (and kept) this long at least (m)
 LANE_PATH_M = 500.0
-#: a background vehicle (``SpawnMatcher.background``) starts this far ahead of the ego (m)
-BACKGROUND_AHEAD_M = 15.0
-#: the models background vehicles take, in turn
-BACKGROUND_MODELS = ("car", "van", "truck")
 #: the params prefix of each lane changer (``Maneuver.lane_change``) for its speeds
 PREFIX_OF_CHANGER = {"npc": "npc", "hero": "ego"}
 
@@ -322,15 +318,13 @@ class SpawnMatcher:
     def assign(self, params: Params, index: int, top_n: int = 5) -> Params:
         """A new params dict with the spawn keys filled from candidate ``index % len``."""
         candidates = self.find(params, top_n)
-        placed = self._placed(params, candidates[index % len(candidates)])
-        return cast(Params, placed)  # the record's params with the spawn keys filled
+        return self.place(params, candidates[index % len(candidates)])
 
-    def lane_over(self, placed: dict[str, Any], index: int = 0) -> dict[str, Any]:
-        """``placed`` (params ``assign`` filled) with the whole scenario one lane over: the ego
-        from a spawn point in a same-direction lane beside its own on the same road that fits
-        the scenario, and every other actor placed from there as ``assign`` places it, so gaps
-        hold along the new lanes. Each neighbouring lane offers the spawn point nearest the
-        ego's ``s``; ``index`` picks among them, the nearer first (left on a tie).
+    def spawns_beside(self, placed: Mapping[str, Any]) -> list[SpawnCandidate]:
+        """The spawn points one lane over from ``placed`` (params ``assign`` filled): in each
+        same-direction lane beside the ego's on the same road, the one nearest the ego's ``s``
+        that fits the scenario, the nearer first (left on a tie). What a lane variant is
+        placed from (``ingest.variants``).
 
         Raises :class:`NoSpawnFits` when neither neighbouring lane has such a spawn point.
         """
@@ -353,17 +347,16 @@ class SpawnMatcher:
             raise NoSpawnFits(f"{needs.scenario_id}: no spawn point beside road {ego.road_id} "
                               f"lane {ego.lane_id} on map {self.map.name} fits the scenario "
                               f"({beside or 'no same-direction lane beside it'})")
-        ranked = sorted(nearest.values(), key=lambda found: found[:2])
-        entry = ranked[index % len(ranked)][2]
-        return self._placed(placed, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
+        return [SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
+                for *_, entry in sorted(nearest.values(), key=lambda found: found[:2])]
 
-    def background(self, placed: dict[str, Any], index: int = 0) -> dict[str, Any]:
-        """``placed`` with one background vehicle (the ``background_*`` keys) that keeps clear
-        of the record: in a same-direction lane no actor of the record starts in or moves
-        into (``required_lane_sides``), ``BACKGROUND_AHEAD_M`` ahead of the ego along it, at
-        the ego's start speed, with drivable lane for the whole drive. The free lanes are
-        ranked nearest the ego first (left on a tie); ``index`` picks one, in turn a
-        ``BACKGROUND_MODELS`` model.
+    def lane_free_of_record(self, placed: Mapping[str, Any], ahead_m: float,
+                            index: int = 0) -> LanePoint:
+        """A point ``ahead_m`` ahead of the ego along a same-direction lane that no actor of
+        ``placed`` starts in or moves into (``required_lane_sides``), with drivable lane for a
+        vehicle driving the ego's start speed until the stop trigger: where another vehicle
+        keeps clear of the record (``ingest.variants``). The free lanes are ranked nearest
+        the ego first (left on a tie); ``index`` picks one, the next where a lane ends.
 
         Raises :class:`NoSpawnFits` when no lane beside the ego is free for it.
         """
@@ -374,30 +367,29 @@ class SpawnMatcher:
                 for actor in ("ego", *(name for name, _, _ in _placed_actors(placed)))}
         used |= {(key.road_id, key.lane_id) for side in needs.sides
                  if (key := self.network.neighbour(here, side)) is not None}
-        speed = number("ego_speed_ms")
-        needed = BACKGROUND_AHEAD_M + speed * number("timeout_s") + VEHICLE_MARGIN_M
+        needed = ahead_m + number("ego_speed_ms") * number("timeout_s") + VEHICLE_MARGIN_M
         free = [key for key in self._lanes_beside(here) if (key.road_id, key.lane_id) not in used]
         for offset in range(len(free)):
             key = free[(index + offset) % len(free)]
             try:
-                point = self.network.advance(key.road_id, key.lane_id, placed["ego_s"],
-                                             BACKGROUND_AHEAD_M)
+                point = self.network.advance(key.road_id, key.lane_id, placed["ego_s"], ahead_m)
             except LaneEndsError:
                 continue
             if self.network.drivable_length(point.road_id, point.lane_id, point.s, True,
-                                            needed) >= needed - BACKGROUND_AHEAD_M:
-                pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
-                model = BACKGROUND_MODELS[index % len(BACKGROUND_MODELS)]
-                return {**placed, "background_present": True, "background_speed_ms": speed,
-                        "background_vehicle_type": model,
-                        **_pose_keys("background", pose.x, pose.y, pose.z, pose.h),
-                        **_lane_keys("background", point)}
+                                            needed) >= needed - ahead_m:
+                return point
         raise NoSpawnFits(f"{needs.scenario_id}: no lane beside road {here.road_id} lane "
                           f"{here.lane_id} on map {self.map.name} is free of the record for "
                           f"{needed:.0f} m (lanes the record uses: "
                           f"{', '.join(str(lane) for _, lane in sorted(used, key=str))})")
 
-    def _ego_key(self, placed: dict[str, Any], needs: Requirements) -> LaneKey:
+    def actor_keys(self, actor: str, point: LanePoint) -> dict[str, Any]:
+        """The params keys of ``actor`` standing at ``point``: its world pose (OpenSCENARIO
+        frame) and its lane position, as ``assign`` writes them."""
+        pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
+        return {**_pose_keys(actor, pose.x, pose.y, pose.z, pose.h), **_lane_keys(actor, point)}
+
+    def _ego_key(self, placed: Mapping[str, Any], needs: Requirements) -> LaneKey:
         try:
             return self.network.key_at(str(placed.get("ego_road_id")), placed["ego_lane_id"],
                                        placed["ego_s"])
@@ -416,11 +408,10 @@ class SpawnMatcher:
                 key = self.network.neighbour(key, side)
         return [key for *_, key in sorted(found, key=lambda item: item[:2])]
 
-    def place_at(self, params: Mapping[str, Any]) -> dict[str, Any]:
-        """``params`` placed anew from the spawn point they name (``spawn_id``): for a record
-        whose values changed but whose place did not (a variant with another vehicle model,
-        whose reference-point gaps differ). Raises :class:`NoSpawnFits` when that spawn point
-        no longer fits."""
+    def named_spawn(self, params: Mapping[str, Any]) -> SpawnCandidate:
+        """The spawn point ``params`` name (``spawn_id``), when it still fits them: for a
+        record whose values changed but whose place did not (a variant with another vehicle
+        model, whose reference-point gaps differ). Raises :class:`NoSpawnFits` otherwise."""
         needs = Requirements.from_params(params)
         entry = next((e for _, e in self._by_context.get(needs.domain, [])
                       if e["spawn_id"] == params.get("spawn_id")), None)
@@ -428,7 +419,12 @@ class SpawnMatcher:
             why = "not in its database" if entry is None else self._why_not(entry, needs, params)
             raise NoSpawnFits(f"{needs.scenario_id}: spawn point {params.get('spawn_id')} of map "
                               f"{self.map.name} does not fit the changed scenario ({why})")
-        return self._placed(params, SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry))
+        return SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
+
+    def place(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> Params:
+        """``params`` with the spawn keys filled from ``candidate`` (as ``assign`` fills them
+        from its pick)."""
+        return cast(Params, self._placed(params, candidate))  # the params with the spawn keys
 
     def _why_not(self, entry: dict[str, Any], needs: Requirements,
                  params: Mapping[str, Any]) -> str:

@@ -17,8 +17,20 @@ from scenweave.commands.agent_options import (
     pipeline_settings,
 )
 from scenweave.console import problem_lines
+from scenweave.errors import InputError
 from scenweave.inputs import InputSelection
 from scenweave.runner import run_batch
+from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_factory, matcher_for
+
+
+def known_matcher(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    """``--matcher`` of a command that makes the matcher here: a registered name or a
+    ``module:callable`` that imports now, else a usage error naming the choices."""
+    try:
+        matcher_factory(value)
+    except InputError as err:
+        raise click.BadParameter(str(err), ctx=ctx, param=param) from err
+    return value
 
 
 @click.command("run")
@@ -45,13 +57,16 @@ from scenweave.runner import run_batch
 @click.option("--retry-failed", is_flag=True, help="On resume, run failed scenarios again.")
 @click.option("--jobs", default=1, show_default=True, type=click.IntRange(1),
               help="Make scenarios in N processes (e.g. one per core).")
+@click.option("--matcher", default=DEFAULT_MATCHER, show_default=True, callback=known_matcher,
+              help="Spawn matcher: a registered name (default, or a plugin's: "
+                   "docs/plugins.md) or module:callable, called with the map.")
 @json_option("summary.json")
 @map_option()
 @agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: tuple[str, ...],
         per_class: int | None, limit: int | None, variants: int, seed: int, vary: int,
-        layout: Path | None, top_n: int, retry_failed: bool, jobs: int, as_json: bool,
-        **agent: Any) -> None:
+        layout: Path | None, top_n: int, retry_failed: bool, jobs: int, matcher: str,
+        as_json: bool, **agent: Any) -> None:
     """Turn DATA (raw MOOVE files or canonical records) into validated .xosc scenarios.
 
     By default (--llm auto) the agent has the Ollama server adapt each reference script when
@@ -66,7 +81,8 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: t
     selection = InputSelection(classes=classes, per_class=per_class, limit=limit,
                                variants=variants, seed=seed, layout=layout)
     result = run_batch(data, out_root, selection, settings, run_id=run_id,
-                       retry_failed=retry_failed, jobs=jobs)
+                       retry_failed=retry_failed, matcher=matcher_for(matcher, settings.map),
+                       jobs=jobs)
     if as_json:
         click.echo(json.dumps(result.summary, indent=1))
     else:

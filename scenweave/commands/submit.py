@@ -21,8 +21,9 @@ from scenweave.errors import InputError
 from scenweave.inputs import InputSelection
 from scenweave.queue.connection import QUEUE_ENV, connect
 from scenweave.queue.handoff import MIB, Limits
-from scenweave.queue.job import DEFAULT_MATCHER, JobOptions, matcher_factory
+from scenweave.queue.job import JobOptions
 from scenweave.queue.submit import submit
+from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_factory
 
 #: options of ``scenweave run`` that mean the same here
 SHARED_OPTIONS = ("data", "out_root", "no_llm", "run_id", "classes", "per_class", "limit",

@@ -9,8 +9,9 @@ import click
 from scenweave.commands.agent_options import map_option
 from scenweave.commands.collect import QUEUE_HELP
 from scenweave.queue.connection import QUEUE_ENV
-from scenweave.queue.job import DEFAULT_MATCHER, SCRATCH_ENV
+from scenweave.queue.job import SCRATCH_ENV
 from scenweave.queue.worker import WorkerOptions, work, work_in_processes
+from scenweave.spawn_db.registry import DEFAULT_MATCHER
 
 
 @click.command("worker")

@@ -17,26 +17,17 @@ import shutil
 import sys
 import tempfile
 import zlib
-from collections.abc import Callable
 from contextlib import suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
-from scenweave.errors import InputError
 from scenweave.pipeline import PipelineSettings, base_outcome
-from scenweave.plugins import DOCS, Registry, resolve
 from scenweave.queue.connection import QueueError, RunKeys, job_id, map_key
 from scenweave.queue.handoff import Limits, pack
 from scenweave.run_folder import RECORDED_NAME, STATUS_FILE
 from scenweave.runner import make_scenario
-
-#: the spawn matcher a job uses: a name in ``SPAWN_MATCHERS`` (or a plugin's) or
-#: ``module:callable``, called with the map's name (None: Town04)
-DEFAULT_MATCHER = "default"
-
-#: the built-in spawn matchers, declared as a plugin declares its own (``docs/plugins.md``)
-SPAWN_MATCHERS = {DEFAULT_MATCHER: "scenweave.runner:default_matcher"}
+from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_for
 
 #: where a worker makes its scenarios unless told (``scenweave worker --scratch``)
 SCRATCH_ENV = "SCENWEAVE_WORKER_SCRATCH"
@@ -55,46 +46,7 @@ class JobOptions:
     limits: Limits = field(default_factory=Limits)
 
 
-_matchers: dict[tuple[Callable[[str | None], Any], str | None], Any] = {}
 _scratch_root: Path | None = None
-_matcher_factories: Registry[Callable[[str | None], Any]] = Registry(
-    "spawn matcher", "SPAWN_MATCHERS", expected="a callable making a matcher from a map name",
-    accepts=callable, builtin_modules=[__name__])
-
-
-def matcher_names() -> list[str]:
-    """Every spawn matcher's name: ``default`` and the plugins'."""
-    return _matcher_factories.names()
-
-
-def matcher_factory(factory: str) -> Callable[[str | None], Any]:
-    """The callable making the matchers ``factory`` names: a registered name or
-    ``module:callable``; an :class:`InputError` naming ``--matcher`` and the choices."""
-    found = _matcher_factories.find(factory)
-    if found is None and ":" in factory:
-        try:
-            found = cast(Callable[[str | None], Any], resolve(factory))
-        except (ImportError, AttributeError) as err:
-            raise InputError(f"--matcher {factory}: {type(err).__name__}: {err}") from err
-    if found is None:
-        raise InputError(f"--matcher {factory!r}: no such spawn matcher (choose "
-                         f"{', '.join(matcher_names())} or give module:callable; plugins add "
-                         f"more, see {DOCS})")
-    return found
-
-
-def matcher_for(factory: str, map_name: str | None = None) -> Any:
-    """The spawn matcher ``factory`` (a registered name or ``module:callable``) makes for
-    ``map_name``, made once per process (``default`` and the callable it names alike)."""
-    from scenweave.roads import DEFAULT_MAP
-
-    make = matcher_factory(factory)
-    key = (make, map_name or DEFAULT_MAP)
-    if key not in _matchers:
-        _matchers[key] = make(map_name)
-    return _matchers[key]
-
-
 def scratch_root() -> Path:
     """This worker's scratch folder: ``--scratch``, ``$SCENWEAVE_WORKER_SCRATCH``, or a
     folder of its own under the system's temp folder."""

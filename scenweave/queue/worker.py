@@ -21,9 +21,10 @@ from typing import Any, cast
 
 from scenweave.pipeline import PipelineSettings
 from scenweave.queue.connection import QUEUE_NAME, connect
-from scenweave.queue.job import DEFAULT_MATCHER, matcher_for, scratch_root, use_scratch_root
+from scenweave.queue.job import scratch_root, use_scratch_root
 from scenweave.runner import make_scenario
 from scenweave.schemas.params import Params
+from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_for
 
 #: reference scripts whose worked examples a worker makes once before work (``warm_up``)
 WARM_UP_SCRIPTS = ("gen_hw_lcf.py", "gen_ur_stop_at_tfl_red.py")

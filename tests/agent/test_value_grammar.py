@@ -16,8 +16,8 @@ import pytest
 from scenweave import corpus, maneuvers
 from scenweave.agent.edits import SPARE_EDITS, value_edit_grammar
 from scenweave.agent.prompts import patch_prompt, variant_prompt
-from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.worked_example import adaptation, worked_example
+from scenweave.ingest.variants import NotAsked, vary
 from scenweave.inputs import InputSelection, load_input
 from scenweave.runner import default_matcher
 from tests.replies import json_edits
@@ -87,7 +87,7 @@ def test_the_right_variant_edits_decode_for_every_aspect_asked(sampler, placed):
         script = worked_example(corpus.retrieve(params).script_path, params)
         for aspect in ("vehicles", "traffic", "lane"):
             try:
-                asked = asked_params(params, aspect, matcher)
+                asked = vary(params, aspect, 0, matcher)
             except NotAsked:
                 continue
             right = json_edits(script, worked_example(corpus.retrieve(params).script_path,

@@ -10,8 +10,8 @@ import pytest
 
 from scenweave import corpus
 from scenweave.agent.llm.log import recent_calls
-from scenweave.agent.variants import NotAsked, asked_params
 from scenweave.corpus.worked_example import example_params as stored_example
+from scenweave.ingest.variants import NotAsked, vary
 from scenweave.inputs import InputSelection, load_input
 from scenweave.judge.variation import compare
 from scenweave.pipeline import PipelineSettings, process_scenario
@@ -22,17 +22,11 @@ from tests.agent.conftest import adapted_source, fenced
 from tests.replies import json_edits
 
 
-class AlreadyPlaced:
-    """The record carries its spawn already; all else is the real matcher's answer."""
-
-    def __init__(self):
-        self.matcher = default_matcher()
-
-    def assign(self, params: dict, index: int, top_n: int = 5) -> dict:
-        return params
-
-    def __getattr__(self, name: str):
-        return getattr(self.matcher, name)
+def already_placed():
+    """The real matcher, but the record carries its spawn already."""
+    matcher = default_matcher()
+    matcher.assign = lambda params, index, top_n=5: params
+    return matcher
 
 
 @pytest.fixture(scope="module")
@@ -48,10 +42,10 @@ def asked(brake) -> dict[str, dict]:
     """The record as its vehicles and lane variants must play it (first round; ``vehicles2``:
     the second vehicles variant, another model)."""
     matcher = default_matcher()
-    return {"vehicles": asked_params(brake, "vehicles", matcher),
-            "vehicles2": asked_params(brake, "vehicles", matcher, 1),
-            "traffic": asked_params(brake, "traffic", matcher),
-            "lane": asked_params(brake, "lane", matcher)}
+    return {"vehicles": vary(brake, "vehicles", 0, matcher),
+            "vehicles2": vary(brake, "vehicles", 1, matcher),
+            "traffic": vary(brake, "traffic", 0, matcher),
+            "lane": vary(brake, "lane", 0, matcher)}
 
 
 @pytest.fixture
@@ -75,7 +69,7 @@ def varied(brake, asked, replay, esmini, tmp_path):
                fenced(one_over)]  # v09 weather: the ego alone one lane over
     settings = PipelineSettings(no_llm=False, agent=replay(replies), replay=ReplaySettings(),
                                 vary=9)
-    outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
+    outcome = process_scenario(brake, 0, tmp_path, settings, already_placed())
     return outcome, tmp_path
 
 
@@ -204,9 +198,10 @@ def test_the_report_lists_each_records_variants(varied):
 def test_no_room_one_lane_over_asks_no_lane_variant(brake, replay, esmini, tmp_path):
     """Where the ego's lane has no same-direction neighbour (Town04's road 51 has one lane
     each way), the lane variant gets VARY_NO_LANE and no LLM call is spent on it."""
-    lone = AlreadyPlaced()
-    lone.lane_over = lambda params, index=0: lone.matcher.lane_over(
-        {**params, "ego_road_id": 51, "ego_lane_id": 1, "ego_s": 10.0}, index)
+    lone = already_placed()
+    beside = lone.spawns_beside
+    lone.spawns_beside = lambda placed: beside(
+        {**placed, "ego_road_id": 51, "ego_lane_id": 1, "ego_s": 10.0})
     right = adapted_source("BRAKE", brake)
     settings = PipelineSettings(no_llm=False, agent=replay([fenced(right)] * 4),
                                 replay=ReplaySettings(), vary=4)
@@ -220,7 +215,7 @@ def test_no_room_one_lane_over_asks_no_lane_variant(brake, replay, esmini, tmp_p
 def test_a_record_without_another_vehicle_asks_no_vehicles_variant(brake):
     alone = {**brake, "has_npc": False}
     with pytest.raises(NotAsked) as raised:
-        asked_params(alone, "vehicles", default_matcher())
+        vary(alone, "vehicles", 0, default_matcher())
     assert raised.value.code == "VARY_NO_VEHICLE"
 
 
@@ -241,7 +236,7 @@ def test_with_the_patch_strategy_a_variant_is_json_edits(brake, asked, replay, e
     replies = [json_edits(shown, right), *(json_edits(right, w) for w in wanted)]
     settings = PipelineSettings(no_llm=False, agent=replay(replies, repair="patch"),
                                 replay=ReplaySettings(), vary=4)
-    outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
+    outcome = process_scenario(brake, 0, tmp_path, settings, already_placed())
     assert (outcome["status"], outcome["attempts"]) == ("ok", 1), outcome["error"]
     assert [(v["changed"], v["kept"]) for v in outcome["variants"]] == [
         (["weather"], True), (["vehicles"], True), (["traffic"], True), (["lane"], True)]
@@ -259,6 +254,6 @@ def test_an_edit_that_does_not_apply_is_no_variant(brake, replay, esmini, tmp_pa
     wrong = json.dumps({"edits": [{"search": "not a line of it", "replace": "x = 1"}]})
     settings = PipelineSettings(no_llm=False, replay=ReplaySettings(), vary=1,
                                 agent=replay([json_edits(shown, right), wrong], repair="patch"))
-    outcome = process_scenario(brake, 0, tmp_path, settings, AlreadyPlaced())
+    outcome = process_scenario(brake, 0, tmp_path, settings, already_placed())
     variant = _variant(outcome, 1)
     assert not variant["kept"] and variant["errors"][0].startswith("VARY_EDIT: edit 1: "), variant

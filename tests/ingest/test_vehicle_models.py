@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from scenweave.ingest.extract import with_vehicle_type
+from scenweave.ingest.variants import with_vehicle_type
 from scenweave.inputs import InputSelection, load_input
 from scenweave.scenario_lib.vehicles import VEHICLE_MODELS, bumper_gap_m, reference_gap_m
 

@@ -17,7 +17,7 @@ from scenweave.agent.llm import backend_names, get_llm
 from scenweave.agent.repair import get_strategy, strategy_names
 from scenweave.cli import main
 from scenweave.errors import InputError
-from scenweave.queue.job import matcher_factory, matcher_for, matcher_names
+from scenweave.spawn_db.registry import matcher_factory, matcher_for, matcher_names
 
 TOY = Path(__file__).with_name("toy_plugin.py")
 

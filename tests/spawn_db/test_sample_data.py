@@ -13,6 +13,7 @@ import pytest
 from scenweave import maneuvers
 from scenweave.ingest import IngestReport, extract_params, iter_raw_records
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
+from scenweave.ingest.variants import NotAsked, vary
 from scenweave.roads import traffic_lights_carla
 from scenweave.roads.road_network import LanePoint
 from scenweave.roads.signals import junction_approach
@@ -66,14 +67,14 @@ def test_highway_spawns_fit_the_manoeuvre(assigned, town04):
 
 
 def test_the_record_one_lane_over_fits_the_neighbouring_lane(assigned, town04):
-    """``lane_over`` (lane variants): the ego in a same-direction lane beside its own, and the
-    whole record fits there as ``assign`` makes it fit."""
+    """``spawns_beside`` (lane variants): the ego in a same-direction lane beside its own, and
+    the whole record fits there as ``assign`` makes it fit."""
     matcher, moved, no_room = SpawnMatcher(), 0, []
     for params, result in assigned:
         if params["domain"] != "highway":
             continue
         try:
-            over = matcher.lane_over(result)
+            over = matcher.place(result, matcher.spawns_beside(result)[0])
         except NoSpawnFits as err:
             no_room.append(str(err))
             continue
@@ -88,15 +89,16 @@ def test_the_record_one_lane_over_fits_the_neighbouring_lane(assigned, town04):
 
 
 def test_background_traffic_keeps_to_a_lane_the_record_leaves_free(assigned, town04):
-    """``background`` (traffic variants): beside the ego in its direction, in no lane an actor
-    starts in or a manoeuvre needs, with lane for the whole drive."""
+    """``lane_free_of_record`` (traffic variants, ``ingest.variants.vary``): beside the ego in
+    its direction, in no lane an actor starts in or a manoeuvre needs, with lane for the whole
+    drive."""
     matcher, placed = SpawnMatcher(), 0
     for params, result in assigned:
         if params["domain"] != "highway":
             continue
         try:
-            added = matcher.background(result)
-        except NoSpawnFits:
+            added = vary(result, "traffic", 0, matcher)
+        except NotAsked:
             continue
         here = town04.key_at(result["ego_road_id"], result["ego_lane_id"], result["ego_s"])
         used = {result[f"{a}_lane_id"] for a in ("ego", "npc", "center", "right", "left")
@@ -112,11 +114,11 @@ def test_background_traffic_keeps_to_a_lane_the_record_leaves_free(assigned, tow
     assert placed > 100
 
 
-def test_place_at_places_a_changed_record_from_the_same_spawn(assigned):
+def test_a_changed_record_is_placed_anew_from_the_spawn_it_names(assigned):
     matcher = SpawnMatcher()
     params, result = next((p, r) for p, r in assigned if p["maneuver_class"] == "BRAKE")
     farther = {**result, "npc_distance_m": result["npc_distance_m"] + 5.0}
-    again = matcher.place_at(farther)
+    again = matcher.place(farther, matcher.named_spawn(farther))
     assert again["spawn_id"] == result["spawn_id"] and again["ego_s"] == result["ego_s"]
     assert again["npc_s"] != result["npc_s"]
     _assert_highway_fit({**params, "npc_distance_m": farther["npc_distance_m"]}, again,

@@ -4,7 +4,9 @@
 OpenSCENARIO 1.0 XSD (``schemas.xsd``), structural and semantic checks (``checks``), parameter
 fidelity (``fidelity``: every number read back from the file), the CARLA scenario_runner lint
 (``carla_lint``) and, given replay settings, the replay in esmini judged sample by sample
-(``replay``); ``variation`` decides whether an LLM's variant kept what the record fixes.
+(``replay``); ``variation`` decides whether an LLM's variant kept what the record fixes;
+``in_situ`` judges an in-situ replay (every recorded vehicle on its recorded road) against
+the raw record.
 Every finding is a :class:`Finding` with a code (docs/scenario-conventions.md lists them).
 The contracts it judges against (the params contract, the XSD, the JSON Schemas) live in
 ``schemas``.

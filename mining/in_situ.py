@@ -4,9 +4,9 @@
 ``scenario.xosc`` (OpenSCENARIO 1.0, ``scenario_lib.trajectories``), ``road.xodr`` (the
 recording's converted road, linked or copied), ``in_situ.json`` (what was chosen: file, ego,
 tracks, window, held samples) and, when played, ``replay.json`` and ``judge.json`` (the
-judge's findings and numbers, ``judge.in_situ``); with ``external_ego`` also
-``hero_reference.csv`` (the ego's recorded trajectory, the stack's reference). The folder
-appears whole or not at all.
+judge's findings and numbers, ``judge.in_situ``, and the OpenSCENARIO 1.0 XSD's); with
+``external_ego`` also ``hero_reference.csv`` (the ego's recorded trajectory, the stack's
+reference). The folder appears whole or not at all.
 
 What is chosen (:func:`choose`): the event's window widened by ``context_s`` on both sides and
 clipped to the ego's track (the scenario is the ego's: t = 0 is where it starts); every
@@ -33,10 +33,12 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from lxml import etree
 
 from scenweave.errors import InputError
 from scenweave.files import write_json_atomic, write_text_atomic
 from scenweave.judge.in_situ import InSituVerdict, RecordedPath, judge_in_situ
+from scenweave.judge.validate_xosc import xsd_findings
 from scenweave.mining.detect import Event
 from scenweave.mining.tracks import Floats, Recording, Track, TrafficLight
 from scenweave.scenario_lib.builder import HERO, write_scenario
@@ -343,6 +345,7 @@ def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
     playback = player.replay_file(scenario, road, replay)
     skip = {HERO} if settings.external_ego else set()
     verdict = judge_in_situ(playback, choice.record, skip)
+    verdict.findings[:0] = xsd_findings(etree.parse(str(scenario)))
     playback.write(staging / REPLAY_NAME)
     write_json_atomic(staging / JUDGE_NAME, {**verdict.to_dict(),
                                              "timings_s": playback.timings_s})

@@ -145,6 +145,7 @@ def test_the_folder_holds_the_scenario_the_road_and_the_verdict(played):
             for p in phases] == [(3.5, "green"), (3.5, "red")]
     judged = json.loads((result.folder / "judge.json").read_text())
     assert judged["vehicles"]["hero"]["position"]["share"] == 1.0
+    assert not [f for f in judged["findings"] if f["code"] == "XSD_INVALID"]
     chosen = json.loads((result.folder / "in_situ.json").read_text())
     assert chosen["tracks"] == {"hero": "1", "v2": "2", "v3": "3", "v4": "4"}
 

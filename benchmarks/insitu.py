@@ -108,6 +108,7 @@ def timed(work: Callable[[], T]) -> tuple[T, float, float]:
 
 
 def measure_map(file: Path, cache: Path, with_carla: bool) -> MapResult:
+    """Convert one file (uncached, then cached) and check its map."""
     road: RecordedRoadMap
     road, wall_s, cpu_s = timed(lambda: road_for(file, cache))
     _, cached_s, _ = timed(lambda: road_for(file, cache))
@@ -123,6 +124,7 @@ def measure_map(file: Path, cache: Path, with_carla: bool) -> MapResult:
 
 def map_line(name: str, check: MapCheck, wall_s: float, cpu_s: float, cached_s: float,
              loaded: str) -> str:
+    """One file's (or location's) map numbers as a line."""
     if not check.loaded:
         return f"{name}: esmini does not load the map ({check.problem})"
     return (f"{name}: own road+lane {100 * check.own_lane:.1f} % (strict "

@@ -62,6 +62,7 @@ class MapCheck:
     strict: Mask = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
 
     def line(self) -> str:
+        """The check as one line of text."""
         if not self.loaded:
             return f"esmini does not load the map: {self.problem}"
         return (f"{self.samples} samples: own road and lane {100 * self.own_lane:.1f} % "

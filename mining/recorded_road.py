@@ -61,6 +61,7 @@ class RecordedRoadMap:
     cached: bool = False
 
     def to_json(self) -> dict[str, Any]:
+        """What the cache's ``road.json`` holds (everything but the paths)."""
         return {"source": self.source, "cache_version": CACHE_VERSION,
                 "lanes": {k: list(v) for k, v in self.lanes.items()},
                 "lights": [{"light_id": light.light_id, "signal_ids": list(light.signal_ids),

@@ -144,6 +144,8 @@ class DenseLine:
 
     @classmethod
     def of(cls, pieces: list[Piece]) -> DenseLine:
+        """The pieces sampled every :data:`DENSE_STEP_M` or closer, ``s`` scaled so each
+        piece's samples span its exact arc length."""
         xys, ss = [], []
         for piece in pieces:
             n = max(2, int(math.ceil(piece.length / DENSE_STEP_M)) + 1)

@@ -275,6 +275,7 @@ class _Links:
 
     @classmethod
     def of(cls, roads: list[_Road]) -> _Links:
+        """The road-level successors and predecessors of each road, and the junctions."""
         road_of = {s.id: r for r in roads for s in r.strips}
         links = cls(roads, road_of, {r.id: r for r in roads})
         for road in roads:

@@ -126,9 +126,12 @@ class InSituChoice:
     def to_dict(self) -> dict[str, Any]:
         tracks = {v.name: v.properties.get("track_id", v.name.removeprefix("v"))
                   for v in self.vehicles}
+        # when each vehicle is on the road (scenario time); parked (far away) outside it
+        life = {p.name: [round(float(p.t[0]), 3), round(float(p.t[-1]), 3)]
+                for p in self.record}
         return {"file": self.source, "ego_track": self.ego,
                 "window_s": [round(self.start_s, 3), round(self.end_s, 3)],
-                "tracks": tracks, "held_backward_samples": self.held_samples,
+                "tracks": tracks, "life_s": life, "held_backward_samples": self.held_samples,
                 "step_s": self.step_s}
 
 

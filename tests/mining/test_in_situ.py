@@ -148,6 +148,7 @@ def test_the_folder_holds_the_scenario_the_road_and_the_verdict(played):
     assert not [f for f in judged["findings"] if f["code"] == "XSD_INVALID"]
     chosen = json.loads((result.folder / "in_situ.json").read_text())
     assert chosen["tracks"] == {"hero": "1", "v2": "2", "v3": "3", "v4": "4"}
+    assert chosen["life_s"]["v2"] == [3.0, 6.0] and chosen["life_s"]["hero"] == [0.0, 7.0]
 
 
 def test_the_external_hero_is_not_played_and_its_reference_is_kept(esmini, road, tmp_path):

@@ -103,12 +103,14 @@ def distance_to_polyline(points: Floats, line: Floats) -> Floats:
     if len(line) == 0:
         return np.full(len(points), np.inf)
     if len(line) == 1:
-        return np.hypot(*(points - line[0]).T)
+        along: Floats = np.hypot(*(points - line[0]).T)
+        return along
     a, seg = line[:-1], np.diff(line, axis=0)
     rel = points[:, None, :] - a[None]
     u = np.clip((rel * seg[None]).sum(2) / np.maximum((seg ** 2).sum(1), 1e-12)[None], 0, 1)
     gap = rel - u[..., None] * seg[None]
-    return np.sqrt((gap ** 2).sum(2).min(axis=1))
+    nearest: Floats = np.sqrt((gap ** 2).sum(2).min(axis=1))
+    return nearest
 
 
 def judged(probe: MapProbe, samples: Sequence[CentreSamples],

@@ -201,6 +201,7 @@ class ReplayTally:
     far: int = 0
     errors: Counter[str] = field(default_factory=Counter)
     replay_s: list[float] = field(default_factory=list)
+    esmini_s: list[float] = field(default_factory=list)
 
     def add(self, result: InSituResult) -> None:
         self.written += 1
@@ -211,10 +212,11 @@ class ReplayTally:
             self.far += fit.worst_position_m > POSITION_FAR_M
         self.errors.update(f.code for f in result.verdict.findings if f.severity == "error")
         self.replay_s.append(result.timings_s["replay"])
+        self.esmini_s.append(result.timings_s["esmini"])
 
     def line(self, label: str) -> str:
         total = self.written + sum(self.refused.values())
-        times = sorted(self.replay_s) or [0.0]
+        times, esmini = sorted(self.replay_s) or [0.0], sorted(self.esmini_s) or [0.0]
         return (f"{label}: {self.written}/{total} in situ ({sum(self.refused.values())} "
                 f"refused); positions within 0.1 m {100 * self.fit.position_share:.2f} % of "
                 f"{self.fit.samples} (worst {self.fit.worst_position_m:.2f} m, vehicles beyond "
@@ -222,7 +224,8 @@ class ReplayTally:
                 f"{100 * self.fit.heading_share:.2f} %; speeds within 0.1 m/s of the "
                 f"positions' change {100 * self.fit.speed_share:.2f} % ("
                 f"{self.fit.backward_samples} steps held as standstill noise); replay median "
-                f"{statistics.median(times):.2f} s, max {times[-1]:.2f} s")
+                f"{statistics.median(times):.2f} s, max {times[-1]:.2f} s (esmini loading and "
+                f"stepping: median {statistics.median(esmini):.2f} s, max {esmini[-1]:.2f} s)")
 
 
 def replay_section(files: list[Path], context_s: float) -> bool:
@@ -260,10 +263,12 @@ def replay_section(files: list[Path], context_s: float) -> bool:
         overall.far += tally.far
         overall.errors.update(tally.errors)
         overall.replay_s += tally.replay_s
+        overall.esmini_s += tally.esmini_s
     print(overall.line("all"))
     for reason, count in overall.refused.most_common(5):
         print(f"    refused {count}x: {reason}")
     print(f"    error findings: {dict(overall.errors) or 'none'}")
+    print(f"    (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores while it ran)")
     total = overall.written + sum(overall.refused.values())
     met = (total > 0 and sum(overall.refused.values()) <= REFUSALS_TARGET * total
            and overall.fit.position_share >= POSITION_TARGET and overall.far == 0

@@ -321,8 +321,9 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
         written = time.perf_counter()
         result = InSituResult(folder, folder / SCENARIO_NAME, choice)
         if settings.replay:
-            result.verdict, result.timings_s["replay"] = _play_and_judge(
-                scenario, road.xodr, choice, settings, staging)
+            result.verdict, played = _play_and_judge(scenario, road.xodr, choice, settings,
+                                                     staging)
+            result.timings_s.update(played)
         write_json_atomic(staging / CHOICE_NAME, {**choice.to_dict(),
                                                   **scenario_summary(scene)})
         _publish(staging, folder)
@@ -336,10 +337,12 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
 
 
 def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
-                    settings: InSituSettings, staging: Path) -> tuple[InSituVerdict, float]:
+                    settings: InSituSettings,
+                    staging: Path) -> tuple[InSituVerdict, dict[str, float]]:
     """Play the staged scenario on the whole road (a trajectory's reach cannot be bounded, so
     the player's map cut would only cost the time to find that out) at the recording's step,
-    judge it, and keep the playback and the verdict beside it; also the replay's seconds."""
+    judge it, and keep the playback and the verdict beside it; also the seconds of the
+    replay and of esmini's own work in it (loading and stepping)."""
     from scenweave import player  # loads esmini's bindings only when asked to play
 
     replay = player.ReplaySettings(time_step_s=choice.step_s, wall_time_s=settings.wall_time_s,
@@ -352,7 +355,9 @@ def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
     playback.write(staging / REPLAY_NAME)
     write_json_atomic(staging / JUDGE_NAME, {**verdict.to_dict(),
                                              "timings_s": playback.timings_s})
-    return verdict, float(playback.timings_s.get("total", 0.0))
+    timings = playback.timings_s
+    return verdict, {"replay": float(timings.get("total", 0.0)),
+                     "esmini": float(timings.get("load", 0.0) + timings.get("step", 0.0))}
 
 
 def _made(folder: Path) -> Path:

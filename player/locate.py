@@ -5,7 +5,8 @@ it came from) or raises :class:`PlayerUnavailable` saying what was tried and why
 did not hold it. The order is the one ``scripts/setup.d/10-esmini.sh`` follows: when neither
 of the first two exists, setup builds ``$ESMINI_SOURCE_ARCHIVE`` or fetches esmini's release
 archive into ``/opt/scenweave/esmini`` (``$SCENWEAVE_ESMINI_PREFIX`` moves it, for setup and
-for this search alike).
+for this search alike). ``$SCENWEAVE_WORKPLACE_ESMINI`` moves the workplace copy's place (a
+folder without esmini there: the machine as a user's clone sees it, for tests and checks).
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ LIBRARY = "libesminiLib.so"
 INSTALLED_HOME = Path("/opt/scenweave/esmini")
 #: the workplace's headless build, beside the repository (absent in users' clones)
 WORKPLACE_HOME = Path(__file__).resolve().parents[2] / "shared" / "esmini"
+#: moves the workplace copy's place (``workplace_home()``)
+WORKPLACE_ENV = "SCENWEAVE_WORKPLACE_ESMINI"
 #: esmini_build_version(), C++ name mangling (it is not declared extern "C")
 BUILD_VERSION_SYMBOL = "_Z20esmini_build_versionv"
 
@@ -49,12 +52,17 @@ def installed_home() -> Path:
     return Path(os.environ.get("SCENWEAVE_ESMINI_PREFIX") or INSTALLED_HOME)
 
 
+def workplace_home() -> Path:
+    """The workplace copy's place: ``$SCENWEAVE_WORKPLACE_ESMINI`` or ``../shared/esmini``."""
+    return Path(os.environ.get(WORKPLACE_ENV) or WORKPLACE_HOME)
+
+
 def candidates() -> list[tuple[str, Path]]:
     """The places looked at, in order: ``(source, home folder)``."""
     places = []
     if os.environ.get("ESMINI_HOME"):
         places.append(("ESMINI_HOME", Path(os.environ["ESMINI_HOME"]).expanduser()))
-    places.append(("workplace build (../shared/esmini)", WORKPLACE_HOME))
+    places.append((f"workplace build ({workplace_home()})", workplace_home()))
     installed = installed_home()
     places.append((f"setup's install ({installed})", installed))
     return places

@@ -2,7 +2,9 @@
 
 ``diagnose()`` returns one entry per part, each a dict with ``available`` (bool) and either the
 details of what was found or ``problem`` (why it is missing, naming what to do). Nothing here
-raises for a missing part: the doctor is a report.
+raises for a missing part: the doctor is a report. Every part also names the one command or
+setting that provides it (``provided_by``; the sandbox per backend), and ``missing_needs``
+says which of the parts a user needs (``scenweave doctor --need player,bwrap``) are missing.
 """
 
 from __future__ import annotations
@@ -17,9 +19,60 @@ from collections.abc import Callable
 OLLAMA_TIMEOUT_S = 2.0
 
 
+#: the one command or setting that provides each part (a user's clone runs scripts/setup.sh,
+#: which does all of them; a pip user does these)
+PROVIDED_BY = {
+    "player": "set ESMINI_HOME to an esmini 3.6 folder with bin/libesminiLib.so (a clone: "
+              "ESMINI_SOURCE_ARCHIVE=esmini-src.tar.gz bash scripts/setup.d/10-esmini.sh)",
+    "embedded_llm": "pip install 'scenweave[embedded]' (a clone: bash "
+                    "scripts/setup.d/30-embedded-llm.sh, which builds llama-cpp-python once)",
+    "ollama": "start `ollama serve` and `ollama pull qwen2.5-coder:7b`, or set OLLAMA_HOST",
+    "redis": "apt-get install redis-server (or set SCENWEAVE_QUEUE to a Redis URL); only the "
+             "queue needs it",
+}
+#: the sandbox's backends, each with what provides it
+SANDBOX_PROVIDED_BY = {
+    "docker": "apt-get install podman, then bash scripts/setup.d/20-sandbox.sh builds the "
+              "image (or set DOCKER_HOST to an engine that has it)",
+    "bwrap": "apt-get install bubblewrap, then bash scripts/setup.d/20-sandbox.sh makes "
+             "/opt/scenweave/sandbox-venv",
+}
+#: names ``--need`` takes besides the parts and the sandbox's backends
+NEED_ALIASES = {"queue": "redis", "embedded": "embedded_llm", "esmini": "player"}
+
+
 def diagnose() -> dict[str, dict]:
-    """Every part, in the order the doctor prints them."""
-    return {name: check() for name, check in CHECKS.items()}
+    """Every part, in the order the doctor prints them, each with ``provided_by``."""
+    return {name: provided(name, check()) for name, check in CHECKS.items()}
+
+
+def provided(name: str, found: dict) -> dict:
+    """``found`` with what provides the part (the sandbox: each backend's)."""
+    if name == "sandbox":
+        for backend, info in found.get("backends", {}).items():
+            info["provided_by"] = SANDBOX_PROVIDED_BY.get(backend)
+        return {**found, "provided_by": "; ".join(f"{b}: {how}"
+                                                  for b, how in SANDBOX_PROVIDED_BY.items())}
+    return {**found, "provided_by": PROVIDED_BY.get(name)}
+
+
+def need_names() -> tuple[str, ...]:
+    """Every name ``--need`` takes: the parts, the sandbox's backends and the aliases."""
+    return (*CHECKS, *SANDBOX_PROVIDED_BY, *NEED_ALIASES)
+
+
+def missing_needs(report: dict[str, dict], needs: tuple[str, ...]) -> list[str]:
+    """The needed parts (``need_names()``) the report finds missing, in the order asked."""
+    missing = []
+    for need in needs:
+        name = NEED_ALIASES.get(need, need)
+        if name in SANDBOX_PROVIDED_BY:
+            works = report["sandbox"].get("backends", {}).get(name, {}).get("works")
+        else:
+            works = report[name]["available"]
+        if not works:
+            missing.append(need)
+    return missing
 
 
 def check_player() -> dict:
@@ -122,12 +175,14 @@ CHECKS: dict[str, Callable[[], dict]] = {
 def describe(name: str, found: dict) -> str:
     """One line for one part."""
     if not found["available"]:
-        return f"{name}: MISSING - {found.get('problem', 'unavailable')}"
+        fix = f" -> {found['provided_by']}" if found.get("provided_by") else ""
+        return f"{name}: MISSING - {found.get('problem', 'unavailable')}{fix}"
     if name == "player":
         return (f"player: esmini {found['version']} from {found['source']} "
                 f"({found['library']})")
     if name == "sandbox":
         others = "; ".join(f"{backend} unavailable: {info['reason']}"
+                           + (f" -> {info['provided_by']}" if info.get("provided_by") else "")
                            for backend, info in found["backends"].items() if not info["works"])
         works = [b for b, info in found["backends"].items() if info["works"]]
         return (f"sandbox: {', '.join(works)} {'works' if len(works) == 1 else 'work'}, "

@@ -43,6 +43,9 @@ class LoadedInput:
     #: scenario id -> the series a mined record recorded (``scenweave mine``), which the
     #: replay figure draws against the played scenario
     recorded: dict[str, dict] = field(default_factory=dict)
+    #: scenario id -> where its mined record was found (its ``scenario_id`` and
+    #: ``provenance``), for the event's in-situ scenario (``scenweave.in_situ_records``)
+    mined: dict[str, dict] = field(default_factory=dict)
 
 
 def is_raw(data: Path) -> bool:
@@ -76,6 +79,9 @@ def load_input(data: Path, selection: InputSelection) -> LoadedInput:
         loaded.params.extend(params)
         if isinstance(record.get("series"), dict):
             loaded.recorded.update((p["scenario_id"], record["series"]) for p in params)
+        if isinstance(record.get("provenance"), dict):
+            found = {"scenario_id": record.get("scenario_id"), "provenance": record["provenance"]}
+            loaded.mined.update((p["scenario_id"], found) for p in params)
         if selection.limit is not None and len(loaded.params) >= selection.limit:
             del loaded.params[selection.limit:]
             break

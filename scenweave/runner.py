@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from scenweave.console import refused_records
+from scenweave.in_situ_records import InSituWriter
 from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.presentation.report import write_run_report
@@ -129,7 +130,10 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
     stage = partial(_staging, folder, loaded.recorded)
     work = (_in_processes(todo, stage, settings, matcher, jobs) if jobs > 1 else
             _in_this_process(todo, stage, settings, matcher))
+    in_situ = _in_situ_writer(loaded, settings)
     for params, staging, outcome in progress(work, desc="scenarios", total=len(todo)):
+        if in_situ is not None and params["scenario_id"] in loaded.mined:
+            outcome["in_situ"] = in_situ.write(loaded.mined[params["scenario_id"]], staging)
         folder.commit(params["scenario_id"], staging, outcome)
         started.committed += 1
     issues = [i.to_dict() for i in loaded.report.issues]
@@ -137,6 +141,11 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
     folder.write(SUMMARY_FILE, summary)
     write_run_report(folder.root)
     return RunResult(folder, summary, skipped, issues)
+
+
+def _in_situ_writer(loaded: LoadedInput, settings: PipelineSettings) -> InSituWriter | None:
+    """Mined records get their event in situ beside the scenario (played when the run plays)."""
+    return InSituWriter.for_run(play=settings.replay is not None) if loaded.mined else None
 
 
 def _staging(folder: RunFolder, recorded: dict[str, dict], params: Mapping[str, Any]) -> Path:

@@ -31,6 +31,15 @@ from scenweave.viewer.run_files import (
     VARIANTS_DIR,
     XOSC_NAME,
 )
+from scenweave.viewer.in_situ import (
+    IN_SITU_DIR,
+    IN_SITU_FILES,
+    IN_SITU_REPORT_NAME,
+    in_situ_of,
+    in_situ_row,
+    in_situ_scene,
+    is_in_situ,
+)
 from scenweave.viewer.scene import read_json, scene
 
 #: trace events that make or judge an attempt, in the order they run
@@ -39,6 +48,8 @@ ATTEMPT_NODES = ("generate", "repair", "fallback", "execute", "validate")
 SEARCH_DEPTH = 3
 #: a file the page shows inline is cut after this many characters
 FILE_PREVIEW_CHARS = 200_000
+#: the files the page lists: a scenario folder's, then an in-situ folder's own
+SHOWN_FILES = (*SCENARIO_FILES, *(n for n in IN_SITU_FILES if n not in SCENARIO_FILES))
 
 
 class NotFound(InputError, LookupError):
@@ -79,11 +90,14 @@ def _run_roots(path: Path, depth: int = SEARCH_DEPTH) -> list[Path]:
 
 
 def _is_run(path: Path) -> bool:
-    return (path / RUN_NAME).is_file() or (path / SUMMARY_NAME).is_file()
+    """A run folder, or the folder of in-situ scenarios ``scenweave mine --in-situ`` writes."""
+    return (path / RUN_NAME).is_file() or (path / SUMMARY_NAME).is_file() \
+        or (path / IN_SITU_REPORT_NAME).is_file()
 
 
 def _is_scenario(path: Path) -> bool:
-    return (path / XOSC_NAME).is_file() or (path / REPLAY_NAME).is_file()
+    return (path / XOSC_NAME).is_file() or (path / REPLAY_NAME).is_file() \
+        or in_situ_of(path) is not None
 
 
 def _scenario_dirs(root: Path) -> dict[str, Path]:
@@ -146,7 +160,17 @@ def scenario_row(run: Run, name: str) -> dict:
             "codes": (replay or {}).get("codes") or [],
             "worst": _worst_errors(folder),
             "variants": len(_variant_dirs(folder)),
-            "watchable": (folder / REPLAY_NAME).is_file()}
+            "watchable": (folder / REPLAY_NAME).is_file(),
+            "in_situ": _in_situ_entry(folder, f"{run.run_id}/{name}")}
+
+
+def _in_situ_entry(folder: Path, key: str) -> dict | None:
+    """The scenario's in-situ scene (its key, vehicles, judge's numbers), if it has one or is
+    one (``scenweave mine --in-situ`` writes in-situ folders alone)."""
+    if is_in_situ(folder):
+        return {"key": key, **in_situ_row(folder)}
+    in_situ = in_situ_of(folder)
+    return None if in_situ is None else {"key": f"{key}/{IN_SITU_DIR}", **in_situ_row(in_situ)}
 
 
 def _worst_errors(folder: Path) -> list[dict]:
@@ -166,8 +190,14 @@ def _worst_errors(folder: Path) -> list[dict]:
 # --- one scenario ----------------------------------------------------------------------------
 
 def scenario_folder(runs: dict[str, Run], key: str) -> Path:
-    """The folder of ``<run>/<scenario>``, or of ``<run>/<scenario>/variants/vNN``."""
+    """The folder of ``<run>/<scenario>``, of ``<run>/<scenario>/variants/vNN`` or of
+    ``<run>/<scenario>/in_situ``."""
     run_id, _, rest = key.partition("/")
+    if rest.endswith(f"/{IN_SITU_DIR}"):
+        owner = scenario_folder(runs, f"{run_id}/{rest.removesuffix('/' + IN_SITU_DIR)}")
+        if in_situ_of(owner) is None:
+            raise NotFound(f"{key!r}: the scenario has no in-situ scene")
+        return owner / IN_SITU_DIR
     name, _, variant = rest.partition("/variants/")
     run = runs.get(run_id)
     if run is None or name not in run.scenario_dirs:
@@ -184,9 +214,13 @@ def scenario_detail(runs: dict[str, Run], key: str) -> dict:
     """Everything the scenario's page shows: the scene to animate and chart, the status, the
     agent's attempts, the variants and the files."""
     folder = scenario_folder(runs, key)
+    if is_in_situ(folder) and not (folder / PARAMS_NAME).is_file():
+        return {"key": key, "scene": in_situ_scene(folder), "status": {}, "params": {},
+                "attempts": [], "variants": [], "files": files(folder), "variant": None}
     return {"key": key, "scene": scene(folder), "status": read_json(folder / STATUS_NAME),
             "params": read_json(folder / PARAMS_NAME), "attempts": attempts(folder),
             "variants": variants(folder, key), "files": files(folder),
+            "in_situ": _in_situ_entry(folder, key),
             "variant": read_json(folder / VARIANT_NAME) or None}
 
 
@@ -236,12 +270,12 @@ def variants(folder: Path, key: str) -> list[dict]:
 
 def files(folder: Path) -> list[dict]:
     return [{"name": name, "bytes": (folder / name).stat().st_size}
-            for name in SCENARIO_FILES if (folder / name).is_file()]
+            for name in SHOWN_FILES if (folder / name).is_file()]
 
 
 def file_text(runs: dict[str, Run], key: str, name: str) -> str:
     """A listed file of the scenario, as text (cut after ``FILE_PREVIEW_CHARS``)."""
-    if name not in SCENARIO_FILES:
+    if name not in SHOWN_FILES:
         raise NotFound(f"{name!r} is not a file the viewer shows")
     path = scenario_folder(runs, key) / name
     if not path.is_file():

@@ -55,6 +55,8 @@ def _scenario_keys(runs: dict[str, catalog.Run], listing: list[dict]) -> list[st
             keys.append(row["key"])
             folder = catalog.scenario_folder(runs, row["key"])
             keys += [v["key"] for v in catalog.variants(folder, row["key"])]
+            if row.get("in_situ") and row["in_situ"]["key"] != row["key"]:
+                keys.append(row["in_situ"]["key"])
     return keys
 
 

@@ -8,6 +8,11 @@ the map prepared for esmini (``player.maps.esmini_map``) beside it, so
 with esmini's command-line player recording ``replay.dat`` for esmini's own replayer, and a
 scenario esmini refuses is named. ``--for carla`` copies the delivered files (CARLA's dialect)
 with a README saying how scenario_runner plays them on their town.
+
+A mined event's in-situ scenario (``<scenario>/in_situ/``, on its recorded road) goes to
+``<scenario>/in_situ/`` of the export: for esmini the scenario with its ``road.xodr`` beside it
+(and its recording), for CARLA the road for CARLA's OpenDRIVE standalone mode and a client
+script that replays every recorded vehicle (``scenweave.exports.in_situ``).
 """
 
 from __future__ import annotations
@@ -44,29 +49,72 @@ MAP_LOAD_NOTES = ("Unsupported geo reference attr", "Unsupported object type",
               help="Folder to write into (one folder per scenario).")
 def export(paths: tuple[Path, ...], target: str, out_dir: Path) -> None:
     """Export scenarios (a run folder's, or .xosc files) for esmini or CARLA."""
-    files = scenario_files(paths)
-    if not files:
+    from scenweave.exports.in_situ import is_in_situ
+
+    found = scenario_files(paths)
+    if not found:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
     out_dir.mkdir(parents=True, exist_ok=True)
+    in_situ = {xosc: f"{xosc.parent.parent.name}/{xosc.parent.name}" for xosc in found
+               if is_in_situ(xosc.parent)}
+    files = [xosc for xosc in found if xosc not in in_situ]
     names = _folder_names(files)
     if target == "carla":
         for xosc in files:
             _export_carla(xosc, out_dir / names[xosc])
-        _write(out_dir / README_NAME, carla_readme(files, names))
-        click.echo(f"export: {len(files)} scenarios for CARLA -> {out_dir} ({README_NAME})")
+        problems = _export_in_situ_carla(in_situ, out_dir)
+        _write(out_dir / README_NAME, carla_readme(files, names, in_situ))
+        click.echo(f"export: {len(found) - len(problems)}/{len(found)} scenarios for CARLA "
+                   f"({len(in_situ)} in situ) -> {out_dir} ({README_NAME})")
+        _fail(problems)
         return
     from scenweave.player import find_esmini
 
     esmini = find_esmini().home / "bin" / "esmini"
     problems = [p for xosc in files
                 if (p := _export_esmini(xosc, out_dir, names[xosc], esmini)) is not None]
+    problems += _export_in_situ_esmini(in_situ, out_dir, esmini)
+    _write(out_dir / README_NAME, esmini_readme(list(in_situ.values())))
+    click.echo(f"export: {len(found) - len(problems)}/{len(found)} scenarios play in plain "
+               f"esmini ({len(in_situ)} in situ) -> {out_dir}")
+    _fail(problems)
+
+
+def _fail(problems: list[str]) -> None:
     for problem in problems:
         click.echo(f"FAIL {problem}")
-    _write(out_dir / README_NAME, esmini_readme())
-    click.echo(f"export: {len(files) - len(problems)}/{len(files)} scenarios play in plain "
-               f"esmini -> {out_dir}")
     if problems:
         raise SystemExit(1)
+
+
+def _export_in_situ_esmini(in_situ: dict[Path, str], out_dir: Path, esmini: Path) -> list[str]:
+    """Each in-situ scenario with its road, played once; the problems."""
+    from scenweave.exports.in_situ import export_esmini
+    from scenweave.judge.in_situ_doc import InSituDocError
+
+    problems = []
+    for xosc, name in in_situ.items():
+        try:
+            problem = export_esmini(xosc.parent, out_dir / name, esmini)
+        except InSituDocError as err:
+            problem = str(err)
+        if problem is not None:
+            problems.append(problem)
+    return problems
+
+
+def _export_in_situ_carla(in_situ: dict[Path, str], out_dir: Path) -> list[str]:
+    """Each in-situ scenario with its road and its CARLA replay script; the problems."""
+    from scenweave.exports.in_situ import export_carla
+    from scenweave.judge.in_situ_doc import InSituDocError
+
+    problems = []
+    for xosc, name in in_situ.items():
+        try:
+            export_carla(xosc.parent, out_dir / name)
+        except InSituDocError as err:
+            problems.append(str(err))
+    return problems
 
 
 def _folder_names(files: list[Path]) -> dict[Path, str]:
@@ -159,7 +207,9 @@ def _map_of(xosc: Path) -> Path | None:
         return None
 
 
-def esmini_readme() -> str:
+def esmini_readme(in_situ: list[str] | None = None) -> str:
+    from scenweave.exports.in_situ import esmini_readme_section
+
     return f"""# Scenarios for esmini
 
 Each folder holds `scenario.xosc`, the copy ScenWeave's replay plays: the map is named by a
@@ -174,7 +224,7 @@ replayer --file <scenario>/{RECORDING_NAME}                    # esmini's replay
 dat2csv <scenario>/{RECORDING_NAME}                            # the recording as CSV
 ```
 The delivered scenarios (CARLA's dialect) are unchanged; export them with `--for carla`.
-"""
+""" + (esmini_readme_section(in_situ) if in_situ else "")
 
 
 # --- CARLA -------------------------------------------------------------------------------------
@@ -192,8 +242,11 @@ def _export_carla(xosc: Path, folder: Path) -> None:
             target.chmod(0o644)
 
 
-def carla_readme(files: list[Path], names: dict[Path, str]) -> str:
+def carla_readme(files: list[Path], names: dict[Path, str],
+                 in_situ: dict[Path, str] | None = None) -> str:
     from lxml import etree
+
+    from scenweave.exports.in_situ import carla_readme_section
 
     rows = []
     for xosc in files:
@@ -219,7 +272,7 @@ python scenario_runner.py --openscenario <scenario>/scenario.xosc --reloadWorld
 ```
 A map given by file (not a CARLA town) is loaded as a standalone OpenDRIVE world by
 scenario_runner when `LogicFile` holds the path to the `.xodr`; copy the map next to it.
-"""
+""" + (carla_readme_section(list(in_situ.values())) if in_situ else "")
 
 
 def _write(path: Path, text: str) -> None:

@@ -94,3 +94,12 @@ def page(browser) -> Iterator:
     yield opened
     context.close()
     assert errors == [], f"the page raised: {errors}"
+
+
+@pytest.fixture(scope="session")
+def in_situ_scene(esmini, tmp_path_factory) -> Path:
+    """A scenario folder of a run with its in-situ scene, played and judged
+    (``tests/viewer/in_situ_run.py``)."""
+    from tests.viewer.in_situ_run import make_in_situ_run
+
+    return make_in_situ_run(tmp_path_factory.mktemp("in_situ"))

@@ -67,7 +67,7 @@ function runCard(run, keep) {
   if (run.report && !SW.api.isStatic()) links.push(el("a", { href: `run/${encodeURIComponent(run.run)}/report.html`, target: "_blank" }, "report.html"));
   if (run.mining_report && !SW.api.isStatic()) links.push(el("a", { href: `mining/${encodeURIComponent(run.run)}`, target: "_blank" }, "mining report"));
   const rows = shown.map((s) => el("tr", { class: "scenario", dataset: { key: s.key }, onclick: () => { location.hash = "#/s/" + s.key; } },
-    el("td", {}, el("a", { href: "#/s/" + s.key }, s.id)),
+    el("td", {}, el("a", { href: "#/s/" + s.key }, s.id), s.in_situ ? [" ", inSituLink(s.in_situ)] : null),
     el("td", {}, s.maneuver_class || ""),
     el("td", {}, badge(s.status)),
     el("td", {}, s.attempts == null ? "" : s.attempts),
@@ -82,6 +82,14 @@ function runCard(run, keep) {
     shown.length ? null : el("p", { class: "note" }, "no scenario matches"));
 }
 
+// the link to a scenario's in-situ scene, with how closely its recorded traffic played
+function inSituLink(inSitu) {
+  const share = inSitu.share == null ? "" : ` ${fmt(100 * inSitu.share, 1)} % ≤ 0.1 m`;
+  return el("a", { class: `in-situ-link badge ${inSitu.passed === false ? "failed" : inSitu.passed ? "passed" : ""}`, href: "#/s/" + inSitu.key,
+    onclick: (e) => e.stopPropagation(), title: "the event on its recorded road with every recorded vehicle" },
+  `in situ${inSitu.vehicles ? ` · ${inSitu.vehicles} vehicles` : ""}${share}`);
+}
+
 // --- one scenario -----------------------------------------------------------------------------
 
 async function showScenario(key) {
@@ -89,11 +97,14 @@ async function showScenario(key) {
   const scene = detail.scene;
   crumb.textContent = key;
   const status = detail.status || {};
+  const passed = scene.in_situ ? scene.in_situ.passed !== false : !scene.findings.length;
   const head = el("div", { class: "facts" },
     el("strong", {}, scene.scenario_id), " · ", scene.maneuver_class || "?", " · ", scene.domain || "", " · ",
-    badge(status.status || "unjudged"), " ",
-    scene.played ? badge(scene.findings.length ? "replay failed" : "replay passed", scene.findings.length ? "failed" : "passed") : badge("not played"),
-    detail.variant ? el("span", {}, " · variant: ", variantFacts(detail.variant)) : null);
+    scene.in_situ ? null : [badge(status.status || "unjudged"), " "],
+    scene.played ? badge(passed ? "replay passed" : "replay failed", passed ? "passed" : "failed") : badge("not played"),
+    detail.variant ? el("span", {}, " · variant: ", variantFacts(detail.variant)) : null,
+    scene.in_situ ? el("span", { id: "in-situ-facts" }, " · ", inSituFacts(scene.in_situ)) : null,
+    detail.in_situ ? [" · ", inSituLink(detail.in_situ)] : null);
   const body = el("div", { id: "tab-body" });
   const tabs = { replay: () => replayTab(body, detail), trace: () => traceTab(body, detail), variants: () => variantsTab(body, detail), files: () => filesTab(body, detail) };
   const bar = el("div", { class: "tabs" }, Object.keys(tabs).map((name) => el("button", {
@@ -104,6 +115,30 @@ async function showScenario(key) {
   window.viewer = { page: "scenario", key, detail };
   bar.querySelector("button").classList.add("active");
   tabs.replay();
+}
+
+// what was chosen and how closely the recorded traffic played (the in-situ judge's numbers)
+function inSituFacts(inSitu) {
+  const choice = inSitu.choice || {}, overall = (inSitu.judge || {}).overall || {};
+  const position = overall.position || {}, heading = overall.heading || {};
+  const window_ = choice.window_s ? `window ${fmt(choice.window_s[0], 1)}–${fmt(choice.window_s[1], 1)} s` : null;
+  return [choice.vehicles != null ? `${choice.vehicles} vehicles` : null, window_,
+    position.share != null ? `within 0.1 m: ${fmt(100 * position.share, 2)} % of ${overall.samples} samples` : "not judged",
+    position.worst_m != null ? `worst ${fmt(position.worst_m, 3)} m${position.worst_of ? ` (${position.worst_of} at ${fmt(position.worst_at_s)} s)` : ""}` : null,
+    heading.share != null ? `heading within 0.05 rad: ${fmt(100 * heading.share, 2)} %` : null].filter(Boolean).join(" · ");
+}
+
+// the in-situ judge's numbers per vehicle; clicking a row seeks to its worst sample
+function inSituTable(inSitu, clock) {
+  const vehicles = Object.entries((inSitu.judge || {}).vehicles || {});
+  if (!vehicles.length) return null;
+  vehicles.sort(([, a], [, b]) => (b.position.worst_m || 0) - (a.position.worst_m || 0));
+  return el("details", { id: "in-situ-table" }, el("summary", {}, `per vehicle (${vehicles.length}), worst first`),
+    el("table", {}, el("thead", {}, el("tr", {}, ["vehicle", "samples", "≤ 0.1 m", "worst (m)", "at (s)", "heading ≤ 0.05 rad", "speed ≤ 0.1 m/s"].map((h) => el("th", {}, h)))),
+      el("tbody", {}, vehicles.map(([name, fit]) => el("tr", { dataset: { vehicle: name }, onclick: () => fit.position.worst_at_s != null && clock.seek(fit.position.worst_at_s) },
+        el("td", {}, name), el("td", {}, fit.samples), el("td", {}, `${fmt(100 * fit.position.share, 1)} %`),
+        el("td", {}, fmt(fit.position.worst_m, 3)), el("td", {}, fmt(fit.position.worst_at_s)),
+        el("td", {}, `${fmt(100 * fit.heading.share, 1)} %`), el("td", {}, `${fmt(100 * fit.speed.share, 1)} %`))))));
 }
 
 function replayTab(body, detail) {
@@ -128,9 +163,12 @@ function replayTab(body, detail) {
   const list = el("ul", { class: "findings", id: "findings" },
     scene.findings.length ? scene.findings.map((f) => el("li", { dataset: { code: f.code, t: f.t == null ? "" : f.t }, onclick: () => f.t != null && clock.seek(f.t) },
       f.t == null ? "" : `${fmt(f.t)} s · `, el("strong", {}, f.code), " ", f.message.replace(/^at [\d.]+ s: /, "")))
-      : el("li", { class: "pass" }, "replay as recorded: no REPLAY_* finding"));
-  const legend = el("div", { class: "legend" }, Object.entries(player.colours).map(([n, c]) => el("span", { style: `color:${c}` }, `■ ${n}`)));
-  const stage = el("div", { class: "stage" }, canvas, el("div", { class: "controls" }, play, time, rate, camera, legend), scrub, timeline, list);
+      : el("li", { class: "pass" }, scene.in_situ ? "every vehicle as recorded: no IN_SITU_* finding" : "replay as recorded: no REPLAY_* finding"));
+  const named = Object.entries(player.colours);
+  const legend = el("div", { class: "legend" }, named.length <= 8 ? named.map(([n, c]) => el("span", { style: `color:${c}` }, `■ ${n}`))
+    : [el("span", { style: `color:${player.colours[EGO]}` }, `■ ${EGO}`), el("span", {}, `■ ${named.length - 1} recorded vehicles`)]);
+  const stage = el("div", { class: "stage" }, canvas, el("div", { class: "controls" }, play, time, rate, camera, legend), scrub, timeline, list,
+    scene.in_situ ? inSituTable(scene.in_situ, clock) : null);
   const charts = el("div", { class: "charts", id: "charts" });
   body.replaceChildren(el("div", { class: "replay" }, stage, charts));
   const made = [speedChart(charts, scene, clock, player.colours, findings), gapChart(charts, scene, clock, player.colours, findings),

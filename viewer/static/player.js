@@ -57,11 +57,21 @@ class Player {
     this.bounds = this.sceneBounds();
   }
 
+  // Whether an actor is on the road at t: always, unless it has a recorded span (in-situ
+  // scenes: a car waits parked off the road before its track starts and after it ends).
+  onRoad(name, t) {
+    const span = this.scene.actors[name].span;
+    return !span || (t >= span[0] - 1e-6 && t <= span[1] + 1e-6);
+  }
+
   sceneBounds() {
     let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
-    for (const actor of Object.values(this.scene.actors)) {
-      for (const x of actor.x) { x0 = Math.min(x0, x); x1 = Math.max(x1, x); }
-      for (const y of actor.y) { y0 = Math.min(y0, y); y1 = Math.max(y1, y); }
+    for (const [name, actor] of Object.entries(this.scene.actors)) {
+      actor.x.forEach((x, i) => {
+        if (!this.onRoad(name, this.scene.times[i])) return;
+        x0 = Math.min(x0, x); x1 = Math.max(x1, x);
+        y0 = Math.min(y0, actor.y[i]); y1 = Math.max(y1, actor.y[i]);
+      });
     }
     for (const light of this.scene.lights) {
       x0 = Math.min(x0, light.x); x1 = Math.max(x1, light.x);
@@ -85,8 +95,9 @@ class Player {
     if (this.camera === "follow" && this.scene.actors[EGO]) {
       // the ego and every actor within FOLLOW_NEAR_M of it, framed with room around them
       const ego = this.pose(EGO, this.t);
-      const near = Object.keys(this.scene.actors).map((n) => this.pose(n, this.t))
+      const near = Object.keys(this.scene.actors).filter((n) => this.onRoad(n, this.t)).map((n) => this.pose(n, this.t))
         .filter((p) => Math.hypot(p.x - ego.x, p.y - ego.y) < FOLLOW_NEAR_M);
+      if (!near.length) near.push(ego);
       cx = near.reduce((sum, p) => sum + p.x, 0) / near.length;
       cy = near.reduce((sum, p) => sum + p.y, 0) / near.length;
       const reach = Math.max(...near.map((p) => Math.hypot(p.x - cx, p.y - cy)));
@@ -104,6 +115,7 @@ class Player {
     const v = this.view();
     const found = {};
     for (const name of Object.keys(this.scene.actors)) {
+      if (!this.onRoad(name, this.t)) continue;
       const p = this.pose(name, this.t);
       const ahead = this.scene.actors[name].box[2];
       found[name] = v.toPx(p.x + ahead * Math.cos(p.h), p.y + ahead * Math.sin(p.h));
@@ -133,7 +145,7 @@ class Player {
     this.drawGhost(ctx, v);
     this.drawStopLine(ctx, v);
     for (const light of this.scene.lights) this.drawLight(ctx, v, light);
-    for (const name of Object.keys(this.scene.actors)) this.drawActor(ctx, v, name);
+    for (const name of Object.keys(this.scene.actors)) if (this.onRoad(name, this.t)) this.drawActor(ctx, v, name);
     this.drawCollisions(ctx, v);
     ctx.fillStyle = "#1f2328";
     ctx.font = "12px system-ui, sans-serif";
@@ -160,11 +172,18 @@ class Player {
       ctx.globalAlpha = 0.35;
       ctx.lineWidth = 1.5;
       ctx.beginPath();
-      actor.x.forEach((x, i) => { const [px, py] = v.toPx(x, actor.y[i]); if (i) ctx.lineTo(px, py); else ctx.moveTo(px, py); });
+      let drawn = false;
+      actor.x.forEach((x, i) => {
+        if (!this.onRoad(name, times[i])) { drawn = false; return; }
+        const [px, py] = v.toPx(x, actor.y[i]);
+        if (drawn) ctx.lineTo(px, py); else ctx.moveTo(px, py);
+        drawn = true;
+      });
       ctx.stroke();
       ctx.globalAlpha = 0.8;
       ctx.font = "10px system-ui, sans-serif";
       for (let second = 1; second <= times[times.length - 1]; second++) {
+        if (!this.onRoad(name, second)) continue;
         const p = this.pose(name, second);
         const [px, py] = v.toPx(p.x, p.y);
         ctx.beginPath(); ctx.arc(px, py, 2, 0, 2 * Math.PI); ctx.fill();
@@ -226,7 +245,9 @@ class Player {
 
   drawActor(ctx, v, name) {
     const p = this.pose(name, this.t);
-    const label = `${name} ${p.speed.toFixed(1)} m/s`;
+    // a crowded scene (in situ: every recorded vehicle) names the cars; the ego keeps its speed
+    const crowded = Object.keys(this.scene.actors).length > 8 && name !== EGO;
+    const label = crowded ? name : `${name} ${p.speed.toFixed(1)} m/s`;
     this.drawBox(ctx, v, p.x, p.y, p.h, this.scene.actors[name].box, this.colours[name], label, false);
   }
 
@@ -244,7 +265,7 @@ class Player {
 
   drawCollisions(ctx, v) {
     for (const [t, a, b] of this.scene.collisions) {
-      if (Math.abs(t - this.t) > 0.5 || !this.scene.actors[a] || !this.scene.actors[b]) continue;
+      if (Math.abs(t - this.t) > 0.5 || !this.scene.actors[a] || !this.scene.actors[b] || !this.onRoad(a, t) || !this.onRoad(b, t)) continue;
       const pa = this.pose(a, t), pb = this.pose(b, t);
       const [px, py] = v.toPx((pa.x + pb.x) / 2, (pa.y + pb.y) / 2);
       ctx.strokeStyle = "#cf222e";

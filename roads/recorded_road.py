@@ -47,7 +47,7 @@ from scenweave.roads.recorded_geometry import (
 )
 
 #: bumped whenever the written map changes for the same input (cache keys include it)
-CONVERTER_VERSION = "3"
+CONVERTER_VERSION = "4"
 #: two strips share a road where their common border differs by less than this (m)
 SHARED_BORDER_M = 0.1
 #: OpenDRIVE signal type of a traffic light (as CARLA and esmini read it)
@@ -465,27 +465,39 @@ def _write_signals(element: etree._Element, placed: list[tuple[SignalPlacement, 
         _sub(signal, "validity", fromLane=placement.lane_id, toLane=placement.lane_id)
 
 
+def _connections(links: _Links, forward: bool) -> list[tuple[int, _Road, _Road]]:
+    """``(junction, road linking to it, connecting road)`` for every road whose successor
+    (``forward``) or predecessor is a junction, and each of its roads on that side."""
+    found = []
+    for road in links.roads:
+        end = links.end_link(road, forward)
+        if end is not None and end[0] == "junction":
+            neighbours = links.succ[road.id] if forward else links.pred[road.id]
+            found += [(end[1], road, links.by_id[n]) for n in sorted(neighbours)]
+    return found
+
+
 def _write_junctions(root: etree._Element, links: _Links) -> None:
-    """Each junction with a connection from every road that links to it (ahead) to each of
-    that road's successors, lane by lane."""
+    """Each junction with a connection from every road that links to it ahead (its
+    successor is the junction) to each of that road's successors, lane by lane. A junction
+    nothing leads into (lanes that merge where the recording begins) gets the connections
+    from the roads it leads to, against the traffic (``contactPoint="end"``): a junction
+    without connections is no valid OpenDRIVE."""
     elements = {j: _sub(root, "junction", id=j, name=f"junction {j}")
                 for j in sorted(links.junctions)}
-    number = 0
-    for incoming in links.roads:
-        end = links.end_link(incoming, forward=True)
-        if end is None or end[0] != "junction":
-            continue
-        for connecting_id in sorted(links.succ[incoming.id]):
-            connecting = links.by_id[connecting_id]
-            number += 1
-            connection = _sub(elements[end[1]], "connection", id=number,
-                              incomingRoad=incoming.id, connectingRoad=connecting_id,
-                              contactPoint="start")
-            for strip in connecting.strips:
-                origin = links.lane_link(strip, False, incoming.id)
-                if origin is not None:
-                    ends = {"from": origin, "to": connecting.lane_id(strip.id)}
-                    _sub(connection, "laneLink", **ends)
+    ahead = _connections(links, forward=True)
+    reached = {junction for junction, _, _ in ahead}
+    behind = [c for c in _connections(links, forward=False) if c[0] not in reached]
+    for number, (junction, incoming, connecting) in enumerate(ahead + behind, start=1):
+        forward = junction in reached
+        connection = _sub(elements[junction], "connection", id=number,
+                          incomingRoad=incoming.id, connectingRoad=connecting.id,
+                          contactPoint="start" if forward else "end")
+        for strip in connecting.strips:
+            origin = links.lane_link(strip, not forward, incoming.id)
+            if origin is not None:
+                ends = {"from": origin, "to": connecting.lane_id(strip.id)}
+                _sub(connection, "laneLink", **ends)
 
 
 def _document(roads: list[_Road], links: _Links,
@@ -501,8 +513,7 @@ def _document(roads: list[_Road], links: _Links,
         _write_link(element, links, road)
         _sub(element, "type", s=0.0, type="town")
         _write_plan_view(element, road.pieces)
-        _sub(element, "elevationProfile")
-        _sub(element, "lateralProfile")
+        _sub(_sub(element, "elevationProfile"), "elevation", s=0.0, a=0.0, b=0.0, c=0.0, d=0.0)
         _write_lanes(element, links, road)
         _write_signals(element, [p for p in placed if p[0].road_id == road.id])
     _write_junctions(root, links)

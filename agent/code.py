@@ -13,6 +13,7 @@ import unicodedata
 from dataclasses import dataclass, field
 
 from scenweave.errors import ScenarioError
+from scenweave.schemas.scenario_folder import CODE_NAME
 
 SPECIAL_TOKENS = re.compile(
     r"<\|(?:im_start|im_end|endoftext|assistant|user|system|begin_of_text|end_of_text|eot_id)\|>"
@@ -206,7 +207,7 @@ def static_check(code: str) -> StaticProblem | None:
     if not code.strip():
         return StaticProblem("EmptyCode", "the reply contained no Python code")
     try:
-        tree = ast.parse(code, "scenario.py")
+        tree = ast.parse(code, CODE_NAME)
     except SyntaxError as err:
         kind = type(err).__name__  # SyntaxError, IndentationError, TabError
         return StaticProblem(kind, f"{err.msg} (line {err.lineno})", err.lineno)

@@ -17,10 +17,9 @@ from scenweave.agent.llm.base import LLMTimeout, LLMUnavailable
 from scenweave.agent.repair.base import Candidate, Request
 from scenweave.agent.state import AgentState, Attempt
 from scenweave.agent.taxonomy import classify_exception
-from scenweave.agent.trace import CODE_NAME, XOSC_NAME
 from scenweave.judge.findings import failure_category
+from scenweave.schemas.scenario_folder import ATTEMPTS_DIR, CODE_NAME, XOSC_NAME
 
-ATTEMPTS_DIR = "attempts"
 #: how a replay failure is put to the LLM: what the engine showed against what the record says
 REPLAY_LEAD = ("The file is valid, but played in the esmini OpenSCENARIO engine it does not do "
                "what the record did (each line: when, what happened, what the record says): ")
@@ -104,12 +103,12 @@ def validate(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
     out_dir = Path(state["out_dir"])
     produced = out_dir / ATTEMPTS_DIR / str(attempt["number"]) / XOSC_NAME
     result = validate_xosc(produced, state["params"], replay=ctx.settings.replay)
-    _write_playback(result, produced.parent)
+    result.write_replay(produced.parent)
     verdict = _validation_summary(result.to_dict())
     attempt["validation"] = verdict
     update: dict[str, Any] = {}
     if verdict["valid"]:
-        _write_playback(result, out_dir)
+        result.write_replay(out_dir)
         shutil.copyfile(produced, out_dir / XOSC_NAME)
         (out_dir / CODE_NAME).write_text(attempt["code"], encoding="utf-8")
         status = "ok" if attempt["number"] == 1 else "repaired"
@@ -140,7 +139,7 @@ def fallback(state: AgentState, ctx: AgentContext) -> tuple[dict, dict]:
         return {"final": final}, {"script": reference.get("name"), **final}
     (out_dir / CODE_NAME).write_text(reference.get("source", ""), encoding="utf-8")
     result = validate_xosc(xosc, state["params"], replay=ctx.settings.replay)
-    _write_playback(result, out_dir)
+    result.write_replay(out_dir)
     verdict = _validation_summary(result.to_dict())
     final = {"status": "fallback" if verdict["valid"] else "failed", "attempt": None,
              "validation": verdict,
@@ -226,13 +225,6 @@ def _validation_summary(result: dict) -> dict:
     errors = [e for e in result["errors"] if e.get("severity") == "error"]
     return {"valid": result["valid"], "fixes_applied": result.get("fixes_applied", []),
             "errors": errors[:20], "domain": result.get("domain"), "replay": result.get("replay")}
-
-
-def _write_playback(result: Any, folder: Path) -> None:
-    if result.playback is not None:
-        from scenweave.player import REPLAY_NAME
-
-        result.playback.write(folder / REPLAY_NAME)
 
 
 def _errors_text(errors: list[dict]) -> str:

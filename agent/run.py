@@ -24,9 +24,10 @@ from scenweave.agent.llm import LLM, get_llm
 from scenweave.agent.repair import get_strategy
 from scenweave.agent.settings import AgentSettings
 from scenweave.agent.state import AgentState
-from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME, Trace
+from scenweave.agent.trace import Trace
 from scenweave.sandbox import Sandbox, get_sandbox
 from scenweave.schemas.params import Params
+from scenweave.schemas.scenario_folder import CHECKPOINTS_NAME, TRACE_NAME
 
 if TYPE_CHECKING:
     from langchain_core.runnables import RunnableConfig

@@ -1,6 +1,7 @@
-"""A scenario folder's readable event log, and the names of the files written into the folder.
+"""A scenario folder's readable event log (``trace.jsonl``; the folder's file names are
+``schemas.scenario_folder``'s).
 
-Both the agent and the deterministic ``--no-llm`` path write these, so they live here, below
+Both the agent and the deterministic ``--no-llm`` path write it, so it lives here, below
 the application shell. Importing this module loads nothing of LangGraph.
 """
 
@@ -10,12 +11,6 @@ import json
 import time
 from pathlib import Path
 from typing import Any
-
-XOSC_NAME = "scenario.xosc"
-CODE_NAME = "scenario.py"
-PARAMS_NAME = "params.json"
-TRACE_NAME = "trace.jsonl"
-CHECKPOINTS_NAME = "checkpoints.sqlite"
 
 
 class Trace:

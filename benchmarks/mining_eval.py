@@ -27,9 +27,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # before benchmarks/, whose ingest.py would shadow the package
 
 from scenweave import maneuvers  # noqa: E402
-from scenweave.mining.mine import REPORT_NAME, mine_recordings  # noqa: E402
+from scenweave.mining.mine import mine_recordings  # noqa: E402
 from scenweave.mining.readers import read_recordings  # noqa: E402
 from scenweave.mining.thresholds import load_thresholds  # noqa: E402
+from scenweave.schemas.scenario_folder import MINING_REPORT_NAME  # noqa: E402
 
 DEFAULT_DATA = ROOT.parent / "shared" / "data"
 DEFAULT_LABELS = ROOT / "benchmarks" / "mining_labels"
@@ -72,7 +73,7 @@ def mined(data: Path, out: Path, stems: set[str]) -> tuple[list[dict], dict]:
     each as {file, class, ego, npc, start_s, end_s, params, skipped}."""
     recordings = (r for r in read_recordings(data) if Path(r.source).stem in stems)
     mine_recordings(recordings, out, load_thresholds())
-    report = json.loads((out / REPORT_NAME).read_text(encoding="utf-8"))
+    report = json.loads((out / MINING_REPORT_NAME).read_text(encoding="utf-8"))
     found = []
     for path in sorted(out.glob("*/*.json")):
         for record in json.loads(path.read_text(encoding="utf-8")):

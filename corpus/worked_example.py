@@ -25,6 +25,7 @@ from typing import Any
 
 from scenweave import maneuvers
 from scenweave.corpus.retrieval import CORPUS_DIR, _load_script, script_path
+from scenweave.schemas.scenario_folder import XOSC_NAME
 
 EXAMPLES_FILE = CORPUS_DIR / "worked_examples.json"
 #: the only params an adapted script is given: where the record came from, never a value the
@@ -84,7 +85,7 @@ def keys_read(script: Path, params: Mapping[str, Any]) -> list[str]:
     """The params keys the reference ``script`` reads when it makes ``params``'s scenario."""
     recording = _Recording(params)
     with tempfile.TemporaryDirectory(prefix="scenweave-example-") as tmp:
-        _load_script(Path(script)).generate(recording, str(Path(tmp) / "scenario.xosc"))
+        _load_script(Path(script)).generate(recording, str(Path(tmp) / XOSC_NAME))
     return [key for key in recording.read if key in params]
 
 

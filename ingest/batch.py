@@ -23,8 +23,8 @@ from scenweave.ingest.highway import (
 from scenweave.ingest.issues import IngestError, IngestReport, Issue, RecordIssue, unexpected_issue
 from scenweave.ingest.layouts import HighwayLayouts, load_layouts
 from scenweave.ingest.urban import canonicalize_urban_file, iter_urban_files
+from scenweave.schemas.scenario_folder import INGEST_REPORT_NAME
 
-REPORT_NAME = "ingest_report.json"
 NO_DATA_MESSAGE = ("no MOOVE data found: expected highway files <CLASS>_BINS_VALUES.npy or urban "
                    "folders <CODE>/<time>.json, here or in highway/ and urban/ (trajectory data "
                    "such as CommonRoad, NGSIM or highD: use scenweave mine)")
@@ -112,7 +112,7 @@ def ingest_directory(raw_dir: Path, out_dir: Path, layout_path: Path | None = No
     for key in sorted(pending):
         _write_group(out_dir, key, pending[key], report)
     _remove_stale_records(out_dir, report.records_by_class)
-    write_json_atomic(out_dir / REPORT_NAME, report.to_dict())
+    write_json_atomic(out_dir / INGEST_REPORT_NAME, report.to_dict())
     return report
 
 

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from scenweave.errors import InputError
-from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2
+from scenweave.scenario_lib.kinematics import GAP_TOL_M, MAX_PLAYABLE_DECELERATION_MS2
 from scenweave.scenario_lib.phases import Phase, PhasedProfile
 
 #: a fitted profile's speed may differ this much from a recorded sample (m/s)
@@ -32,9 +32,6 @@ DISTANCE_TOL_M = 0.5
 #: ... and an NPC's gap to the ego this much (m): tighter than the replay's 1 m, which also
 #: absorbs the player's step and lanes of different length on curves
 GAP_FIT_TOL_M = 0.3
-#: a begin/end record's end gap, played by one ramp, may be off this much (m): the replay's
-#: gap tolerance (``judge.replay.GAP_TOL_M``)
-END_GAP_TOL_M = 1.0
 #: a phase changing the speed less than this is no phase (m/s)
 NO_CHANGE_MS = 1e-3
 #: a phase's corner speed may lie this far from the recorded sample it ends at (m/s): room to
@@ -186,11 +183,11 @@ def _segments_from(times: np.ndarray, speeds: np.ndarray,
 def fit_end_values(v0: float, v1: float, start_s: float, duration_s: float,
                    distance_m: float | None) -> tuple[Phase, ...]:
     """The profile from ``v0`` to ``v1`` within ``duration_s`` from ``start_s`` that drives
-    ``distance_m`` meanwhile (within ``END_GAP_TOL_M``): one ramp when that does, else two
+    ``distance_m`` meanwhile (within the replay's ``GAP_TOL_M``): one ramp when that does, else two
     phases through the gentlest corner speed, else a stop between braking and pulling away.
     ``distance_m`` None: no distance is recorded, one ramp. Raises :class:`NoProfile`."""
     ramp = (Phase(start_s, duration_s, v1),)
-    if distance_m is None or abs((v0 + v1) / 2 * duration_s - distance_m) <= END_GAP_TOL_M:
+    if distance_m is None or abs((v0 + v1) / 2 * duration_s - distance_m) <= GAP_TOL_M:
         return ramp
     if distance_m < 0:
         raise NoProfile(f"it would have to drive {distance_m:.1f} m, backwards, in "

@@ -11,23 +11,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from scenweave.judge.fidelity import class_of, expected_speed_changes, placed_actors
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
-from scenweave.scenario_lib.kinematics import STOP_LINE_MARGIN_M
+from scenweave.scenario_lib.kinematics import GAP_TOL_M, STOP_LINE_MARGIN_M
 from scenweave.schemas.params import Params, actor_value, all_finite, finite
+from scenweave.schemas.scenario_folder import ReplayVerdict, Tolerances, VerdictMark
 
 if TYPE_CHECKING:  # the player loads esmini's bindings: only the type is needed here
     from scenweave.player.playback import Playback
 
 #: a speed of the replay may differ this much from the record (m/s)
 SPEED_TOL_MS = 0.5
-#: a gap of the replay may differ this much from the record (m)
-GAP_TOL_M = 1.0
 #: a change may start this much later than scripted (s): events fire on the first step past
 #: their time, and a speed change is seen once it has moved the speed by ONSET_MS
 ONSET_TOL_S = 0.3
@@ -66,9 +65,15 @@ MapPath = str | Path | None
 LanePosition = tuple[int | str, int, float]
 
 
+#: the tolerances a verdict names, for whoever draws it
+TOLERANCES: Tolerances = {"speed_ms": SPEED_TOL_MS, "gap_m": GAP_TOL_M,
+                          "series_speed_ms": SERIES_SPEED_TOL_MS,
+                          "series_gap_m": SERIES_GAP_TOL_M, "lane_change_s": LANE_CHANGE_TOL_S}
+
+
 def _finding(code: str, message: str, time_s: float | None = None) -> Finding:
     when = "" if time_s is None else f"at {time_s:.2f} s: "
-    return Finding(code, when + message)
+    return Finding(code, when + message, time_s=time_s)
 
 
 @dataclass
@@ -78,9 +83,16 @@ class _Judge:
     doc: ScenarioDoc
     map_path: MapPath
     found: list[Finding]
+    #: what the judge expected of the replay, beside what it saw (the verdict's marks)
+    speed_marks: list[VerdictMark] = field(default_factory=list)
+    gap_marks: list[VerdictMark] = field(default_factory=list)
 
     def fail(self, code: str, message: str, time_s: float | None = None) -> None:
         self.found.append(_finding(code, message, time_s))
+
+    def verdict(self) -> ReplayVerdict:
+        """The findings and the expectations, as ``verdict.json`` holds them."""
+        return verdict_of(self.found, self.playback, self.speed_marks, self.gap_marks)
 
     def speed(self, entity: str, time_s: float) -> float:
         return self.playback.value(entity, "speed", time_s)
@@ -91,16 +103,40 @@ class _Judge:
         return times[1] - times[0] if len(times) > 1 else 0.0
 
 
+def verdict_of(found: list[Finding], playback: Playback,
+               speed_marks: Iterable[VerdictMark] = (),
+               gap_marks: Iterable[VerdictMark] = ()) -> ReplayVerdict:
+    """The verdict on ``playback``: the findings, each with its time, and what the judge
+    expected of it (none when only collisions were judged)."""
+    return {"passed": not found, "codes": sorted(set(replay_codes(found))),
+            "findings": [{"code": f.code, "message": f.message, "t": f.time_s} for f in found],
+            "speed_marks": list(speed_marks), "gap_marks": list(gap_marks),
+            "tolerances": TOLERANCES, "series_errors": dict(playback.series_errors or {})}
+
+
 def judge_replay(playback: Playback, params: Params, doc: ScenarioDoc,
                  map_path: MapPath = None) -> list[Finding]:
     """REPLAY_* findings of one playback against the params the scenario was made from."""
+    return _judged(playback, params, doc, map_path).found
+
+
+def replay_verdict(playback: Playback, params: Params, doc: ScenarioDoc,
+                   map_path: MapPath = None) -> tuple[list[Finding], ReplayVerdict]:
+    """The findings of ``judge_replay`` and the verdict written beside the replay: each
+    finding with its time, each value the judge expected with what the replay showed."""
+    judge = _judged(playback, params, doc, map_path)
+    return judge.found, judge.verdict()
+
+
+def _judged(playback: Playback, params: Params, doc: ScenarioDoc,
+            map_path: MapPath) -> _Judge:
     judge = _Judge(playback, params, doc, map_path, [])
     if playback.engine_error:
         judge.fail("REPLAY_ENGINE", f"esmini could not play the scenario: {playback.engine_error}")
-        return judge.found
+        return judge
     if not playback.times:
         judge.fail("REPLAY_ENGINE", "esmini recorded no step")
-        return judge.found
+        return judge
     if playback.quit_by_engine:
         judge.fail("REPLAY_ENGINE", "esmini ended the scenario before its stop time",
                    playback.duration_s)
@@ -108,7 +144,7 @@ def judge_replay(playback: Playback, params: Params, doc: ScenarioDoc,
                   _lane_changes, _events_fired, _lights, _stop_or_pass, _right_turn, _collisions,
                   _series):
         check(judge)
-    return judge.found
+    return judge
 
 
 def judge_collisions_only(playback: Playback) -> list[Finding]:
@@ -176,10 +212,12 @@ def _actors_present(judge: _Judge) -> None:
 def _start_speeds(judge: _Judge) -> None:
     for entity, prefix in placed_actors(judge.params):
         want = finite(actor_value(judge.params, prefix, "speed_ms"))
-        if want is None or entity not in judge.playback.tracks:
+        if want is None:
             continue
-        got = judge.playback.tracks[entity]["speed"][0]
-        if abs(got - want) > SPEED_TOL_MS:
+        got = judge.playback.tracks[entity]["speed"][0] \
+            if entity in judge.playback.tracks else None
+        judge.speed_marks.append(_mark(entity, "start speed", 0.0, want, got, SPEED_TOL_MS))
+        if got is not None and abs(got - want) > SPEED_TOL_MS:
             judge.fail("REPLAY_START_SPEED", f"{entity} starts at {got:.2f} m/s, the record "
                        f"says {want:.2f} m/s", 0.0)
 
@@ -188,16 +226,19 @@ def _speed_changes(judge: _Judge) -> None:
     """Each scripted speed change starts on time and reaches its target in its duration."""
     for name, target, duration, start in expected_speed_changes(judge.doc, judge.params):
         entity = name.removesuffix("_speed_change")
-        if target is None or duration is None or start is None \
-                or entity not in judge.playback.tracks or _has_speed_series(judge.params, entity):
-            continue  # a recorded speed curve is compared sample by sample (_series)
+        if target is None or duration is None or start is None:
+            continue
         # events fire on the first step past their time: the change ends one step late, and
         # the next one (keeping the distance after the record) may start right then
         ends = start + duration + judge.time_step_s
-        if ends > judge.playback.duration_s:
-            continue  # the scenario stops before the change is over: nothing to compare
+        compared = entity in judge.playback.tracks and ends <= judge.playback.duration_s \
+            and not _has_speed_series(judge.params, entity)  # a series: compared in _series
+        got = judge.speed(entity, ends) if compared else None
+        judge.speed_marks.append(_mark(entity, "target speed", start + duration, target, got,
+                                       SPEED_TOL_MS))
+        if got is None:
+            continue  # absent, a recorded curve, or the scenario stops before the change ends
         v0 = judge.speed(entity, start)
-        got = judge.speed(entity, ends)
         if abs(got - target) > SPEED_TOL_MS:
             judge.fail("REPLAY_SPEED", f"{entity} drives {got:.2f} m/s at the end of its speed "
                        f"change ({name}), the record says {target:.2f} m/s", ends)
@@ -217,22 +258,31 @@ def _gaps(judge: _Judge) -> None:
     """The recorded gap holds at the manoeuvre start (and, for FL, ``duration_s`` later)."""
     params = judge.params
     start = finite(params.get("maneuver_start_s"))
-    wanted = [(entity, finite(actor_value(params, prefix, "distance_m")), start)
+    wanted = [(entity, "gap", finite(actor_value(params, prefix, "distance_m")), start)
               for entity, prefix in placed_actors(params) if entity != "hero"]
     if class_of(params).gap_at_end and start is not None:
-        wanted.append(("npc", finite(params.get("npc_distance_end_m")),
+        wanted.append(("npc", "gap at end", finite(params.get("npc_distance_end_m")),
                        start + (finite(params.get("duration_s")) or 0.0)))
-    for entity, gap, at_s in wanted:
-        if gap is None or at_s is None or entity not in judge.playback.tracks \
-                or params.get("domain") != "highway" or at_s > judge.playback.duration_s:
+    for entity, what, gap, at_s in wanted:
+        if gap is None or at_s is None or params.get("domain") != "highway":
             continue
-        got = gap_along_lane(judge.playback, entity, at_s, judge.map_path)
+        compared = entity in judge.playback.tracks and at_s <= judge.playback.duration_s
+        got = gap_along_lane(judge.playback, entity, at_s, judge.map_path) if compared else None
+        judge.gap_marks.append(_mark(entity, what, at_s, gap, got, GAP_TOL_M))
+        if not compared:
+            continue
         if got is None:
             judge.fail("REPLAY_GAP", f"{entity}'s gap to the ego could not be measured along its "
                        "lane (not on the ego's road or a neighbour lane)", at_s)
         elif abs(got - gap) > GAP_TOL_M:
             judge.fail("REPLAY_GAP", f"{entity} is {got:.2f} m from the ego along its lane, the "
                        f"record says {gap:.2f} m", at_s)
+
+
+def _mark(entity: str, what: str, t: float, expected: float, observed: float | None,
+          tol: float) -> VerdictMark:
+    return {"entity": entity, "what": what, "t": round(t, 4), "expected": expected,
+            "observed": None if observed is None else round(observed, 4), "tol": tol}
 
 
 def _lane_changes(judge: _Judge) -> None:

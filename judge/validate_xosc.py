@@ -17,10 +17,11 @@ from scenweave.judge.autofix import apply_fixes
 from scenweave.judge.carla_lint import carla_lint
 from scenweave.judge.checks import detect_domain, semantics, structural
 from scenweave.judge.fidelity import fidelity
-from scenweave.judge.findings import Finding, ReplaySummary, ValidationResult
-from scenweave.judge.replay import judge_replay
+from scenweave.judge.findings import Finding, ValidationResult
+from scenweave.judge.replay import replay_verdict
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.schemas.params import Params
+from scenweave.schemas.scenario_folder import ReplaySummary
 from scenweave.schemas.xsd import osc_1_0_schema
 
 if TYPE_CHECKING:  # the player loads esmini's bindings: imported only when a file is played
@@ -40,7 +41,7 @@ def validate_xosc(path: Path | str, params: Params | None = None, *,
     check is also played headless on ``map_path`` (default: the map params ``map`` names, else
     the file's ``LogicFile``, else Town04) and judged
     against the params (``REPLAY_*``, ``judge.replay``); ``result.playback`` holds what
-    happened.
+    happened and ``result.verdict`` the judge's verdict on it (``result.write_replay``).
     """
     path = Path(path)
     try:
@@ -76,7 +77,7 @@ def _replay_and_judge(result: ValidationResult, path: Path, tree: etree._Element
         result.valid = False
         return
     playback = player.replay_file(path, map_path, settings)
-    findings = judge_replay(playback, params, doc, map_path)
+    findings, result.verdict = replay_verdict(playback, params, doc, map_path)
     result.errors += findings
     result.valid = not any(f.severity == "error" for f in result.errors)
     result.playback = playback

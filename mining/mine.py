@@ -21,8 +21,7 @@ from scenweave.mining.detect import Event, detect
 from scenweave.mining.duplicates import Clock, SeenEvents
 from scenweave.mining.records import record_of
 from scenweave.mining.tracks import Recording
-
-REPORT_NAME = "mining_report.json"
+from scenweave.schemas.scenario_folder import MINING_REPORT_NAME
 
 
 @dataclass
@@ -86,7 +85,7 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
         write_json_atomic(Path(out_dir) / folder / f"{code}.json", records, indent=None)
         report.written[code] += len(records)
     report.seconds = time.perf_counter() - started
-    write_json_atomic(Path(out_dir) / REPORT_NAME, report.to_dict())
+    write_json_atomic(Path(out_dir) / MINING_REPORT_NAME, report.to_dict())
     return report
 
 

@@ -16,9 +16,9 @@ from scenweave.mining.highway import follow_event, free_ride_event
 from scenweave.mining.replayed import recording_from_playback
 from scenweave.mining.tracks import Recording
 from scenweave.player import Playback
+from scenweave.scenario_lib.kinematics import GAP_TOL_M
 
 SPEED_TOL_MS = 0.5
-GAP_TOL_M = 1.0
 TIME_TOL_S = 0.2
 GAP_FIELDS = ("npc_distance_m", "npc_distance_begin_m", "npc_distance_end_m")
 

@@ -15,10 +15,10 @@ from __future__ import annotations
 from scenweave.player.errors import PlayerError, PlayerUnavailable
 from scenweave.player.locate import EsminiInstall, find_esmini
 from scenweave.player.playback import Box, Playback, StoryboardChange
-from scenweave.player.replay import REPLAY_NAME, player_status, replay_file, scenario_duration_s
+from scenweave.player.replay import player_status, replay_file, scenario_duration_s
 from scenweave.player.settings import ReplaySettings
 from scenweave.player.translate import TranslationError
 
-__all__ = ["REPLAY_NAME", "Box", "EsminiInstall", "Playback", "PlayerError", "PlayerUnavailable",
+__all__ = ["Box", "EsminiInstall", "Playback", "PlayerError", "PlayerUnavailable",
            "ReplaySettings", "StoryboardChange", "TranslationError", "find_esmini",
            "player_status", "replay_file", "scenario_duration_s"]

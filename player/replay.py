@@ -16,7 +16,6 @@ from scenweave.player.settings import ReplaySettings
 from scenweave.player.translate import TranslationError, set_map_file, translate
 
 #: the playback's file in a scenario folder
-REPLAY_NAME = "replay.json"
 #: what the translation writes as the map file before the copy to play on is chosen
 _MAP_PLACEHOLDER = Path("map.xodr")
 

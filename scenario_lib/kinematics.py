@@ -20,6 +20,9 @@ YELLOW_PHASE_S = 3.0
 LANE_CHANGE_MIN_LENGTH_M = 5.0
 #: time between the cue (a light turning yellow, the lead braking) and the ego's reaction (s)
 REACTION_TIME_S = 1.0
+#: a played gap to the ego may differ this much from the record's (m): the replay judge's
+#: tolerance, which ingest's one-ramp choice of an end gap and mining's round trip keep too
+GAP_TOL_M = 1.0
 #: the stopping ego comes to rest this far before the stop line (m)
 STOP_LINE_MARGIN_M = 1.0
 #: a passing-on-orange light turns yellow when the ego is this far before the stop line (m)

@@ -27,8 +27,8 @@ from scenweave.presentation.bench_report import BENCH_FILE, model_dir_name, writ
 from scenweave.presentation.metrics import by_class, metrics
 from scenweave.presentation.report import pct
 from scenweave.progress import progress
-from scenweave.run_folder import SUMMARY_FILE
 from scenweave.runner import run_batch
+from scenweave.schemas.scenario_folder import SUMMARY_FILE
 
 #: the 11 highway classes of the thesis benchmark (BR_BK shares BRAKE's script)
 THESIS_CLASSES = ("BRAKE", "CINF", "CINB", "COUTF", "COUTB", "LCF", "LCB", "FLF", "FLB", "FRF",

@@ -7,13 +7,14 @@ from collections import Counter
 from collections.abc import Iterable
 
 from scenweave.ingest import Issue
+from scenweave.schemas.scenario_folder import SUMMARY_FILE
 
 #: problems shown per kind; the rest are counted
 SHOWN = 3
 
 
 def problem_lines(input_issues: Iterable[dict], outcomes: Iterable[dict] = (),
-                  where: str = "summary.json", shown: int = SHOWN) -> list[str]:
+                  where: str = SUMMARY_FILE, shown: int = SHOWN) -> list[str]:
     """Refused records, failed scenarios, then warnings: a count line each, the first
     ``shown`` of each kind, and "and N more — see ``where``"."""
     issues = list(input_issues)

@@ -17,16 +17,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from scenweave.agent.trace import CODE_NAME, PARAMS_NAME, TRACE_NAME, XOSC_NAME, Trace
+from scenweave.agent.trace import Trace
 from scenweave.errors import InfrastructureError, ParamsError
 from scenweave.schemas.params import Params
+from scenweave.schemas.scenario_folder import (
+    CODE_NAME,
+    PARAMS_NAME,
+    TRACE_NAME,
+    XOSC_NAME,
+    Outcome,
+)
 
 if TYPE_CHECKING:
     from scenweave.judge.variation import Asked
     from scenweave.spawn_db.registry import Matcher
 
-__all__ = ["CODE_NAME", "PARAMS_NAME", "TRACE_NAME", "XOSC_NAME", "PipelineSettings", "Trace",
-           "process_scenario"]
+__all__ = ["PipelineSettings", "Trace", "process_scenario"]
 
 
 @dataclass
@@ -50,7 +56,7 @@ def process_scenario(params: Params, index: int, out_dir: Path, settings: Pipeli
     started = time.perf_counter()
     timings: dict[str, float] = {}
     trace = Trace(out_dir / TRACE_NAME)
-    outcome = base_outcome(params)
+    outcome: dict[str, Any] = {**base_outcome(params)}  # the stages add their keys
     try:
         placed = _timed(timings, "spawn",
                         lambda: matcher.assign(params, index, top_n=settings.top_n))
@@ -80,7 +86,7 @@ def is_infrastructure_error(err: BaseException) -> bool:
     return isinstance(err, (OSError, MemoryError, InfrastructureError))
 
 
-def base_outcome(params: Mapping[str, Any]) -> dict:
+def base_outcome(params: Mapping[str, Any]) -> Outcome:
     """The outcome of a scenario before anything ran: ``failed``, no attempts, no spawn."""
     return {
         "scenario_id": params["scenario_id"], "maneuver_class": params["maneuver_class"],
@@ -89,14 +95,6 @@ def base_outcome(params: Mapping[str, Any]) -> dict:
         "tokens_in": 0, "tokens_out": 0, "error_taxonomy": [], "error": None,
         "validation": None, "replay": None,
     }
-
-
-def write_playback(result: Any, out_dir: Path) -> None:
-    """Write the validation's playback (if the scenario was played) as ``replay.json``."""
-    if getattr(result, "playback", None) is not None:
-        from scenweave.player import REPLAY_NAME
-
-        result.playback.write(out_dir / REPLAY_NAME)
 
 
 def _reference_scenario(params: Params, out_dir: Path, settings: PipelineSettings,
@@ -111,7 +109,7 @@ def _reference_scenario(params: Params, out_dir: Path, settings: PipelineSetting
     _timed(timings, "generate", lambda: corpus.generate(params, xosc))
     result = _timed(timings, "validate",
                     lambda: validate_xosc(xosc, params, replay=settings.replay))
-    write_playback(result, out_dir)
+    result.write_replay(out_dir)
     validation = result.to_dict()
     trace.event("validate", valid=validation["valid"], errors=validation["errors"],
                 replay=validation["replay"])

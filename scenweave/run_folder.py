@@ -6,7 +6,6 @@ so a scenario folder is either complete or absent; a rerun skips finished scenar
 
 from __future__ import annotations
 
-import json
 import re
 import shutil
 import subprocess
@@ -18,13 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.files.atomic import write_json_atomic
-
-STATUS_FILE = "status.json"
-SUMMARY_FILE = "summary.json"
-RUN_FILE = "run.json"
-#: a mined record's recorded series, beside the scenario it became (scenweave mine)
-RECORDED_NAME = "recorded.json"
-STATUSES = ("ok", "repaired", "fallback", "failed")
+from scenweave.schemas.scenario_folder import STAGING_DIR, STATUS_NAME, Outcome, read_outcome
 
 
 def new_run_id() -> str:
@@ -81,12 +74,12 @@ class RunFolder:
             if self.created and progress.committed == 0 and not self.outcomes():
                 _remove_tree(self.root)
             else:
-                _remove_tree(self.root / ".staging")
+                _remove_tree(self.root / STAGING_DIR)
             if isinstance(err, KeyboardInterrupt) and not isinstance(err, RunInterrupted) \
                     and self.root.exists():
                 raise RunInterrupted(self.run_id, progress.committed) from err
             raise
-        _remove_tree(self.root / ".staging")
+        _remove_tree(self.root / STAGING_DIR)
 
     @property
     def run_id(self) -> str:
@@ -95,39 +88,30 @@ class RunFolder:
     def scenario_dir(self, scenario_id: str) -> Path:
         return self.root / safe_name(scenario_id)
 
-    def outcome(self, scenario_id: str) -> dict | None:
+    def outcome(self, scenario_id: str) -> Outcome | None:
         """The stored outcome of a finished scenario, or None."""
-        path = self.scenario_dir(scenario_id) / STATUS_FILE
-        try:
-            return json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError):
-            return None
+        return read_outcome(self.scenario_dir(scenario_id))
 
     def staging(self, scenario_id: str) -> Path:
         """A fresh, empty staging folder for one scenario's files."""
-        path = self.root / ".staging" / safe_name(scenario_id)
+        path = self.root / STAGING_DIR / safe_name(scenario_id)
         _remove_tree(path)
         path.mkdir(parents=True)
         return path
 
     def commit(self, scenario_id: str, staging: Path, outcome: dict) -> Path:
         """Write the outcome into ``staging`` and move the whole folder into place."""
-        write_json_atomic(staging / STATUS_FILE, outcome)
+        write_json_atomic(staging / STATUS_NAME, outcome)
         final = self.scenario_dir(scenario_id)
         if final.exists():
             _remove_tree(final)
         staging.rename(final)
         return final
 
-    def outcomes(self) -> list[dict]:
+    def outcomes(self) -> list[Outcome]:
         """Every finished scenario's outcome, sorted by scenario id."""
-        found = []
-        for path in sorted(self.root.glob(f"*/{STATUS_FILE}")):
-            try:
-                found.append(json.loads(path.read_text(encoding="utf-8")))
-            except (OSError, json.JSONDecodeError):
-                continue
-        return found
+        return [outcome for path in sorted(self.root.glob(f"*/{STATUS_NAME}"))
+                if (outcome := read_outcome(path.parent)) is not None]
 
     def write(self, name: str, data: Any) -> Path:
         path = self.root / name

@@ -12,7 +12,7 @@ import json
 import multiprocessing
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
@@ -26,15 +26,15 @@ from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
 from scenweave.presentation.report import write_run_report
 from scenweave.progress import progress
-from scenweave.run_folder import (
+from scenweave.run_folder import RunFolder, Started
+from scenweave.schemas.params import Params
+from scenweave.schemas.scenario_folder import (
     RECORDED_NAME,
+    REPORT_FILE,
     RUN_FILE,
     STATUSES,
     SUMMARY_FILE,
-    RunFolder,
-    Started,
 )
-from scenweave.schemas.params import Params
 
 if TYPE_CHECKING:
     from scenweave.spawn_db import SpawnMatcher
@@ -77,7 +77,7 @@ class RunResult:
                   if variants.get("asked") else "")
         return (f"run {self.folder.run_id}: {self.summary['total']} scenarios: {parts}{resumed}"
                 f"{issues}{played}{varied} -> {self.folder.root} "
-                f"(open {self.folder.root / 'report.html'})")
+                f"(open {self.folder.root / REPORT_FILE})")
 
 
 def spawn_db_cache() -> Path:
@@ -257,7 +257,7 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
     }
 
 
-def variant_summary(outcomes: list[dict]) -> dict:
+def variant_summary(outcomes: Sequence[Mapping[str, Any]]) -> dict:
     """The variants the LLM wrote (``run --vary``): asked, kept, the records with at least one
     kept, and what the kept ones changed."""
     variants = [v for o in outcomes for v in o.get("variants", [])]
@@ -268,7 +268,7 @@ def variant_summary(outcomes: list[dict]) -> dict:
             "changed": dict(sorted(Counter(c for v in kept for c in v["changed"]).items()))}
 
 
-def replay_summary(outcomes: list[dict]) -> dict:
+def replay_summary(outcomes: Sequence[Mapping[str, Any]]) -> dict:
     """How many scenarios were played in esmini and replayed as recorded, in all and per class,
     and how often each REPLAY_* code came up."""
     played = [o for o in outcomes if o.get("replay")]
@@ -283,7 +283,7 @@ def replay_summary(outcomes: list[dict]) -> dict:
             "codes": dict(sorted(codes.items()))}
 
 
-def node_latency(outcomes: list[dict]) -> dict[str, dict[str, float]]:
+def node_latency(outcomes: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, float]]:
     """Per agent node: total seconds and mean seconds per scenario that visited it."""
     per_node: dict[str, list[float]] = {}
     for o in outcomes:

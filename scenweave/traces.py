@@ -6,14 +6,19 @@ LangGraph checkpoints of the same thread in ``checkpoints.sqlite`` beside it.
 
 from __future__ import annotations
 
-import json
 import sqlite3
 from contextlib import closing
 from pathlib import Path
 
-from scenweave.agent.trace import CHECKPOINTS_NAME, TRACE_NAME
 from scenweave.errors import InputError
-from scenweave.run_folder import STATUS_FILE, safe_name
+from scenweave.run_folder import safe_name
+from scenweave.schemas.scenario_folder import (
+    CHECKPOINTS_NAME,
+    STATUS_NAME,
+    TRACE_NAME,
+    read_json_lines,
+    read_json_object,
+)
 
 PREVIEW_LINES = 12
 
@@ -37,16 +42,10 @@ def find_scenario(scenario_id: str, runs_root: Path, run_id: str | None = None) 
 
 
 def read_events(folder: Path) -> list[dict]:
-    """The events of ``folder/trace.jsonl`` in order (unreadable lines become notes)."""
-    events = []
-    for number, line in enumerate((folder / TRACE_NAME).read_text(encoding="utf-8")
-                                  .splitlines(), start=1):
-        if line.strip():
-            try:
-                events.append(json.loads(line))
-            except json.JSONDecodeError:
-                events.append({"node": "unreadable", "line": number})
-    return events
+    """The events of ``folder/trace.jsonl`` in order (an unreadable one becomes a note with
+    its place among them)."""
+    return [{"node": "unreadable", "line": number} if event is None else event
+            for number, event in enumerate(read_json_lines(folder / TRACE_NAME), start=1)]
 
 
 def checkpoint_count(folder: Path, thread_id: str) -> int | None:
@@ -64,10 +63,7 @@ def checkpoint_count(folder: Path, thread_id: str) -> int | None:
 
 
 def status_of(folder: Path) -> dict:
-    try:
-        return json.loads((folder / STATUS_FILE).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return {}
+    return read_json_object(folder / STATUS_NAME)
 
 
 def format_trace(folder: Path, scenario_id: str, full: bool = False) -> str:

@@ -17,19 +17,21 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.errors import InputError
-from scenweave.viewer.run_files import (
-    MINING_REPORT_NAME,
+from scenweave.schemas.scenario_folder import (
+    MINING_REPORT_PAGE,
     PARAMS_NAME,
     REPLAY_NAME,
-    REPORT_NAME,
-    RUN_NAME,
+    REPORT_FILE,
+    RUN_FILE,
     SCENARIO_FILES,
     STATUS_NAME,
-    SUMMARY_NAME,
+    SUMMARY_FILE,
     TRACE_NAME,
     VARIANT_NAME,
     VARIANTS_DIR,
     XOSC_NAME,
+    read_json_lines,
+    read_json_object,
 )
 from scenweave.viewer.in_situ import (
     IN_SITU_DIR,
@@ -40,7 +42,7 @@ from scenweave.viewer.in_situ import (
     in_situ_scene,
     is_in_situ,
 )
-from scenweave.viewer.scene import read_json, scene
+from scenweave.viewer.scene import scene
 
 #: trace events that make or judge an attempt, in the order they run
 ATTEMPT_NODES = ("generate", "repair", "fallback", "execute", "validate")
@@ -91,7 +93,7 @@ def _run_roots(path: Path, depth: int = SEARCH_DEPTH) -> list[Path]:
 
 def _is_run(path: Path) -> bool:
     """A run folder, or the folder of in-situ scenarios ``scenweave mine --in-situ`` writes."""
-    return (path / RUN_NAME).is_file() or (path / SUMMARY_NAME).is_file() \
+    return (path / RUN_FILE).is_file() or (path / SUMMARY_FILE).is_file() \
         or (path / IN_SITU_REPORT_NAME).is_file()
 
 
@@ -115,11 +117,11 @@ def run_list(runs: dict[str, Run]) -> list[dict]:
 
 
 def run_row(run: Run) -> dict:
-    info, summary = read_json(run.root / RUN_NAME), read_json(run.root / SUMMARY_NAME)
+    info, summary = read_json_object(run.root / RUN_FILE), read_json_object(run.root / SUMMARY_FILE)
     row = {"run": run.run_id, "path": str(run.root), "mode": info.get("mode"),
            "map": info.get("map"), "started_at": info.get("started_at"),
            "counts": summary.get("counts"), "replay": _replay_counts(summary),
-           "report": (run.root / REPORT_NAME).is_file(),
+           "report": (run.root / REPORT_FILE).is_file(),
            "mining_report": _mining_report(info, run.root),
            "scenarios": [scenario_row(run, name) for name in run.scenario_dirs]}
     return row
@@ -136,7 +138,7 @@ def _mining_report(info: dict, root: Path) -> str | None:
     them (it lies beside the records)."""
     source = info.get("input")
     for folder in ([Path(source), root / source, root.parent.parent / source] if source else []):
-        report = folder / MINING_REPORT_NAME
+        report = folder / MINING_REPORT_PAGE
         if report.is_file():
             return str(report.resolve())
     return None
@@ -144,7 +146,7 @@ def _mining_report(info: dict, root: Path) -> str | None:
 
 def scenario_row(run: Run, name: str) -> dict:
     folder = run.scenario_dirs[name]
-    status, params = read_json(folder / STATUS_NAME), read_json(folder / PARAMS_NAME)
+    status, params = read_json_object(folder / STATUS_NAME), read_json_object(folder / PARAMS_NAME)
     replay = status.get("replay") if isinstance(status.get("replay"), dict) else None
     if replay is None and (folder / REPLAY_NAME).is_file():
         verdict = "played"
@@ -176,7 +178,7 @@ def _in_situ_entry(folder: Path, key: str) -> dict | None:
 def _worst_errors(folder: Path) -> list[dict]:
     """The largest series errors the judge measured against a mined record's series (max and
     RMS per quantity, ``replay.json``'s ``series_errors``), largest first; empty without."""
-    errors = read_json(folder / REPLAY_NAME).get("series_errors") \
+    errors = read_json_object(folder / REPLAY_NAME).get("series_errors") \
         if (folder / REPLAY_NAME).is_file() else None
     if not isinstance(errors, dict):
         return []
@@ -217,11 +219,11 @@ def scenario_detail(runs: dict[str, Run], key: str) -> dict:
     if is_in_situ(folder) and not (folder / PARAMS_NAME).is_file():
         return {"key": key, "scene": in_situ_scene(folder), "status": {}, "params": {},
                 "attempts": [], "variants": [], "files": files(folder), "variant": None}
-    return {"key": key, "scene": scene(folder), "status": read_json(folder / STATUS_NAME),
-            "params": read_json(folder / PARAMS_NAME), "attempts": attempts(folder),
+    return {"key": key, "scene": scene(folder), "status": read_json_object(folder / STATUS_NAME),
+            "params": read_json_object(folder / PARAMS_NAME), "attempts": attempts(folder),
             "variants": variants(folder, key), "files": files(folder),
             "in_situ": _in_situ_entry(folder, key),
-            "variant": read_json(folder / VARIANT_NAME) or None}
+            "variant": read_json_object(folder / VARIANT_NAME) or None}
 
 
 def attempts(folder: Path) -> list[dict]:
@@ -241,19 +243,8 @@ def attempts(folder: Path) -> list[dict]:
 
 
 def _events(path: Path) -> list[dict]:
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except OSError:
-        return []
-    events = []
-    for line in lines:
-        try:
-            event = json.loads(line)
-        except ValueError:
-            continue
-        if isinstance(event, dict):
-            events.append(event)
-    return events
+    """The trace's events; a line that is no event is left out."""
+    return [event for event in read_json_lines(path) if event is not None]
 
 
 def _variant_dirs(folder: Path) -> list[Path]:
@@ -263,8 +254,9 @@ def _variant_dirs(folder: Path) -> list[Path]:
 
 def variants(folder: Path, key: str) -> list[dict]:
     """The record's variants: what each changed, whether it was kept, and its key."""
-    return [{"name": path.name, "key": f"{key}/variants/{path.name}",
-             "variant": read_json(path / VARIANT_NAME), "watchable": (path / REPLAY_NAME).is_file()}
+    return [{"name": path.name, "key": f"{key}/{VARIANTS_DIR}/{path.name}",
+             "variant": read_json_object(path / VARIANT_NAME),
+             "watchable": (path / REPLAY_NAME).is_file()}
             for path in _variant_dirs(folder)]
 
 

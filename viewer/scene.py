@@ -4,39 +4,39 @@
 step, its box, the lights' actions and where they stand, the map played on) and, where they
 are there, ``params.json`` (the record's values), ``scenario.xosc`` (the scripted speed
 changes) and the mined record's ``recorded.json``. The animation needs only ``replay.json``;
-the rest adds the record's values, the judge's tolerance bands and its findings.
+the judge's verdict (``verdict.json``, written beside it by whatever played the scenario,
+``scenweave replay --force`` included) adds what the judge expected of the replay (start
+speeds, speed targets, gaps, with their tolerance), what it observed and its findings at
+their times. The viewer draws that verdict; it does not judge.
 
 Everything is plain JSON: lanes are polylines sampled from the OpenDRIVE map by ``roads``
-(the one reader of the map), gaps are the judge's own measurement (``gap_along_lane``) and
-the findings are the judge's, run again on the playback (``judge.replay.judge_replay``), so
-a file played with ``scenweave replay --force`` shows them too.
+(the one reader of the map), the gap curves are measured along the lanes as the judge
+measures them (``judge.replay.gap_along_lane``).
 """
 
 from __future__ import annotations
 
-import json
 import math
-import re
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from scenweave.judge.replay import (
-    GAP_TOL_M,
-    LANE_CHANGE_TOL_S,
-    SERIES_GAP_TOL_M,
-    SERIES_SPEED_TOL_MS,
-    SPEED_TOL_MS,
-    gap_along_lane,
-    judge_replay,
-    light_state,
-)
-from scenweave.player import REPLAY_NAME, Playback
+from scenweave.judge.replay import gap_along_lane, light_state
+from scenweave.player import Playback
 from scenweave.scenario_lib.vehicles import reference_gap_m
-from scenweave.schemas.params import Params, actor_value, finite, unchecked
-from scenweave.viewer.run_files import PARAMS_NAME, RECORDED_NAME, STATUS_NAME, XOSC_NAME
+from scenweave.schemas.params import Params, finite, unchecked
+from scenweave.schemas.scenario_folder import (
+    PARAMS_NAME,
+    RECORDED_NAME,
+    REPLAY_NAME,
+    STATUS_NAME,
+    ReplayVerdict,
+    VerdictMark,
+    read_json_object,
+    read_verdict,
+)
 
 EGO = "hero"
 #: the gap chart is sampled this often (s); each sample follows the lanes (~1 ms)
@@ -45,14 +45,13 @@ GAP_STEP_S = 0.2
 MAP_MARGIN_M = 40.0
 #: lane borders are sampled about this far apart (m)
 LANE_STEP_M = 2.0
-#: a finding's message starts with its time, as the judge writes it
-FINDING_TIME = re.compile(r"^at (?P<t>-?\d+(?:\.\d+)?) s: ")
 
 
 def scene(folder: Path) -> dict[str, Any]:
     """The scenario in ``folder`` as the page animates and charts it (``KeyError``-free: a
     missing file leaves its part out; no ``replay.json`` gives ``played: False``)."""
-    params, status = unchecked(read_json(folder / PARAMS_NAME)), read_json(folder / STATUS_NAME)
+    params = unchecked(read_json_object(folder / PARAMS_NAME))
+    status = read_json_object(folder / STATUS_NAME)
     replay_path = folder / REPLAY_NAME
     out: dict[str, Any] = {"scenario_id": params.get("scenario_id") or status.get("scenario_id")
                            or folder.name,
@@ -63,30 +62,23 @@ def scene(folder: Path) -> dict[str, Any]:
     if not replay_path.is_file():
         out["problem"] = "not played: no replay.json in the folder"
         return out
-    raw = read_json(replay_path)
+    raw = read_json_object(replay_path)
     playback = Playback.from_dict(raw)
     if playback.engine_error or not playback.times:
         out["problem"] = playback.engine_error or "esmini recorded no step"
         out["log"] = playback.log[-10:]
         return out
     map_path = _map_path(playback.map or params.get("map"))
+    verdict = read_verdict(folder)
     out.update(played=True, duration_s=playback.duration_s, times=playback.times,
                actors=_actors(playback), lights=_lights(playback, params),
                collisions=[list(c) for c in playback.collisions],
                lanes=_lanes_near(map_path, playback),
                map=Path(map_path).stem if map_path else None,
-               charts=_charts(playback, params, folder, map_path),
-               findings=_findings(playback, params, folder, map_path, status),
+               charts=_charts(playback, params, folder, map_path, verdict),
+               findings=_findings(verdict, status),
                series_errors=_series_errors(raw, status))
     return out
-
-
-def read_json(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
 
 
 def _map_path(name: str | None) -> Path | None:
@@ -168,34 +160,36 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
 
 # --- the charts ------------------------------------------------------------------------------
 
-def _charts(playback: Playback, params: Params, folder: Path,
-            map_path: Path | None) -> dict:
-    """Speed, gap, lateral offset and lane, light state: the replay's series, the record's
-    values with the judge's tolerance, and the mined record's own series where there is one."""
-    from scenweave.judge.fidelity import placed_actors
-
+def _charts(playback: Playback, params: Params, folder: Path, map_path: Path | None,
+            verdict: ReplayVerdict | None) -> dict:
+    """Speed, gap, lateral offset and lane, light state: the replay's series, what the judge
+    expected with its tolerance (its verdict), and the mined record's own series where there
+    is one."""
     recorded = _recorded(folder, params)
-    speed_marks = [{"entity": entity, "t": 0.0, "value": value, "tol": SPEED_TOL_MS,
-                    "what": "start speed"}
-                   for entity, prefix in placed_actors(params)
-                   if (value := finite(actor_value(params, prefix, "speed_ms"))) is not None]
-    speed_marks += [{"entity": entity, "t": at_s, "value": target, "tol": SPEED_TOL_MS,
-                     "what": "target speed"}
-                    for entity, target, at_s in _speed_targets(folder, params)]
+    tolerances = verdict["tolerances"] if verdict else None
     return {
         "speed": {"series": {n: t["speed"] for n, t in playback.tracks.items()},
-                  "marks": speed_marks, "tol": SPEED_TOL_MS, "series_tol": SERIES_SPEED_TOL_MS,
+                  "marks": _marks(verdict["speed_marks"] if verdict else []),
+                  "tol": tolerances["speed_ms"] if tolerances else None,
+                  "series_tol": tolerances["series_speed_ms"] if tolerances else None,
                   "recorded": {f"{e}": recorded[f"{r}_speed_ms"] for r, e in
                                (("ego", EGO), ("npc", "npc")) if f"{r}_speed_ms" in recorded},
                   "recorded_t": recorded.get("t")},
-        "gap": _gap_chart(playback, params, recorded, map_path),
+        "gap": _gap_chart(playback, params, recorded, map_path, verdict),
         "lateral": {"offset": {n: t["lane_offset"] for n, t in playback.tracks.items()},
                     "lane": {n: t["lane"] for n, t in playback.tracks.items()},
-                    "tol_s": LANE_CHANGE_TOL_S},
+                    "tol_s": tolerances["lane_change_s"] if tolerances else None},
         "light": [light_state(playback, t) for t in playback.times] if playback.lights else [],
         "maneuver": [finite(params.get("maneuver_start_s")), finite(params.get("duration_s"))],
         "stop_line": _stop_line_chart(playback, params),
     }
+
+
+def _marks(marks: list[VerdictMark]) -> list[dict]:
+    """The verdict's marks as the page draws them: the record's value at its time, with the
+    judge's tolerance, and what the replay showed."""
+    return [{"entity": m["entity"], "t": m["t"], "value": m["expected"], "tol": m["tol"],
+             "what": m["what"], "observed": m["observed"]} for m in marks]
 
 
 def _driven(playback: Playback, entity: str) -> np.ndarray:
@@ -223,39 +217,22 @@ def _stop_line_chart(playback: Playback, params: Params) -> dict:
             "at": [round(x, 3), round(y, 3), round(h, 5)]}
 
 
-def _speed_targets(folder: Path, params: Params) -> list[tuple[str, float, float]]:
-    """(entity, target speed, when it should be reached) of each scripted speed change."""
-    from lxml import etree
-
-    from scenweave.judge.fidelity import expected_speed_changes, speed_targets
-    from scenweave.judge.scenario_doc import ScenarioDoc
-
-    if not params:
-        return []
-    try:
-        doc = ScenarioDoc(etree.parse(str(folder / XOSC_NAME)), params.get("map"))
-        return speed_targets(expected_speed_changes(doc, params))
-    except (OSError, etree.XMLSyntaxError, KeyError, TypeError, ValueError, AttributeError):
-        return []
-
-
 def _recorded(folder: Path, params: Params) -> dict:
     """A mined record's series (params' ``recorded_series``, else the folder's
     ``recorded.json``) on the scenario's clock: its event starts with the manoeuvre."""
     recorded = params.get("recorded_series")
     if not isinstance(recorded, dict):
-        recorded = read_json(folder / RECORDED_NAME)
+        recorded = read_json_object(folder / RECORDED_NAME)
     if not isinstance(recorded.get("t"), list):
         return {}
     shift = finite(params.get("maneuver_start_s")) or 0.0
     return {**recorded, "t": [None if t is None else t + shift for t in recorded["t"]]}
 
 
-def _gap_chart(playback: Playback, params: Params, recorded: dict,
-               map_path: Path | None) -> dict:
-    """Every other vehicle's gap to the ego along its lane (highway; the judge's measure)."""
-    from scenweave.judge.fidelity import class_of, placed_actors
-
+def _gap_chart(playback: Playback, params: Params, recorded: dict, map_path: Path | None,
+               verdict: ReplayVerdict | None) -> dict:
+    """Every other vehicle's gap to the ego along its lane (highway; the judge's measure),
+    with the gaps the judge expected (its verdict)."""
     others = [e for e in playback.entities if e != EGO]
     if not others or EGO not in playback.tracks:
         return {}
@@ -270,46 +247,29 @@ def _gap_chart(playback: Playback, params: Params, recorded: dict,
                 gap = None
             gaps.append(None if gap is None else round(gap, 3))
         series[name] = gaps
-    start = finite(params.get("maneuver_start_s"))
-    marks = [{"entity": e, "t": start, "value": gap, "tol": GAP_TOL_M, "what": "gap"}
-             for e, prefix in placed_actors(params) if e != EGO and start is not None
-             and (gap := finite(actor_value(params, prefix, "distance_m"))) is not None]
-    end_gap = finite(params.get("npc_distance_end_m"))
-    if params and class_of(params).gap_at_end and start is not None and end_gap is not None:
-        marks.append({"entity": "npc", "t": start + (finite(params.get("duration_s")) or 0.0),
-                      "value": end_gap, "tol": GAP_TOL_M, "what": "gap at end"})
+    tolerances = verdict["tolerances"] if verdict else None
     kind = params.get("npc_vehicle_type")
     # the record's gap is between bumpers; the chart's, like the judge's, between reference points
     recorded_gap = [None if g is None else round(reference_gap_m(g, kind), 3)
                     for g in recorded.get("npc_gap_m") or []] or None
-    return {"times": times, "series": series, "marks": marks, "tol": GAP_TOL_M,
-            "series_tol": SERIES_GAP_TOL_M, "recorded": recorded_gap,
+    return {"times": times, "series": series,
+            "marks": _marks(verdict["gap_marks"] if verdict else []),
+            "tol": tolerances["gap_m"] if tolerances else None,
+            "series_tol": tolerances["series_gap_m"] if tolerances else None,
+            "recorded": recorded_gap,
             "recorded_t": recorded.get("t")}
 
 
 # --- the verdict -----------------------------------------------------------------------------
 
-def _findings(playback: Playback, params: Params, folder: Path, map_path: Path | None,
-              status: dict) -> list[dict]:
-    """The judge's REPLAY_* findings on this playback, each with its time where it has one."""
-    from lxml import etree
-
-    from scenweave.judge.scenario_doc import ScenarioDoc
-
-    if params and (folder / XOSC_NAME).is_file():
-        try:
-            doc = ScenarioDoc(etree.parse(str(folder / XOSC_NAME)), params.get("map"))
-            found = [(f.code, f.message) for f in judge_replay(playback, params, doc, map_path)]
-        except (OSError, etree.XMLSyntaxError):
-            found = _status_findings(status)
-    else:
-        found = _status_findings(status)
-    findings = []
-    for code, message in found:
-        when = FINDING_TIME.match(message)
-        findings.append({"code": code, "message": message,
-                         "t": float(when.group("t")) if when else None})
-    return findings
+def _findings(verdict: ReplayVerdict | None, status: dict) -> list[dict]:
+    """The judge's REPLAY_* findings, each with its time where it has one (the verdict's);
+    a folder played before the judge wrote verdicts shows its status' findings, untimed."""
+    if verdict is not None:
+        return [{"code": f["code"], "message": f["message"], "t": f["t"]}
+                for f in verdict["findings"]]
+    return [{"code": code, "message": message, "t": None}
+            for code, message in _status_findings(status)]
 
 
 def _status_findings(status: dict) -> list[tuple[str, str]]:

@@ -16,6 +16,7 @@ from scenweave import exit_codes
 from scenweave.commands.agent_options import json_option
 from scenweave.console import problem_lines
 from scenweave.queue.connection import QUEUE_ENV
+from scenweave.schemas.scenario_folder import RUN_FILE, SUMMARY_FILE
 
 QUEUE_HELP = ("Redis URL of the job queue (rediss:// for TLS, a password as "
               "redis://:PASSWORD@host:6379/0) [default: redis://127.0.0.1:6379/0].")
@@ -55,7 +56,6 @@ def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None,
     """Write the scenario folders the workers handed back into RUN_DIR (atomically, once
     each), then its summary.json and, when every scenario is in, its report.html."""
     from scenweave.queue.connection import connect
-    from scenweave.run_folder import RUN_FILE
 
     if not (run_dir / RUN_FILE).is_file():
         raise click.UsageError(f"{run_dir} is not a run folder (no {RUN_FILE}); give the "
@@ -67,7 +67,7 @@ def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None,
         click.echo(result.line())
         for line in problem_lines(result.summary.get("input_issues", []),
                                   result.summary.get("scenarios", []),
-                                  str(run_dir / "summary.json")):
+                                  str(run_dir / SUMMARY_FILE)):
             click.echo(line, err=True)
     failed = any(o.get("status") == "failed" for o in result.summary.get("scenarios", []))
     exit_codes.finish(bool(result.lost) or failed or (wait and not result.complete))

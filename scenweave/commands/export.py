@@ -24,6 +24,7 @@ from pathlib import Path
 import click
 
 from scenweave.commands.replay import scenario_files
+from scenweave.schemas.scenario_folder import CODE_NAME, PARAMS_NAME, XOSC_NAME
 
 MAPS_DIR = "maps"
 RECORDING_NAME = "replay.dat"
@@ -121,7 +122,7 @@ def _folder_names(files: list[Path]) -> dict[Path, str]:
     """One folder name per scenario: its folder's name (a lone file: its stem), unique."""
     names: dict[Path, str] = {}
     for xosc in files:
-        name = xosc.parent.name if xosc.name == "scenario.xosc" else xosc.stem
+        name = xosc.parent.name if xosc.name == XOSC_NAME else xosc.stem
         while name in names.values() or name == MAPS_DIR:
             name += "_"
         names[xosc] = name
@@ -153,7 +154,7 @@ def _export_esmini(xosc: Path, out_dir: Path, name: str, esmini: Path) -> str | 
                                roads.traffic_lights_carla(map_path))
     except TranslationError as err:
         return f"{xosc}: {err}"
-    scenario = folder / "scenario.xosc"
+    scenario = folder / XOSC_NAME
     scenario.write_bytes(translated.xml)
     scenario.chmod(0o644)
     return _record(esmini, scenario)
@@ -198,7 +199,7 @@ def _map_of(xosc: Path) -> Path | None:
 
     from scenweave.judge.scenario_doc import ScenarioDoc
 
-    params_path = xosc.parent / "params.json"
+    params_path = xosc.parent / PARAMS_NAME
     named = json.loads(params_path.read_text(encoding="utf-8")).get("map") \
         if params_path.is_file() else None
     try:
@@ -229,15 +230,15 @@ The delivered scenarios (CARLA's dialect) are unchanged; export them with `--for
 
 # --- CARLA -------------------------------------------------------------------------------------
 
-DELIVERED = ("scenario.xosc", "scenario.py", "params.json")
+DELIVERED = (XOSC_NAME, CODE_NAME, PARAMS_NAME)
 
 
 def _export_carla(xosc: Path, folder: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
-    sources = [xosc.parent / n for n in DELIVERED] if xosc.name == "scenario.xosc" else [xosc]
+    sources = [xosc.parent / n for n in DELIVERED] if xosc.name == XOSC_NAME else [xosc]
     for source in sources:
         if source.is_file():
-            target = folder / ("scenario.xosc" if source == xosc else source.name)
+            target = folder / (XOSC_NAME if source == xosc else source.name)
             shutil.copyfile(source, target)
             target.chmod(0o644)
 

@@ -11,8 +11,8 @@ from scenweave import exit_codes
 from scenweave.commands.agent_options import json_option
 from scenweave.console import problem_lines
 from scenweave.ingest import ingest_directory
-from scenweave.ingest.batch import REPORT_NAME
 from scenweave.ingest.highway import DEFAULT_BINNING
+from scenweave.schemas.scenario_folder import INGEST_REPORT_NAME
 
 
 @click.command("ingest")
@@ -36,8 +36,9 @@ def ingest(raw_dir: Path, out_dir: Path, layout: Path | None, binning: str, stri
         click.echo(json.dumps(report.to_dict(), indent=1))
     else:
         click.echo(f"ingest: {report.records_written} records from {report.files_read} files, "
-                   f"{len(report.errors)} refused -> {out_dir} (report: {out_dir / REPORT_NAME})")
+                   f"{len(report.errors)} refused -> {out_dir} "
+                   f"(report: {out_dir / INGEST_REPORT_NAME})")
         issues = [issue.to_dict() for issue in report.issues]
-        for line in problem_lines(issues, where=str(out_dir / REPORT_NAME)):
+        for line in problem_lines(issues, where=str(out_dir / INGEST_REPORT_NAME)):
             click.echo(line, err=True)
     exit_codes.finish(bool(report.errors) or report.records_written == 0)

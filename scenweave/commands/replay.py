@@ -8,15 +8,18 @@ Each played scenario gets its ``replay.json`` beside it; the delivered ``.xosc``
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from scenweave import exit_codes
 from scenweave.commands.agent_options import json_option, map_option
 from scenweave.progress import progress
+from scenweave.schemas.scenario_folder import ATTEMPTS_DIR, PARAMS_NAME, XOSC_NAME
+
+if TYPE_CHECKING:
+    from scenweave.schemas.params import Params
 
 
 @click.command("replay")
@@ -66,8 +69,8 @@ def scenario_files(paths: tuple[Path, ...]) -> list[Path]:
     files: list[Path] = []
     for path in paths:
         if path.is_dir():
-            files += sorted(p for p in path.rglob("scenario.xosc")
-                            if not any(part.startswith(".") or part == "attempts"
+            files += sorted(p for p in path.rglob(XOSC_NAME)
+                            if not any(part.startswith(".") or part == ATTEMPTS_DIR
                                        for part in p.relative_to(path).parts))
         elif path.suffix == ".xosc":
             files.append(path)
@@ -81,47 +84,50 @@ def replay_one(xosc: Path, settings, figures: bool, map_path: Path | None = None
     checks is not played, unless ``force``: then it is played and judged all the same, and
     ``forced`` names the checks it fails."""
     from scenweave.judge import validate_xosc
-    from scenweave.judge.findings import Finding
-    from scenweave.judge.replay import judge_collisions_only
-    from scenweave.player import REPLAY_NAME, Playback, replay_file
+    from scenweave.judge.findings import Finding, write_replay
+    from scenweave.judge.replay import judge_collisions_only, verdict_of
+    from scenweave.player import Playback, replay_file
+    from scenweave.schemas.params import unchecked
 
-    params_path = xosc.parent / "params.json"
+    params_path = xosc.parent / PARAMS_NAME
     if params_path.is_file():
-        params = json.loads(params_path.read_text(encoding="utf-8"))
+        params = unchecked(json.loads(params_path.read_text(encoding="utf-8")))
         result = validate_xosc(xosc, params, fix=False, replay=settings, map_path=map_path)
         # schemas keeps the playback duck-typed (it does not import the player)
         played = result.playback if isinstance(result.playback, Playback) else None
         playback, findings = played, [f for f in result.errors if f.severity == "error"]
+        verdict = result.verdict
         forced = sorted({f.code for f in findings}) if force and playback is None else []
         if forced:
-            playback, judged = _forced_replay(xosc, params, settings, map_path)
+            playback, judged, verdict = _forced_replay(xosc, params, settings, map_path)
             findings += judged
     elif (map_path := map_path or _named_map(xosc)) is not None:
         playback = replay_file(xosc, map_path, settings)
         findings = judge_collisions_only(playback)
+        verdict = verdict_of(findings, playback)
     else:
         playback, findings = None, [Finding("REPLAY_MAP", "its LogicFile names no known map; "
                                             "give one with --map")]
-    if playback is not None:
-        playback.write(xosc.parent / REPLAY_NAME)
+        verdict = None
+    write_replay(xosc.parent, playback, verdict)
     if figures and playback is not None:
         from scenweave.presentation.replay_figures import draw_replay_figure
 
         draw_replay_figure(xosc.parent, map_path)
-    return {"scenario": xosc.parent.name if xosc.name == "scenario.xosc" else str(xosc),
+    return {"scenario": xosc.parent.name if xosc.name == XOSC_NAME else str(xosc),
             "played": playback is not None and not playback.engine_error,
             "passed": not findings, "codes": sorted({f.code for f in findings}),
             "errors": [f"{f.code}: {f.message}" for f in findings],
             **({"forced": forced} if params_path.is_file() and forced else {})}
 
 
-def _forced_replay(xosc: Path, params: Mapping[str, Any], settings, map_path: Path | None) -> tuple:
-    """Play a file that failed the checks before the replay; the playback and the judge's
-    findings (a REPLAY_MAP finding when no map is named)."""
+def _forced_replay(xosc: Path, params: Params, settings, map_path: Path | None) -> tuple:
+    """Play a file that failed the checks before the replay; the playback, the judge's
+    findings (a REPLAY_MAP finding when no map is named) and its verdict."""
     from lxml import etree
 
     from scenweave.judge.findings import Finding
-    from scenweave.judge.replay import judge_replay
+    from scenweave.judge.replay import replay_verdict
     from scenweave.judge.scenario_doc import ScenarioDoc
     from scenweave.player import replay_file
 
@@ -129,9 +135,9 @@ def _forced_replay(xosc: Path, params: Mapping[str, Any], settings, map_path: Pa
     map_path = map_path or doc.map_path
     if map_path is None:
         return None, [Finding("REPLAY_MAP", "its LogicFile names no known map; give one with "
-                              "--map")]
+                              "--map")], None
     playback = replay_file(xosc, map_path, settings)
-    return playback, judge_replay(playback, params, doc, map_path)
+    return (playback, *replay_verdict(playback, params, doc, map_path))
 
 
 def _named_map(xosc: Path) -> Path | None:

@@ -9,7 +9,7 @@ import click
 
 from scenweave.commands.agent_options import json_option
 from scenweave.presentation.report import write_run_report
-from scenweave.run_folder import SUMMARY_FILE
+from scenweave.schemas.scenario_folder import STATUS_NAME, SUMMARY_FILE
 
 
 @click.command("report")
@@ -19,7 +19,7 @@ def report(run_dir: Path, as_json: bool) -> None:
     """Write RUN_DIR/report.html from the scenario folders (summary.json is refreshed)."""
     from scenweave.queue.collector import refresh_run
 
-    if not (run_dir / SUMMARY_FILE).exists() and not any(run_dir.glob("*/status.json")):
+    if not (run_dir / SUMMARY_FILE).exists() and not any(run_dir.glob(f"*/{STATUS_NAME}")):
         raise click.UsageError(f"{run_dir}: not a run folder (no summary.json, no scenarios)")
     summary = refresh_run(run_dir)
     path = write_run_report(run_dir)

@@ -20,6 +20,7 @@ from scenweave.console import problem_lines
 from scenweave.errors import InputError
 from scenweave.inputs import InputSelection
 from scenweave.runner import run_batch
+from scenweave.schemas.scenario_folder import SUMMARY_FILE
 from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_factory, matcher_for
 
 
@@ -60,7 +61,7 @@ def known_matcher(ctx: click.Context, param: click.Parameter, value: str) -> str
 @click.option("--matcher", default=DEFAULT_MATCHER, show_default=True, callback=known_matcher,
               help="Spawn matcher: a registered name (default, or a plugin's: "
                    "docs/plugins.md) or module:callable, called with the map.")
-@json_option("summary.json")
+@json_option(SUMMARY_FILE)
 @map_option()
 @agent_options
 def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: tuple[str, ...],
@@ -88,6 +89,6 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: t
     else:
         click.echo(result.line())
         for line in problem_lines(result.input_issues, result.summary["scenarios"],
-                                  str(result.folder.root / "summary.json")):
+                                  str(result.folder.root / SUMMARY_FILE)):
             click.echo(line, err=True)
     exit_codes.finish(result.problems)

@@ -23,6 +23,7 @@ from scenweave.queue.connection import QUEUE_ENV, connect
 from scenweave.queue.handoff import MIB, Limits
 from scenweave.queue.job import JobOptions
 from scenweave.queue.submit import submit
+from scenweave.schemas.scenario_folder import SUMMARY_FILE
 from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_factory
 
 #: options of ``scenweave run`` that mean the same here
@@ -80,7 +81,7 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
         click.echo(collected.line())
     if not as_json:
         for line in problem_lines(result.input_issues, outcomes,
-                                  str(result.folder.root / "summary.json")):
+                                  str(result.folder.root / SUMMARY_FILE)):
             click.echo(line, err=True)
     failed = any(o.get("status") == "failed" for o in outcomes)
     unfinished = wait and (bool(collected.lost) or not collected.complete

@@ -13,7 +13,8 @@ from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 
-from scenweave.run_folder import STATUS_FILE, STATUSES, safe_name
+from scenweave.run_folder import safe_name
+from scenweave.schemas.scenario_folder import STATUS_NAME, STATUSES
 
 HOUR_S = 3600.0
 
@@ -129,7 +130,7 @@ def observed_curve(run_dir: Path, outcomes: list[dict]) -> list[tuple[float, int
     """
     points = []
     for o in outcomes:
-        path = Path(run_dir) / safe_name(o["scenario_id"]) / STATUS_FILE
+        path = Path(run_dir) / safe_name(o["scenario_id"]) / STATUS_NAME
         if path.exists():
             points.append((path.stat().st_mtime, latency_s(o) or 0.0))
     if not points:

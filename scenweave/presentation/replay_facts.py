@@ -7,17 +7,25 @@ tell the actors and the verdict apart.
 
 from __future__ import annotations
 
-import json
 import math
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
-from scenweave.run_folder import RECORDED_NAME
 from scenweave.schemas.params import Params, unchecked
 from scenweave.schemas.params import number as number_of
+from scenweave.schemas.scenario_folder import (
+    PARAMS_NAME,
+    RECORDED_NAME,
+    STATUS_NAME,
+    XOSC_NAME,
+    ReplayVerdict,
+    VerdictMark,
+    read_json_object,
+    read_verdict,
+)
 
 EGO = "hero"
 EGO_COLOUR = "#1f4e9c"
@@ -28,17 +36,31 @@ PASS_COLOUR = "#1a7f37"
 
 
 class ReplayFacts:
-    """The record's values (params), the replay's verdict (status) and the scenario's
-    storyboard (for the scripted speed changes), each possibly missing."""
+    """The record's values (params), the outcome (status), the judge's verdict on the replay
+    (``verdict.json``: what it expected, with its tolerances, and its findings at their
+    times) and the scenario (for the map it names), each possibly missing."""
 
-    def __init__(self, folder: Path, params: Params, status: dict, doc: Any):
+    def __init__(self, folder: Path, params: Params, status: dict, doc: Any,
+                 judged: ReplayVerdict | None = None):
         self.folder, self.params, self.status, self.doc = folder, params, status, doc
+        self.judged = judged
 
     @classmethod
     def read(cls, folder: Path) -> ReplayFacts:
-        return cls(folder, unchecked(_read_json(folder / "params.json")),
-                   _read_json(folder / "status.json"),
-                   _scenario_doc(folder / "scenario.xosc"))
+        return cls(folder, unchecked(read_json_object(folder / PARAMS_NAME)),
+                   read_json_object(folder / STATUS_NAME), _scenario_doc(folder / XOSC_NAME),
+                   read_verdict(folder))
+
+    def marks(self, kind: Literal["speed_marks", "gap_marks"],
+              what: str | None = None) -> list[VerdictMark]:
+        """The values the judge expected (of one kind, ``what`` one sort of them); none
+        without a verdict."""
+        return [m for m in (self.judged[kind] if self.judged else [])
+                if what is None or m["what"] == what]
+
+    def tolerance(self, name: Literal["speed_ms", "gap_m"]) -> float | None:
+        """The judge's tolerance (None without a verdict: the mark is drawn without bars)."""
+        return self.judged["tolerances"][name] if self.judged else None
 
     @property
     def scenario_id(self) -> str:
@@ -55,8 +77,11 @@ class ReplayFacts:
         return replay if isinstance(replay, dict) else None
 
     def findings(self) -> list[str]:
-        """The replay's findings as ``CODE message`` lines (status.json's validation errors),
-        or only the codes when the messages were not kept."""
+        """The replay's findings as ``CODE message`` lines: the verdict's, else (a folder
+        judged before verdicts were written) status.json's validation errors, or only the
+        codes when the messages were not kept."""
+        if self.judged is not None:
+            return [f"{f['code']} {f['message']}".strip() for f in self.judged["findings"]]
         validation = self.status.get("validation") or {}
         lines = [f"{e.get('code')} {e.get('message', '')}".strip()
                  for e in validation.get("errors") or []
@@ -79,7 +104,8 @@ class ReplayFacts:
     def recorded(self) -> dict:
         """What a mined record recorded (``recorded.json``, else params ``recorded_series``;
         empty for other records)."""
-        return _read_json(self.folder / RECORDED_NAME) or self.params.get("recorded_series") or {}
+        return (read_json_object(self.folder / RECORDED_NAME)
+                or self.params.get("recorded_series") or {})
 
     def recorded_curve(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
         """(scenario time, values) of a recorded series: the record's event starts when the
@@ -105,14 +131,6 @@ class ReplayFacts:
 
     def number(self, key: str) -> float | None:
         return number_of(self.params, key)
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
 
 
 def _scenario_doc(path: Path) -> Any:

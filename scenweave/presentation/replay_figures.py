@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.files.atomic import write_text_atomic
-from scenweave.player import REPLAY_NAME, Playback
+from scenweave.player import Playback
 from scenweave.presentation.charts import (
     CAPTION_PX,
     DOTTED,
@@ -66,8 +66,13 @@ from scenweave.presentation.replay_panels import (
     speed_panel,
     urban_panel,
 )
+from scenweave.schemas.scenario_folder import (
+    FIGURE_NAME,
+    REPLAY_NAME,
+    ReplayVerdict,
+    read_verdict,
+)
 
-FIGURE_NAME = "replay.svg"
 TEMPLATE = "replay_figure.svg"
 #: the figure's size in pixels, the same for every replay
 FIGURE_PX = (900, 504)
@@ -113,7 +118,7 @@ def draw_replay_figure(scenario_dir: Path, map_path: Path | str | None = None,
                                      f"{type(err).__name__}: {err}")
     out = folder / FIGURE_NAME
     write_text_atomic(out, render_svg(figure, TEMPLATE,
-                                      source=_source_of(played, facts.status),
+                                      source=_source_of(played, facts.status, facts.judged),
                                       source_ns=SOURCE_NS))
     return out
 
@@ -128,7 +133,7 @@ def is_reported(outcome: dict, index: int) -> bool:
 
 def figure_source(folder: Path, status: dict) -> str:
     """What a figure of ``folder`` shows, as a digest: the playback and the verdict on it."""
-    return _source_of(_played(folder), status)
+    return _source_of(_read_playback(folder / REPLAY_NAME)[0], status, read_verdict(folder))
 
 
 def is_current(folder: Path, status: dict) -> bool:
@@ -142,14 +147,6 @@ def is_current(folder: Path, status: dict) -> bool:
     return drawn is not None and drawn.group(1) == figure_source(folder, status)
 
 
-def _played(folder: Path) -> Any:
-    """``replay.json`` as read (None when it cannot be)."""
-    try:
-        return json.loads((folder / REPLAY_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-
-
 def _read_playback(path: Path) -> tuple[Any, Playback | Exception]:
     """``replay.json`` as read (None when it cannot be) and its playback, or why there is
     none; read once for the figure and for what it shows."""
@@ -161,14 +158,14 @@ def _read_playback(path: Path) -> tuple[Any, Playback | Exception]:
         return played, err
 
 
-def _source_of(played: Any, status: dict) -> str:
+def _source_of(played: Any, status: dict, judged: ReplayVerdict | None) -> str:
     raw = status.get("replay")
     replay: dict[str, Any] = raw if isinstance(raw, dict) else {}
     verdict = {"passed": replay.get("passed"), "codes": replay.get("codes"),
                "errors": (status.get("validation") or {}).get("errors")}
     if isinstance(played, dict):  # how long the replay took is no part of what it shows
         played = {k: v for k, v in played.items() if k != "timings_s"}
-    shown = json.dumps([played, verdict], sort_keys=True, default=str).encode()
+    shown = json.dumps([played, verdict, judged], sort_keys=True, default=str).encode()
     return hashlib.sha256(shown).hexdigest()
 
 

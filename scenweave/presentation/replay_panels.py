@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from scenweave.judge.replay import GAP_TOL_M, SPEED_TOL_MS, gap_along_lane
+from scenweave.judge.replay import gap_along_lane, lane_changes
 from scenweave.player import Playback
 from scenweave.presentation.charts import (
     DASH_DOT,
@@ -54,8 +54,6 @@ LANE_THIN_PX = 6.0
 
 def speed_panel(plot: Plot, playback: Playback, facts: ReplayFacts,
                 colours: dict[str, str]) -> None:
-    from scenweave.judge.fidelity import placed_actors
-
     start, duration = facts.number("maneuver_start_s"), facts.number("duration_s")
     if start is not None and duration is not None:
         plot.span(start, start + duration, "#888888", 0.13)
@@ -64,34 +62,15 @@ def speed_panel(plot: Plot, playback: Playback, facts: ReplayFacts,
         plot.line(playback.times, playback.tracks[name]["speed"], colours[name], 1.6)
         plot.legend.append(Entry(name, colours[name]))
     plot.legend += _recorded_lines(plot, facts, colours, "speed_ms", lambda v: v)
-    for name, prefix in placed_actors(facts.params):
-        value = facts.number(f"{prefix}_speed_ms")
-        if value is not None and name in colours:
-            plot.mark(0.0, value, "circle", colours[name], 6.25, fill="white",
-                      tolerance=SPEED_TOL_MS, clip=False)
-    for name, target, at_s in _speed_targets(facts):
-        if name in colours:
-            plot.mark(at_s, target, "diamond", colours[name], 6.25, fill="white",
-                      tolerance=SPEED_TOL_MS)
+    for mark in facts.marks("speed_marks"):
+        if mark["entity"] in colours:
+            start_speed = mark["what"] == "start speed"
+            plot.mark(mark["t"], mark["expected"], "circle" if start_speed else "diamond",
+                      colours[mark["entity"]], 6.25, fill="white", tolerance=mark["tol"],
+                      clip=not start_speed)
     plot.legend += [Entry("record: start speed", mark="circle"),
                     Entry("record: target speed", mark="diamond")]
     plot.legend_columns = 2
-
-
-def _speed_targets(facts: ReplayFacts) -> list[tuple[str, float, float]]:
-    """(entity, target speed, when it should be reached) of every scripted speed change."""
-    from scenweave.judge.fidelity import SpeedChange, expected_speed_changes, speed_targets
-
-    changes: list[SpeedChange] = []
-    if facts.doc is not None:
-        try:
-            changes = expected_speed_changes(facts.doc, facts.params)
-        except (KeyError, TypeError, ValueError, AttributeError):
-            changes = []
-    elif facts.number("ego_end_speed_ms") is not None:
-        changes = [("hero_speed_change", facts.number("ego_end_speed_ms"),
-                    facts.number("duration_s"), facts.number("maneuver_start_s"))]
-    return speed_targets(changes)
 
 
 def _recorded_lines(plot: Plot, facts: ReplayFacts, colours: dict[str, str], what: str,
@@ -124,8 +103,6 @@ def _anchor_times(playback: Playback, series: int, marked: list[float]) -> list[
 def _lane_change_times(playback: Playback, entity: str) -> list[float]:
     """The samples either side of each lane change of ``entity`` or the ego: the gap, measured
     on another lane from there on, may jump."""
-    from scenweave.judge.replay import lane_changes
-
     times = playback.times
     found = []
     for name in {EGO, entity}:
@@ -165,29 +142,14 @@ def _gap_curve(playback: Playback, entity: str, anchors: list[float],
     return times, drift + offsets[piece] * (1 - share) + offsets[piece + 1] * share
 
 
-def _recorded_gaps(facts: ReplayFacts) -> list[tuple[str, float, float]]:
-    """(entity, gap, time) of every gap the record has, as the judge compares them."""
-    from scenweave.judge.fidelity import class_of, placed_actors
-
-    start = facts.number("maneuver_start_s")
-    if start is None:
-        return []
-    found = [(name, facts.number(f"{prefix}_distance_m"), start)
-             for name, prefix in placed_actors(facts.params) if name != EGO]
-    if class_of(facts.params).gap_at_end:
-        found.append(("npc", facts.number("npc_distance_end_m"),
-                      start + (facts.number("duration_s") or 0.0)))
-    return [(name, gap, at_s) for name, gap, at_s in found if gap is not None]
-
-
 def gap_panel(plot: Plot, playback: Playback, facts: ReplayFacts, colours: dict[str, str],
                map_path: Any) -> None:
     others = [e for e in playback.entities if e != EGO]
     if not others:
         plot.note("no other vehicle: no gap to show")
         return
-    recorded = _recorded_gaps(facts)
-    anchors = _anchor_times(playback, len(others), [t for _, _, t in recorded])
+    recorded = facts.marks("gap_marks")
+    anchors = _anchor_times(playback, len(others), [mark["t"] for mark in recorded])
     kind = facts.params.get("npc_vehicle_type")
     mined = _recorded_lines(plot, facts, colours, "gap_m",
                             np.vectorize(lambda g: reference_gap_m(g, kind), otypes=[float]))
@@ -195,10 +157,10 @@ def gap_panel(plot: Plot, playback: Playback, facts: ReplayFacts, colours: dict[
         at = sorted(set(anchors) | set(_lane_change_times(playback, name)))
         plot.line(*_gap_curve(playback, name, at, map_path), colours[name], 1.6)
         plot.legend.append(Entry(name, colours[name]))
-    for name, gap, at_s in recorded:
-        if name in colours:
-            plot.mark(at_s, gap, "diamond", colours[name], 6.25, fill="white",
-                      tolerance=GAP_TOL_M)
+    for mark in recorded:
+        if mark["entity"] in colours:
+            plot.mark(mark["t"], mark["expected"], "diamond", colours[mark["entity"]], 6.25,
+                      fill="white", tolerance=mark["tol"])
     plot.hline(0.0, "black", 0.75)
     plot.legend += [Entry("record: gap", mark="diamond"), *mined]
 
@@ -236,8 +198,8 @@ def _lead_line(plot: Plot, playback: Playback, facts: ReplayFacts, colour: str,
         plot.legend.append(Entry("lead: gap at start + distance driven", colour, DASH_DOT))
     recorded = facts.number("lead_distance_m")
     if recorded is not None:
-        plot.mark(0.0, recorded, "diamond", colour, 6.25, fill="white", tolerance=GAP_TOL_M,
-                  clip=False)
+        plot.mark(0.0, recorded, "diamond", colour, 6.25, fill="white",
+                  tolerance=facts.tolerance("gap_m") or 0.0, clip=False)
         plot.legend.append(Entry("record: lead gap", colour, mark="diamond"))
 
 

@@ -9,7 +9,6 @@ escaped); this module only computes what the page shows.
 from __future__ import annotations
 
 import base64
-import json
 from collections import Counter
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -32,12 +31,18 @@ from scenweave.presentation.run_charts import (
     plot_latency_per_class,
 )
 from scenweave.presentation.templating import render
-from scenweave.run_folder import RUN_FILE, STATUS_FILE, STATUSES, SUMMARY_FILE, safe_name
+from scenweave.run_folder import safe_name
+from scenweave.schemas.scenario_folder import (
+    FIGURE_NAME,
+    REPLAY_NAME,
+    REPORT_FILE,
+    RUN_FILE,
+    SCENARIO_FILES,
+    STATUSES,
+    SUMMARY_FILE,
+    read_json_object,
+)
 
-REPORT_FILE = "report.html"
-REPLAY_JSON, REPLAY_FIGURE = "replay.json", "replay.svg"
-SCENARIO_FILES = ("scenario.xosc", "scenario.py", "trace.jsonl", "params.json", STATUS_FILE,
-                  REPLAY_JSON, REPLAY_FIGURE)
 #: replay figures embedded in a run's report: every failed replay, up to this many passing
 #: ones per class, at most this many in all
 REPLAY_PASSING_PER_CLASS = 1
@@ -123,8 +128,8 @@ def render_run_report(run_dir: Path) -> str:
 
 def run_report_context(run_dir: Path) -> dict[str, Any]:
     """What ``templates/run_report.html`` shows of a run folder."""
-    summary = _read_json(run_dir / SUMMARY_FILE) or {}
-    run = _read_json(run_dir / RUN_FILE) or {}
+    summary = read_json_object(run_dir / SUMMARY_FILE)
+    run = read_json_object(run_dir / RUN_FILE)
     outcomes = summary.get("scenarios") or []
     m = metrics(outcomes)
     run_id = summary.get("run_id", run_dir.name)
@@ -281,7 +286,7 @@ def _replay_svg(folder: Path, status: dict) -> bytes | str | None:
     replay."""
     from scenweave.presentation.replay_figures import draw_replay_figure, is_current
 
-    source, picture = folder / REPLAY_JSON, folder / REPLAY_FIGURE
+    source, picture = folder / REPLAY_NAME, folder / FIGURE_NAME
     if not source.exists():
         return None
     try:
@@ -334,10 +339,3 @@ def write_run_report(run_dir: Path) -> Path:
     path = Path(run_dir) / REPORT_FILE
     write_text_atomic(path, render_run_report(Path(run_dir)))
     return path
-
-
-def _read_json(path: Path) -> Any:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return None

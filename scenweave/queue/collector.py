@@ -25,8 +25,15 @@ from scenweave.pipeline import base_outcome
 from scenweave.presentation.report import write_run_report
 from scenweave.queue.connection import QueueError, RunKeys, job_id
 from scenweave.queue.handoff import ParcelError, unpack
-from scenweave.run_folder import RUN_FILE, STATUS_FILE, SUMMARY_FILE, RunFolder
+from scenweave.run_folder import RunFolder
 from scenweave.runner import summarize
+from scenweave.schemas.scenario_folder import (
+    REPORT_FILE,
+    RUN_FILE,
+    STATUS_NAME,
+    SUMMARY_FILE,
+    read_json_object,
+)
 
 LOCK_FILE = ".collect.lock"
 #: RQ job states from which a job without a hand-back will never hand one back
@@ -60,8 +67,8 @@ class CollectResult:
         waiting = f", {queued} still queued" if queued else ""
         lost = (f", {len(self.lost)} no longer in the queue (submit the same --run-id again)"
                 if self.lost else "")
-        report = (f" (open {self.folder.root / 'report.html'})"
-                  if (self.folder.root / "report.html").exists() and self.complete else "")
+        report = (f" (open {self.folder.root / REPORT_FILE})"
+                  if (self.folder.root / REPORT_FILE).exists() and self.complete else "")
         return (f"run {self.folder.run_id}: collected {len(self.committed)}, {total} of "
                 f"{expected} scenarios in the run folder: {statuses}{waiting}{lost} -> "
                 f"{self.folder.root}{report}")
@@ -130,7 +137,7 @@ def _commit_parcel(folder: RunFolder, scenario_id: str, data: bytes,
     staging = folder.staging(scenario_id)
     try:
         unpack(data, staging)
-        outcome = json.loads((staging / STATUS_FILE).read_text(encoding="utf-8"))
+        outcome = json.loads((staging / STATUS_NAME).read_text(encoding="utf-8"))
     except (ParcelError, OSError, json.JSONDecodeError) as err:
         staging = folder.staging(scenario_id)
         outcome = {**base_outcome({"scenario_id": scenario_id, "maneuver_class": "?",
@@ -198,8 +205,9 @@ def refresh_run(run_dir: Path) -> dict:
     """
     folder = RunFolder(Path(run_dir))
     with run_lock(folder.root):
-        run = _read_json(folder.root / RUN_FILE)
-        issues = run.get("input_issues", _read_json(folder.root / SUMMARY_FILE).get("input_issues"))
+        run = read_json_object(folder.root / RUN_FILE)
+        issues = run.get("input_issues",
+                         read_json_object(folder.root / SUMMARY_FILE).get("input_issues"))
         summary = summarize(folder, issues or [])
         folder.write(SUMMARY_FILE, summary)
         if summary["total"] >= expected_scenarios(folder.root):
@@ -209,11 +217,4 @@ def refresh_run(run_dir: Path) -> dict:
 
 def expected_scenarios(run_dir: Path) -> int:
     """How many scenarios the run has (``run.json``)."""
-    return int(_read_json(Path(run_dir) / RUN_FILE).get("scenarios") or 0)
-
-
-def _read_json(path: Path) -> dict:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return {}
+    return int(read_json_object(Path(run_dir) / RUN_FILE).get("scenarios") or 0)

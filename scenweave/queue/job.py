@@ -25,8 +25,8 @@ from typing import Any
 from scenweave.pipeline import PipelineSettings, base_outcome
 from scenweave.queue.connection import QueueError, RunKeys, job_id, map_key
 from scenweave.queue.handoff import Limits, pack
-from scenweave.run_folder import RECORDED_NAME, STATUS_FILE
 from scenweave.runner import make_scenario
+from scenweave.schemas.scenario_folder import RECORDED_NAME, STATUS_NAME
 from scenweave.spawn_db.registry import DEFAULT_MATCHER, matcher_for
 
 #: where a worker makes its scenarios unless told (``scenweave worker --scratch``)
@@ -114,7 +114,7 @@ def hand_back(connection: Any, spec: dict, folder: Path, outcome: dict) -> int:
     def status(dropped: list[dict]) -> dict[str, bytes]:
         if dropped:
             outcome["artefacts_left_behind"] = dropped
-        return {STATUS_FILE: _json(outcome).encode("utf-8")}
+        return {STATUS_NAME: _json(outcome).encode("utf-8")}
 
     parcel = pack(folder, limits, extra=status)
     keys, scenario_id = RunKeys(spec["run_id"]), spec["params"]["scenario_id"]

@@ -21,8 +21,9 @@ from scenweave.pipeline import PipelineSettings
 from scenweave.progress import progress
 from scenweave.queue.connection import QUEUE_NAME, QueueError, RunKeys, job_id, map_key
 from scenweave.queue.job import JobOptions, on_job_failure, run_job
-from scenweave.run_folder import RUN_FILE, RunFolder
+from scenweave.run_folder import RunFolder
 from scenweave.runner import round_robin, run_description
+from scenweave.schemas.scenario_folder import RUN_FILE
 
 #: RQ job states in which a job will still run: such a job is not enqueued a second time
 PENDING_STATES = ("queued", "started", "scheduled", "deferred")

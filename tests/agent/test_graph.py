@@ -14,10 +14,10 @@ from scenweave.agent import AgentSettings, LLMTimeout, LLMUnavailable, run_scena
 from scenweave.agent.context import AgentContext
 from scenweave.agent.graph import after_execute, after_generation, after_validate, build_graph
 from scenweave.agent.repair import get_strategy
-from scenweave.agent.run import CHECKPOINTS_NAME
 from scenweave.judge import validate_xosc
 from scenweave.pipeline import is_infrastructure_error
 from scenweave.sandbox import SandboxSettings
+from scenweave.schemas.scenario_folder import CHECKPOINTS_NAME
 from tests.agent.conftest import adapted_source, fenced, reference_source
 from tests.corpus.params_examples import example_params
 

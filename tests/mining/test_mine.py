@@ -9,9 +9,10 @@ from click.testing import CliRunner
 
 from scenweave.cli import cli
 from scenweave.ingest import extract_params, load_records
-from scenweave.mining.mine import REPORT_NAME, mine_recordings
+from scenweave.mining.mine import mine_recordings
 from scenweave.mining.thresholds import load_thresholds
 from scenweave.presentation.mining_report import write_mining_report
+from scenweave.schemas.scenario_folder import MINING_REPORT_NAME
 from tests.mining.synthetic import braking, car, recording, steady, switch
 
 
@@ -33,7 +34,7 @@ def test_mined_records_are_canonical_and_say_where_they_come_from(tmp_path):
     assert len(brake["series"]["t"]) == len(brake["series"]["npc_speed_ms"]) > 10
     params = extract_params(brake)
     assert params["npc_speed_ms"] == brake["params"]["lead_vel_kmh"] / 3.6
-    saved = json.loads((tmp_path / REPORT_NAME).read_text())
+    saved = json.loads((tmp_path / MINING_REPORT_NAME).read_text())
     assert saved["files"]["road-1.xml"]["events_by_class"]["BRAKE"] == 1
     assert saved["values"]["BRAKE"]["npc_distance_m"]
 
@@ -47,7 +48,7 @@ def test_events_no_scenario_can_play_are_skipped_with_the_reason(tmp_path):
 
 def test_the_report_draws_a_histogram_per_class(tmp_path):
     mine_recordings([road()], tmp_path, load_thresholds())
-    html = write_mining_report(tmp_path / REPORT_NAME).read_text()
+    html = write_mining_report(tmp_path / MINING_REPORT_NAME).read_text()
     assert "Mining report" in html and "road-1.xml" in html
     assert html.count("<svg") >= 4 and "histogram of npc_distance_m" in html
 

@@ -19,10 +19,10 @@ import pytest
 from scenweave.agent import AgentSettings
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
-from scenweave.presentation.report import REPORT_FILE
 from scenweave.run_folder import safe_name
 from scenweave.runner import run_batch
 from scenweave.sandbox import SandboxSettings
+from scenweave.schemas.scenario_folder import REPORT_FILE
 from tests.replies import right_replies
 from tests.report.chromium import dump_dom, probe
 from tests.worker.records import BRAKE, LCF, POISONED, ingest_with_poisoned_record

@@ -23,21 +23,20 @@ from scenweave.pipeline import PipelineSettings
 from scenweave.player import Playback, PlayerUnavailable, ReplaySettings, find_esmini
 from scenweave.presentation.replay_facts import FAIL_COLOUR
 from scenweave.presentation.replay_figures import (
-    FIGURE_NAME,
     FIGURE_PX,
     draw_replay_figure,
     figure_source,
     is_current,
 )
-from scenweave.presentation.report import (
-    REPORT_FILE,
-    pct,
-    replay_figure_picks,
-    replay_rate,
-    write_run_report,
-)
-from scenweave.run_folder import SUMMARY_FILE, RunFolder
+from scenweave.presentation.report import pct, replay_figure_picks, replay_rate, write_run_report
+from scenweave.run_folder import RunFolder
 from scenweave.runner import run_batch, summarize
+from scenweave.schemas.scenario_folder import (
+    FIGURE_NAME,
+    REPORT_FILE,
+    SUMMARY_FILE,
+    VERDICT_NAME,
+)
 
 CLASSES = ("FLF", "LCF", "U4_2")
 #: the scenario made to fail (one with an NPC to collide with) and a clean one to compare
@@ -73,6 +72,11 @@ def crashed(run) -> Path:
                                                   "has no collision", "line": None}]
     status["status"], status["error"] = "failed", "REPLAY_COLLISION"
     (folder / "status.json").write_text(json.dumps(status))
+    verdict = json.loads((folder / VERDICT_NAME).read_text())  # what the figure draws
+    verdict.update(passed=False, codes=["REPLAY_COLLISION"], findings=[
+        {"code": "REPLAY_COLLISION", "t": 3.0, "message": status["validation"]["errors"][0][
+            "message"]}])
+    (folder / VERDICT_NAME).write_text(json.dumps(verdict))
     (folder / FIGURE_NAME).unlink(missing_ok=True)
     run_folder = RunFolder(run)
     run_folder.write(SUMMARY_FILE, summarize(run_folder, []))
@@ -169,6 +173,10 @@ def test_a_record_s_text_is_shown_in_the_figure_never_run(run, tmp_path):
     status["validation"]["errors"] = [{"code": "REPLAY_SPEED", "severity": "error",
                                        "message": "<script>document.x</script> & more"}]
     (folder / "status.json").write_text(json.dumps(status))
+    verdict = json.loads((folder / VERDICT_NAME).read_text())
+    verdict["findings"] = [{"code": "REPLAY_SPEED", "t": None,
+                            "message": "<script>document.x</script> & more"}]
+    (folder / VERDICT_NAME).write_text(json.dumps(verdict))
     path = draw_replay_figure(folder)
     root = _svg(path)
     assert not [e for e in root.iter() if etree.QName(e).localname in ("script", "b")]

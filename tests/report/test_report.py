@@ -12,8 +12,9 @@ from click.testing import CliRunner
 from scenweave.cli import cli
 from scenweave.inputs import InputSelection
 from scenweave.pipeline import PipelineSettings
-from scenweave.presentation.report import REPORT_FILE, write_run_report
+from scenweave.presentation.report import write_run_report
 from scenweave.runner import run_batch
+from scenweave.schemas.scenario_folder import REPORT_FILE
 from tests.report.chromium import dump_dom, screenshot
 
 

@@ -11,8 +11,9 @@ import pytest
 from scenweave.presentation.bench_report import render_bench
 from scenweave.presentation.metrics import metrics
 from scenweave.presentation.mining_report import write_mining_report
-from scenweave.presentation.report import REPORT_FILE, write_run_report
-from scenweave.run_folder import RUN_FILE, STATUS_FILE, SUMMARY_FILE, safe_name
+from scenweave.presentation.report import write_run_report
+from scenweave.run_folder import safe_name
+from scenweave.schemas.scenario_folder import REPORT_FILE, RUN_FILE, STATUS_NAME, SUMMARY_FILE
 
 SCRIPT_ID = "BRAKE_<script>alert('id')</script>"
 SCRIPT_ERROR = "NameError: <script>alert(\"error\")</script> & more"
@@ -33,7 +34,7 @@ def run(tmp_path):
     for outcome in outcomes:
         folder = tmp_path / safe_name(outcome["scenario_id"])
         folder.mkdir()
-        (folder / STATUS_FILE).write_text(json.dumps(outcome))
+        (folder / STATUS_NAME).write_text(json.dumps(outcome))
     issue = {"file": SCRIPT_FILE, "row": 4, "field": "<b>speed</b>",
              "message": "<script>alert('message')</script>"}
     (tmp_path / RUN_FILE).write_text(json.dumps({"mode": "no-llm", "input": "<i>records</i>",
@@ -61,7 +62,7 @@ def test_a_record_s_script_is_shown_as_text_in_the_run_report(run):
     assert rows["BRAKE_2"][-1].xpath("./span/@class") == ["error"]
     # the links go to the folder of the safe name, the id never becomes part of an address
     hrefs = rows[SCRIPT_ID].xpath(".//a/@href")
-    assert hrefs == [f"{safe_name(SCRIPT_ID)}/", f"{safe_name(SCRIPT_ID)}/{STATUS_FILE}"]
+    assert hrefs == [f"{safe_name(SCRIPT_ID)}/", f"{safe_name(SCRIPT_ID)}/{STATUS_NAME}"]
     [refused] = parsed.xpath("//h2[.='Refused records (input errors)']"
                              "/following-sibling::table[1]")
     assert [_text(td) for td in refused.xpath(".//tbody/tr/td")] == [

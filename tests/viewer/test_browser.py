@@ -110,7 +110,7 @@ def test_a_replay_finding_appears_at_its_time(page, server, viewer_runs, artifac
     playback = Playback.read(folder / "replay.json")
     judged = [f for f in judge_replay(playback, params, doc) if f.code == "REPLAY_SPEED"]
     assert judged, "the edited cut-in should fail REPLAY_SPEED"
-    when = float(judged[0].message.split(" s:")[0].removeprefix("at "))
+    when = judged[0].time_s  # the verdict's time, not one parsed from the message
     open_scenario(page, server, f"{EDITED}/{EDITED}")
     item = page.locator("#findings li[data-code='REPLAY_SPEED']")
     assert float(item.get_attribute("data-t")) == pytest.approx(when)

@@ -14,7 +14,6 @@ from click.testing import CliRunner
 
 from scenweave.cli import cli
 from scenweave.player import find_esmini
-from scenweave.viewer import run_files
 from scenweave.viewer.scene import scene
 from tests.viewer.runs import CUT_IN, EDITED_SLOWER_MS
 
@@ -87,26 +86,3 @@ def test_a_scenario_is_watchable_from_its_replay_json_alone(viewer_runs, tmp_pat
     shutil.copy(urban / "replay.json", folder)
     lights = scene(folder)["lights"]
     assert lights and {span[2] for span in lights[0]["spans"]} >= {"red"}
-
-
-def test_the_viewer_reads_the_files_the_shell_writes():
-    from scenweave.agent.variants import REFERENCE_NAME, VARIANT_FILE, VARIANTS_DIR
-    from scenweave.presentation.report import REPORT_FILE
-    from scenweave.run_folder import RECORDED_NAME, RUN_FILE, STATUS_FILE, SUMMARY_FILE
-
-    assert (run_files.RUN_NAME, run_files.SUMMARY_NAME, run_files.STATUS_NAME,
-            run_files.RECORDED_NAME, run_files.REPORT_NAME, run_files.VARIANTS_DIR,
-            run_files.VARIANT_NAME) == (RUN_FILE, SUMMARY_FILE, STATUS_FILE, RECORDED_NAME,
-                                        REPORT_FILE, VARIANTS_DIR, VARIANT_FILE)
-    assert REFERENCE_NAME in run_files.SCENARIO_FILES
-
-
-def test_view_static_writes_a_page_with_every_scenario(viewer_runs, tmp_path):
-    result = CliRunner().invoke(cli, ["view", str(viewer_runs["runs"]), "--static",
-                                      str(tmp_path / "site")])
-    assert result.exit_code == 0, result.output
-    assert "1 runs, 2 scenarios" in result.output
-    page = (tmp_path / "site" / "index.html").read_text()
-    assert 'src="data/runs.js"' in page and "http" not in page
-    empty = CliRunner().invoke(cli, ["view", str(tmp_path / "site")])
-    assert empty.exit_code != 0 and "no run folder found" in empty.output

@@ -15,7 +15,8 @@ from scenweave.queue.collector import collect
 from scenweave.queue.connection import RunKeys, connect
 from scenweave.queue.handoff import Limits, ParcelError, pack, unpack
 from scenweave.queue.job import hand_back
-from scenweave.run_folder import RUN_FILE, RunFolder
+from scenweave.run_folder import RunFolder
+from scenweave.schemas.scenario_folder import RUN_FILE
 
 RUN_ID = "handback"
 

@@ -99,7 +99,7 @@ function speedChart(holder, scene, clock, colours, findings) {
     bands.push({ t: c.recorded_t, values, tol: c.series_tol || c.tol, colour: colours[name] });
   }
   const marks = c.marks.map((m) => ({ ...m, colour: colours[m.entity] || "#555" }));
-  return makeChart(holder, `speed (m/s) — record: ◇ with ±${c.tol} m/s, the judge's tolerance`,
+  return makeChart(holder, `speed (m/s)` + (c.tol == null ? "" : ` — record: ◇ with ±${c.tol} m/s, the judge's tolerance`),
     { name: "speed", unit: "m/s", data, series, marks, bands, findings }, clock);
 }
 
@@ -116,7 +116,7 @@ function gapChart(holder, scene, clock, colours, findings) {
     bands.push({ t: c.recorded_t, values: c.recorded, tol: c.series_tol || c.tol, colour: colours.npc || "#555" });
   }
   const marks = c.marks.map((m) => ({ ...m, colour: colours[m.entity] || "#555" }));
-  return makeChart(holder, `gap to the ego along its lane (m) — record: ◇ ±${c.tol} m`,
+  return makeChart(holder, `gap to the ego along its lane (m)` + (c.tol == null ? "" : ` — record: ◇ ±${c.tol} m`),
     { name: "gap", unit: "m", data, series, marks, bands, findings }, clock);
 }
 

@@ -27,6 +27,8 @@ XOSC_NAME = "scenario.xosc"
 ROAD_NAME = "road.xodr"
 CHOICE_NAME = "in_situ.json"
 REFERENCE_NAME = "hero_reference.csv"
+#: what esmini played (``player.Playback``)
+REPLAY_NAME = "replay.json"
 #: the judge's numbers: ``judge.json`` as ``mining.in_situ`` writes it, ``verdict.json`` as
 #: the scenario folder's contract names a judge's verdict
 JUDGE_NAMES = ("judge.json", "verdict.json")

@@ -21,6 +21,7 @@ from scenweave.judge.in_situ_doc import (
     CHOICE_NAME,
     JUDGE_NAMES,
     REFERENCE_NAME,
+    REPLAY_NAME,
     ROAD_NAME,
     XOSC_NAME,
     InSituDoc,
@@ -30,7 +31,7 @@ from scenweave.judge.in_situ_doc import (
     read_in_situ,
     read_object,
 )
-from scenweave.player import REPLAY_NAME, Playback
+from scenweave.player import Playback
 from scenweave.viewer.scene import EGO, MAP_MARGIN_M, _actors, _lane_polylines
 
 #: the in-situ scenario's folder inside a scenario folder
@@ -70,7 +71,8 @@ def in_situ_scene(folder: Path) -> dict[str, Any]:
     choice = read_object(folder / CHOICE_NAME)
     judged = judge_numbers(folder)
     out: dict[str, Any] = {"scenario_id": _title(folder, choice), "maneuver_class": "in situ",
-                           "domain": choice.get("file"), "played": False,
+                           "domain": Path(str(choice.get("file") or "")).name or None,
+                           "played": False,
                            "in_situ": {"choice": choice, "judge": judged,
                                        "passed": judged.get("passed") if judged else None}}
     try:

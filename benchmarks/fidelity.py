@@ -33,17 +33,24 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from scenweave import maneuvers
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
 from scenweave.judge.replay import (
+    SERIES_CROSSING_TOL_S,
     SERIES_GAP_TOL_M,
     SERIES_LANE_CHANGE_TOL_S,
+    SERIES_OFFSET_TOL_M,
     SERIES_SPEED_TOL_MS,
 )
 
 SHARED = Path("/work/shared/data/ngsim")
 TOLERANCE = {"speed": SERIES_SPEED_TOL_MS, "gap change": SERIES_GAP_TOL_M,
              "lane change start": SERIES_LANE_CHANGE_TOL_S,
-             "lane change end": SERIES_LANE_CHANGE_TOL_S}
+             "lane change end": SERIES_LANE_CHANGE_TOL_S,
+             "lane change crossing": SERIES_CROSSING_TOL_S,
+             "lateral offset at start": SERIES_OFFSET_TOL_M}
+#: the hardest second of braking, played against the raw record's, within this share (issue 31)
+BRAKE_PEAK_SHARE = 0.1
 
 
 @dataclass
@@ -57,6 +64,11 @@ class Source:
     failures: Counter = field(default_factory=Counter)
     #: per ok scenario with a series: (within tolerance, worst speed error, worst gap error)
     series: list[tuple[bool, float | None, float | None]] = field(default_factory=list)
+    #: per ok lane-change scenario: the played crossing's error (s), None where not timed
+    crossings: list[float | None] = field(default_factory=list)
+    #: per ok scenario of a braking class: the braking car's played hardest second against
+    #: the record's, as a share (None: the record brakes less than the judge reports)
+    brake_peaks: list[float | None] = field(default_factory=list)
 
 
 def scenweave(*args: str) -> None:
@@ -66,8 +78,9 @@ def scenweave(*args: str) -> None:
         raise SystemExit(f"{' '.join(command)} failed:\n{done.stdout}\n{done.stderr}")
 
 
-def mined(name: str, folders: list[Path], work: Path, jobs: int) -> Source | None:
-    files = [f for folder in folders for f in sorted(folder.glob("*.xml"))]
+def mined(name: str, folders: list[Path], work: Path, jobs: int,
+          most: int | None = None) -> Source | None:
+    files = [f for folder in folders for f in sorted(folder.glob("*.xml"))][:most]
     if not files:
         return None
     source = Source(name)
@@ -113,15 +126,42 @@ def collect(source: Source, run_dir: Path) -> None:
         if status["status"] == "failed":
             source.failures[status.get("error") or "?"] += 1
             continue
-        replay = folder / "replay.json"
-        errors = json.loads(replay.read_text()).get("series_errors") if replay.is_file() else None
+        errors = series_errors(folder)
         if errors:
             source.series.append(judged(errors))
+        lateral_and_brake(source, folder, errors or {})
+
+
+def series_errors(folder: Path) -> dict[str, dict] | None:
+    """The judge's series errors of a scenario (``replay.json``, or the verdict's)."""
+    for name in ("replay.json", "verdict.json"):
+        path = folder / name
+        found = json.loads(path.read_text()).get("series_errors") if path.is_file() else None
+        if found:
+            return found
+    return None
+
+
+def lateral_and_brake(source: Source, folder: Path, errors: dict[str, dict]) -> None:
+    """An ok scenario's lane-line crossing (lane-change classes) and hardest second of
+    braking (BRAKE, BR_BK) against the raw record."""
+    params_file = folder / "params.json"
+    params = json.loads(params_file.read_text()) if params_file.is_file() else {}
+    maneuver = maneuvers.find(str(params.get("maneuver_class")))
+    if maneuver is None:
+        return
+    if maneuver.lane_change:
+        crossing = [e["max"] for name, e in errors.items()
+                    if name.endswith(" lane change crossing")]
+        source.crossings.append(crossing[0] if crossing else None)
+    if maneuver.code in ("BRAKE", "BR_BK"):
+        peak = errors.get("npc brake peak")
+        source.brake_peaks.append(peak["share"] if peak else None)
 
 
 def judged(errors: dict[str, dict]) -> tuple[bool, float | None, float | None]:
     within = all(e["max"] <= TOLERANCE[name.split(" ", 1)[1]] + 1e-9
-                 for name, e in errors.items())
+                 for name, e in errors.items() if not name.endswith(" brake peak"))
     speed = [e["max"] for name, e in errors.items() if name.endswith(" speed")]
     gap = [e["max"] for name, e in errors.items() if name.endswith(" gap change")]
     return within, max(speed, default=None), max(gap, default=None)
@@ -158,6 +198,23 @@ def show(source: Source) -> None:
               f"{spread([s[2] for s in source.series if s[2] is not None])}")
     else:
         print("ok with a recorded series: 0 (begin/end records: judged by the REPLAY_* checks)")
+    show_lateral_and_brake(source)
+
+
+def show_lateral_and_brake(source: Source) -> None:
+    if source.crossings:
+        timed = [c for c in source.crossings if c is not None]
+        within = sum(1 for c in timed if c <= SERIES_CROSSING_TOL_S + 1e-9)
+        print(f"lane-change scenarios (ok): {len(source.crossings)}, crossing timed from the "
+              f"record: {len(timed)}, played crossing within {SERIES_CROSSING_TOL_S:g} s: "
+              f"{within} ({100 * within / len(source.crossings):.1f} %); error {spread(timed)}")
+    if source.brake_peaks:
+        peaks = [p for p in source.brake_peaks if p is not None]
+        within = sum(1 for p in peaks if abs(p) <= BRAKE_PEAK_SHARE + 1e-9)
+        print(f"braking scenarios (ok): {len(source.brake_peaks)}, with a recorded brake: "
+              f"{len(peaks)}, hardest 1 s within {100 * BRAKE_PEAK_SHARE:.0f} % of the raw "
+              f"record: {within} ({100 * within / max(len(peaks), 1):.1f} % of those); played "
+              f"minus recorded, share: {spread(peaks)}")
 
 
 def main() -> None:
@@ -168,20 +225,25 @@ def main() -> None:
                         help="sample rows per FL class that need two or more phases")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--work", type=Path, help="keep the work here (default: a temp dir)")
+    parser.add_argument("--sources", default="us101,sample,urban",
+                        help="which of us101, sample, urban to run (a subset while developing)")
+    parser.add_argument("--files", type=int, help="at most this many files per mined source")
     args = parser.parse_args()
+    wanted = set(args.sources.split(","))
     with tempfile.TemporaryDirectory(prefix="fidelity-") as tmp:
         work = args.work or Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
         sources = [
-            mined("US-101 (mined)", [SHARED / "us101"], work, args.jobs),
+            mined("US-101 (mined)", [SHARED / "us101"], work, args.jobs, args.files)
+            if "us101" in wanted else None,
             sample([int(s) for s in args.seeds.split(",")], args.per_class, args.phased, work,
-                   args.jobs),
+                   args.jobs) if "sample" in wanted else None,
             mined("urban snippets (mined)", [SHARED / "lankershim", SHARED / "peachtree"],
-                  work, args.jobs),
+                  work, args.jobs, args.files) if "urban" in wanted else None,
         ]
         for source in sources:
             if source is None:
-                print("== (a shared source is absent: skipped)")
+                print("== (a source absent or not asked for: skipped)")
             else:
                 show(source)
 

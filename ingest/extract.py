@@ -29,6 +29,9 @@ HIGHWAY_WEATHER = "Day_Clear"
 #: a recorded series whose first speed differs more from the params' start speed is not the
 #: record's (a perturbed variant) (m/s)
 SERIES_START_TOL_MS = 1.0
+#: a mined lane change as its lateral position recorded it (mining.highway.lateral_fields):
+#: copied from the record's params, kept only while its series is (docs/params.md)
+LANE_CHANGE_KEYS = ("lane_change_cross_s", "lane_change_width_m")
 SPAWN_KEYS = ("spawn_id", "ego_x", "ego_y", "ego_z", "ego_h", "ego_road_id", "ego_lane_id",
               "ego_s")
 
@@ -78,8 +81,23 @@ def _extract_highway(record: dict) -> Params:
     series = record.get("series")
     if isinstance(series, dict) and isinstance(series.get("t"), list):
         base["recorded_series"] = {k: list(v) for k, v in series.items() if isinstance(v, list)}
+        base.update(_recorded_lane_change(raw, base, maneuver.lane_change))
     base.update(dict.fromkeys(SPAWN_KEYS))
     return finish(base)
+
+
+def _recorded_lane_change(raw: Mapping[str, Any], params: Mapping[str, Any],
+                          changer: str | None) -> dict[str, float]:
+    """A mined lane change's crossing time and lane spacing, and where the changer starts
+    across its lane (``<actor>_lane_offset_m``, + to the left of its travel; the record gives
+    it toward the new lane); nothing for a MOOVE row, which keeps its duration only."""
+    found = {key: float(raw[key]) for key in (*LANE_CHANGE_KEYS, "lane_change_offset_m")
+             if isinstance(raw.get(key), float | int) and not isinstance(raw.get(key), bool)}
+    if changer is None or len(found) != len(LANE_CHANGE_KEYS) + 1:
+        return {}
+    toward_left = 1.0 if params.get("lane_change_direction") == "left" else -1.0
+    offset = found.pop("lane_change_offset_m") * toward_left
+    return found | {f"{'ego' if changer == 'hero' else 'npc'}_lane_offset_m": offset}
 
 
 def _gaps_to_reference_points(params: dict) -> None:
@@ -242,6 +260,8 @@ def fit_phases(params: dict) -> None:
     series = params.get("recorded_series")
     if series is not None and not _series_starts_at_params(params, series):
         del params["recorded_series"]  # a perturbed variant: no longer what was recorded
+        for key in (*LANE_CHANGE_KEYS, "ego_lane_offset_m", "npc_lane_offset_m"):
+            params.pop(key, None)
         series = None
     if series is not None:
         for prefix in PHASED_ACTORS:  # the ego first: the others keep their gap to it
@@ -258,8 +278,12 @@ def _fit_actor(params: Mapping[str, Any], series: dict, prefix: str) -> tuple:
     """``prefix``'s phases from the series, keeping its gap to the ego too where that does
     not take many more phases (a recorded gap that disagrees with the recorded motion, e.g.
     measured across lanes, would otherwise cost a phase per sample)."""
+    # past tracking noise the recorded positions may stay off (the tracker's box moved):
+    # an actor with noise keeps the distance its own speeds drive, not its positions
+    positions = None if _noise_from(series, (prefix,)) is not None \
+        else series.get(f"{prefix}_s_m")
     args = (series["t"], series[f"{prefix}_speed_ms"], params["maneuver_start_s"],
-            params[f"{prefix}_speed_ms"], series.get(f"{prefix}_s_m"))
+            params[f"{prefix}_speed_ms"], positions)
     own = fit_series(*args)
     targets = _gap_targets(params, series, prefix)
     if targets is None:
@@ -280,6 +304,9 @@ def _gap_targets(params: Mapping[str, Any], series: dict, prefix: str) -> list[f
     passed = next((k for k, g in enumerate(gaps) if g is not None and (g > 0) != sign), None)
     if passed is not None:
         gaps = [*gaps[:passed], *[None] * (len(gaps) - passed)]
+    noisy = _noise_from(series, ("ego", prefix))  # a gap past tracking noise may stay off
+    if noisy is not None:
+        gaps = [*gaps[:noisy], *[None] * (len(gaps) - noisy)]
     times = series["t"]
     measured = [(t, g) for t, g in zip(times, gaps, strict=False)
                 if t is not None and g is not None]
@@ -310,6 +337,13 @@ def _recorded_distance(series: dict, prefix: str):
             total += (v + rows[k - 1][1]) / 2 * (t - rows[k - 1][0])
         table[t] = total
     return lambda t: table.get(t, 0.0)
+
+
+def _noise_from(series: Mapping[str, Any], roles: tuple[str, ...]) -> int | None:
+    """The first sample any of ``roles`` has tracking noise at (mining's ``<role>_noise``),
+    None when none has."""
+    marks = [k for role in roles for k, n in enumerate(series.get(f"{role}_noise") or ()) if n]
+    return min(marks, default=None)
 
 
 def npc_end_gap_phases(params: Mapping[str, Any]) -> tuple:

@@ -29,6 +29,7 @@ from scenweave.scenario_lib.kinematics import (
     start_gap_m,
     stop_at_line,
 )
+from scenweave.scenario_lib.lateral import RecordedLaneChange, recorded_lane_change
 from scenweave.scenario_lib.phases import (
     PhasesInvalid,
     is_single_ramp,
@@ -388,9 +389,12 @@ def _lane_change(check: _Check, actor: str) -> None:
         check.found.append(Finding("FIDELITY_DIRECTION", f"{name} goes {got} lanes, params say "
                                    f"{direction} ({want:+.0f})", "error", source_line(target)))
     prefix = "ego" if actor == "hero" else "npc"
+    timed = recorded_lane_change(params, prefix)
     ramp = all_finite(actor_value(params, prefix, "speed_ms"),
                       actor_value(params, prefix, "end_speed_ms"), params.get("duration_s"))
-    if ramp is not None:
+    if timed is not None:
+        _timed_lane_change(check, actor, timed)
+    elif ramp is not None:
         length = lane_change_length_m(*ramp) if _single_ramp(params, prefix) \
             else lane_change_length(params, prefix)
         dynamics = event.action.find(".//LaneChangeActionDynamics")
@@ -398,6 +402,27 @@ def _lane_change(check: _Check, actor: str) -> None:
                     number(dynamics, "value"), length, POSITION_TOL_M + length * 1e-3, dynamics)
     check.close("FIDELITY_TRIGGER", f"{name} start time", event.start_s,
                 params.get("maneuver_start_s"), TIME_TOL_S, event.action)
+
+
+def _timed_lane_change(check: _Check, actor: str, timed: RecordedLaneChange) -> None:
+    """A lane change timed from the record (``scenario_lib.lateral``): the move toward the
+    new lane takes as long as crossing the line when recorded needs, and the settling part
+    starts and lasts as the record says."""
+    change = check.doc.events[f"{actor}_lane_change"]
+    dynamics = change.action.find(".//LaneChangeActionDynamics")
+    check.close("FIDELITY_DURATION", f"{actor}_lane_change length (to cross the line when "
+                "recorded)", number(dynamics, "value"), timed.first_m, POSITION_TOL_M, dynamics)
+    if timed.settle_start_s is None:
+        return
+    settle = check.doc.events.get(f"{actor}_lane_settle")
+    if settle is None:
+        check.found.append(Finding("FIDELITY_MISSING", f"no action '{actor}_lane_settle'"))
+        return
+    dynamics = settle.action.find(".//LaneChangeActionDynamics")
+    check.close("FIDELITY_DURATION", f"{actor}_lane_settle length", number(dynamics, "value"),
+                timed.settle_m, POSITION_TOL_M, dynamics)
+    check.close("FIDELITY_TRIGGER", f"{actor}_lane_settle start time", settle.start_s,
+                timed.settle_start_s, TIME_TOL_S, settle.action)
 
 
 def _lights(check: _Check) -> None:

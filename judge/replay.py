@@ -19,6 +19,7 @@ from scenweave.judge.fidelity import class_of, expected_speed_changes, placed_ac
 from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.scenario_lib.kinematics import GAP_TOL_M, STOP_LINE_MARGIN_M
+from scenweave.scenario_lib.lateral import RecordedLaneChange, recorded_lane_change
 from scenweave.schemas.params import Params, actor_value, all_finite, finite
 from scenweave.schemas.scenario_folder import ReplayVerdict, Tolerances, VerdictMark
 
@@ -54,6 +55,14 @@ TURN_EXIT_REACH_M = 3.0
 SERIES_SPEED_TOL_MS = 0.75
 SERIES_GAP_TOL_M = 1.0
 SERIES_LANE_CHANGE_TOL_S = 0.3
+#: ... and a lane change timed from the record (mined, ``scenario_lib.lateral``): the played
+#: crossing of the line this far from the recorded one (s), where the changer starts across
+#: its lane this far from where it was recorded (m)
+SERIES_CROSSING_TOL_S = 0.3
+SERIES_OFFSET_TOL_M = 0.3
+#: a recorded brake: at least this much speed lost within one second (m/s; mining's
+#: threshold); its hardest second is reported against the played one, not judged
+BRAKE_PEAK_MIN_MS = 2.0
 #: the record's roles (series keys ``<role>_speed_ms``, ``<role>_gap_m``) as scenario entities
 ROLE_ENTITIES = {"ego": "hero", "npc": "npc", "center": "npc_center", "right": "npc_right",
                  "left": "npc_left"}
@@ -179,7 +188,9 @@ def _start_poses(judge: _Judge) -> None:
             judge.fail("REPLAY_OFF_LANE", f"{entity} starts on road {lane[0]} lane {lane[1]}, "
                        "which is not a lane of the map", 0.0)
             continue
-        off = math.hypot(track["x"][0] - pose.x, track["y"][0] - pose.y)
+        # a car recorded off its lane's centre (mid-change) starts as far off it
+        intended = finite(actor_value(judge.params, planned.get(entity) or "", "lane_offset_m"))
+        off = math.hypot(track["x"][0] - pose.x, track["y"][0] - pose.y) - abs(intended or 0.0)
         turned = math.remainder(track["h"][0] - pose.h, math.tau)
         where = f"(road {lane[0]}, lane {lane[1]})"
         if not drivable:
@@ -304,7 +315,8 @@ def _lane_changes(judge: _Judge) -> None:
     if side != direction:
         judge.fail("REPLAY_LANE_CHANGE", f"{actor} changes lanes to the {side}, the record "
                    f"says {direction}", crossed_s)
-    took = lane_change_duration(judge.playback, actor, crossed_s)
+    took = None if _timed_change(params, actor) is not None \
+        else lane_change_duration(judge.playback, actor, crossed_s)  # timed: in the series
     if took is not None and abs(took - duration) > max(LANE_CHANGE_TOL_S,
                                                        LANE_CHANGE_TOL_REL * duration):
         judge.fail("REPLAY_LANE_CHANGE", f"{actor}'s lane change takes {took:.2f} s, the record "
@@ -471,9 +483,8 @@ def series_errors(playback: Playback, params: Params) -> list[SeriesError]:
     for role, entity in ROLE_ENTITIES.items():
         if entity not in playback.tracks:
             continue
-        speeds = [(start + t, v) for t, v in zip(times, series.get(f"{role}_speed_ms") or (),
-                                                  strict=False)
-                  if t is not None and v is not None and start + t <= playback.duration_s]
+        speeds = [(start + t, v) for t, v in recorded_speeds(series, role)
+                  if start + t <= playback.duration_s]
         if speeds:
             found.append(SeriesError(entity, "speed", "m/s", [
                 (at, want, playback.value(entity, "speed", at)) for at, want in speeds]))
@@ -482,12 +493,35 @@ def series_errors(playback: Playback, params: Params) -> list[SeriesError]:
                                                strict=False)
                 if role != "ego" and t is not None and g is not None and g != 0
                 and start + t <= playback.duration_s]
-        if gaps and "hero" in playback.tracks:
+        runs = _noise_free_runs(gaps, series, ("ego", role), start)
+        if runs and "hero" in playback.tracks:
             found.append(SeriesError(entity, "gap change", "m", [
-                sample for run in _same_bumpers(gaps)
+                sample for part in runs for run in _same_bumpers(part)
                 for sample in _gap_changes(playback, entity, run)]))
     found += _lane_change_timing(playback, params)
     return found
+
+
+def _noise_free_runs(gaps: list[tuple[float, float]], series: dict[str, list[float | None]],
+                     roles: tuple[str, ...], start: float) -> list[list[tuple[float, float]]]:
+    """The recorded gaps in runs between samples of tracking noise of ``roles``
+    (``<role>_noise``), which are left out: past such a stretch the positions, and the gap
+    measured from them, may stay off by what the tracker's box moved, so each run's change
+    is measured from its own first sample."""
+    times = series.get("t") or []
+    noisy = sorted(start + t for role in roles
+                   for t, n in zip(times, series.get(f"{role}_noise") or (), strict=False)
+                   if n and t is not None)
+    runs: list[list[tuple[float, float]]] = []
+    for sample in gaps:
+        if any(abs(sample[0] - at) < 1e-6 for at in noisy):
+            continue
+        broken = bool(runs) and any(runs[-1][-1][0] < at < sample[0] for at in noisy)
+        if runs and not broken:
+            runs[-1].append(sample)
+        else:
+            runs.append([sample])
+    return runs
 
 
 def _same_bumpers(gaps: list[tuple[float, float]]) -> list[list[tuple[float, float]]]:
@@ -526,16 +560,90 @@ def _lane_change_timing(playback: Playback, params: Params) -> list[SeriesError]
     if len(changes) != 1:
         return []  # _lane_changes names it
     began, ended = lane_change_span(playback, actor, changes[0][0])
-    return [SeriesError(actor, "lane change start", "s", [(start, start, began)]),
-            SeriesError(actor, "lane change end", "s", [(start + duration, start + duration,
-                                                         ended or playback.duration_s)])]
+    end = SeriesError(actor, "lane change end", "s", [(start + duration, start + duration,
+                                                       ended or playback.duration_s)])
+    timed = _timed_change(params, actor)
+    if timed is None:
+        return [SeriesError(actor, "lane change start", "s", [(start, start, began)]), end]
+    # timed from the record: it starts where it was recorded, off its lane's centre or not,
+    # and crosses the line when it did (its start is where it starts, not a time)
+    return [SeriesError(actor, "lane change crossing", "s",
+                        [(timed.cross_s, timed.cross_s, changes[0][0])]),
+            SeriesError(actor, "lateral offset at start", "m",
+                        [(start, timed.offset_toward_m, _offset_toward(playback, actor, start,
+                                                                       params))]), end]
+
+
+def _timed_change(params: Params, actor: str) -> RecordedLaneChange | None:
+    """The lane change of ``actor`` (``hero``/``npc``) as the record timed it, if it did."""
+    return recorded_lane_change(params, "ego" if actor == "hero" else "npc")
+
+
+def _offset_toward(playback: Playback, entity: str, time_s: float, params: Params) -> float:
+    """How far ``entity`` is off its lane's centre toward the lane it changes to (m)."""
+    i = playback.index_at(time_s)
+    track = playback.tracks[entity]
+    left = track["lane_offset"][i] * (1 if track["lane"][i] < 0 else -1)
+    return left if params.get("lane_change_direction") == "left" else -left
+
+
+def recorded_speeds(series: dict[str, list[float | None]],
+                    role: str) -> list[tuple[float, float]]:
+    """``(t, speed)`` the replay is judged against: the speed from the recorded positions
+    (``<role>_speed_raw_ms``, mining's 0.5 s average, not the series fitted to) where the
+    record has it, else ``<role>_speed_ms``; samples the record names tracking noise
+    (``<role>_noise``) are left out: no car drove them."""
+    times = series.get("t") or []
+    speeds = series.get(f"{role}_speed_raw_ms") or series.get(f"{role}_speed_ms") or ()
+    noise = series.get(f"{role}_noise") or [None] * len(times)
+    return [(t, v) for t, v, n in zip(times, speeds, noise, strict=False)
+            if t is not None and v is not None and not n]
+
+
+def hardest_second(times: list[float], speeds: list[float]) -> float:
+    """The most speed lost within one second (m/s) over the samples."""
+    best = 0.0
+    for k, (t, v) in enumerate(zip(times, speeds, strict=True)):
+        later = [w for u, w in zip(times[k + 1:], speeds[k + 1:], strict=True) if u <= t + 1.0]
+        if later:
+            best = max(best, v - min(later))
+    return best
+
+
+def brake_peaks(playback: Playback, params: Params) -> dict[str, dict[str, float | int]]:
+    """Each actor's hardest second of braking in the replay against the record's (its
+    raw-position speed, at the recorded samples), where the record brakes (at least
+    :data:`BRAKE_PEAK_MIN_MS` lost within a second): reported per scenario
+    (``replay.json`` ``series_errors["<entity> brake peak"]``), not judged."""
+    series, start = params.get("recorded_series"), finite(params.get("maneuver_start_s"))
+    if not isinstance(series, dict) or start is None or not playback.times:
+        return {}
+    found: dict[str, dict[str, float | int]] = {}
+    for role, entity in ROLE_ENTITIES.items():
+        samples = [(start + t, v) for t, v in recorded_speeds(series, role)
+                   if start + t <= playback.duration_s]
+        if entity not in playback.tracks or len(samples) < 2:
+            continue
+        times = [t for t, _ in samples]
+        want = hardest_second(times, [v for _, v in samples])
+        if want < BRAKE_PEAK_MIN_MS:
+            continue
+        got = hardest_second(times, [playback.value(entity, "speed", t) for t in times])
+        found[f"{entity} brake peak"] = {
+            "max": round(abs(got - want), 4), "rms": round(abs(got - want), 4),
+            "samples": len(times), "worst_at_s": round(times[0], 3),
+            "recorded_ms2": round(want, 4), "played_ms2": round(got, 4),
+            "share": round((got - want) / want, 4)}
+    return found
 
 
 def _series(judge: _Judge) -> None:
     """REPLAY_SERIES: the whole recorded motion, sample by sample (records with series)."""
     tolerance = {"speed": SERIES_SPEED_TOL_MS, "gap change": SERIES_GAP_TOL_M,
                  "lane change start": SERIES_LANE_CHANGE_TOL_S,
-                 "lane change end": SERIES_LANE_CHANGE_TOL_S}
+                 "lane change end": SERIES_LANE_CHANGE_TOL_S,
+                 "lane change crossing": SERIES_CROSSING_TOL_S,
+                 "lateral offset at start": SERIES_OFFSET_TOL_M}
     errors = series_errors(judge.playback, judge.params)
     summary: dict[str, dict[str, float | int]] = {}
     for error in errors:
@@ -546,7 +654,8 @@ def _series(judge: _Judge) -> None:
                        f"{error.unit}, the record says {want:.2f} {error.unit} (tolerance "
                        f"{tolerance[error.quantity]:g} {error.unit}; "
                        f"{error.summary()['samples']} samples compared)", at)
-    if errors:
+    summary |= brake_peaks(judge.playback, judge.params)
+    if summary:
         # additive keys of replay.json (player.Playback.series_errors)
         judge.playback.series_errors = summary
 

@@ -38,7 +38,7 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
             follower = scene.traffic.follower(i, first)
             if follower is None or follower.gap_m > limits["follower_within_m"]:
                 continue
-            event = _brake_event(scene, i, follower, first, last, best, limits)
+            event = _brake_event(scene, i, follower, first, last, limits)
             if event is not None:
                 yield event
 
@@ -60,11 +60,15 @@ def braking_phases(t: Floats, speed: Floats, onset_ms2: float,
 
 
 def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last: int,
-                 best_ms2: float, limits: dict[str, float]) -> Event | None:
+                 limits: dict[str, float]) -> Event | None:
     """The braking phase as recorded: from the speed where it starts falling to where it
-    stops; its intensity from the most speed lost within one second."""
-    track, motion = scene.tracks[lead], scene.motion[lead]
-    v0, v1 = float(motion.speed[first]), float(motion.speed[last])
+    stops; its intensity from the most speed lost within one second, by the speed the
+    record gives (its positions' change, 0.5 s), not the detector's 1 s smoothing."""
+    track, measured = scene.tracks[lead], scene.positions[lead]
+    v0, v1 = scene.speed_at_step(lead, first), scene.speed_at_step(lead, last)
+    # the record's intensity from the speed it gives (0.5 s), not the detector's 1 s one,
+    # which flattens the hardest second; tracking noise counts for nothing
+    best_ms2 = best_second_deceleration(track.t, measured.speed, first, last, ~measured.noise)
     start, end = float(track.t[first]), float(track.t[last])
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
     if ego_speed is None or gap is None:
@@ -96,6 +100,12 @@ class LaneChange:
     duration_s: float
     #: how far the car moved across the road (m)
     lateral_m: float
+    #: when it crossed the line between the two lanes (recording time, s; NaN: no lateral
+    #: positions, the lanes' change is all that is known)
+    cross_s: float = float("nan")
+    #: how far from its old lane's centre, toward the new lane, it was when the event starts
+    #: (m; a track recorded mid-change starts well off it; NaN: unknown)
+    start_offset_m: float = float("nan")
 
     @property
     def direction(self) -> str:
@@ -181,9 +191,34 @@ def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float
     last = _when(track.t, done, window, ended[0] - 1, 1 - share) if len(ended) \
         else float(track.t[window[-1]])
     duration = (last - first) / (1 - 2 * share)
-    start = first - share * duration
-    return LaneChange(i, before, after, old, new, max(start, float(track.t[0])),
-                      min(start + duration, float(track.t[-1])), duration, abs(moved))
+    start = max(first - share * duration, float(track.t[0]))
+    cross, offset = _line_crossing(scene, i, after, old, new, start)
+    return LaneChange(i, before, after, old, new, start,
+                      min(first - share * duration + duration, float(track.t[-1])), duration,
+                      abs(moved), cross, offset)
+
+
+def _line_crossing(scene: Scene, i: int, after: int, old: float, new: float,
+                   start: float) -> tuple[float, float]:
+    """When track ``i`` crossed the line between lanes ``old`` and ``new`` (its lateral
+    position passing the middle of their centres, interpolated between steps, the passing
+    nearest the step the lane label changed at), and how far it was from the old lane's
+    centre toward the new one at ``start``; NaNs where the lanes' centres are unknown."""
+    track, lateral, spacing = scene.tracks[i], scene.lateral[i], scene.lane_spacing
+    if spacing is None or not np.isfinite([old, new]).all():
+        return float("nan"), float("nan")
+    toward = float(np.sign(spacing * (new - old)))
+    across = (lateral - spacing * old) * toward  # m from the old centre toward the new one
+    line = abs(spacing * (new - old)) / 2
+    past = np.where(np.isfinite(across), across >= line, False)
+    flips = np.flatnonzero(past[1:] & ~past[:-1])  # step k -> k + 1 goes over the line
+    if not len(flips):
+        return float("nan"), float("nan")
+    k = int(flips[np.argmin(np.abs(flips + 1 - after))])
+    share = (line - across[k]) / (across[k + 1] - across[k])
+    cross = float(track.t[k] + share * (track.t[k + 1] - track.t[k]))
+    at = int(np.argmin(np.abs(track.t - start)))
+    return cross, float(across[at])
 
 
 def _when(t: Floats, done: Floats, window: Steps, step: int,
@@ -228,7 +263,25 @@ def _cut_event(scene: Scene, code: str, change: LaneChange, ego: int) -> Event |
         "other_dir_traffic": "No", "direction": change.direction,
         "lead_vehicle_type": vehicle(scene.tracks[npc]),
     }
+    fields.update(lateral_fields(scene, change))
     return make_event(scene, code, ego, npc, change.start_s, change.end_s, fields)
+
+
+#: the lane change as measured from the lateral position, in a mined record's params (not in
+#: MOOVE's layouts: a MOOVE row keeps its duration and is played as one linear change)
+LATERAL_FIELDS = ("lane_change_cross_s", "lane_change_offset_m", "lane_change_width_m")
+
+
+def lateral_fields(scene: Scene, change: LaneChange) -> dict[str, float | str]:
+    """When the changer crossed the line (s from the event's start), how far off its old
+    lane's centre toward the new one it was then (m) and how far apart the two lanes'
+    centres are (m); none where the lateral positions do not tell."""
+    spacing = scene.lane_spacing
+    values = (change.cross_s - change.start_s, change.start_offset_m,
+              abs(spacing * (change.new_lane - change.old_lane)) if spacing else float("nan"))
+    if not np.isfinite(values).all():
+        return {}
+    return {key: float(value) for key, value in zip(LATERAL_FIELDS, values, strict=True)}
 
 
 def own_lane_changes(scene: Scene) -> Iterator[Event]:
@@ -246,6 +299,7 @@ def own_lane_changes(scene: Scene) -> Iterator[Event]:
             "ego_vel_begin_kmh": start * KMH, "ego_vel_end_kmh": end * KMH,
             "duration_s": change.duration_s, "other_dir_traffic": "No",
             "direction": change.direction}
+        fields.update(lateral_fields(scene, change))
         yield make_event(scene, "LCB" if behind else "LCF", i, None, change.start_s,
                          change.end_s, fields)
 
@@ -410,7 +464,7 @@ def free_ride_event(scene: Scene, code: str, ego: int, start: float, end: float,
              for name, shift in SLOT_LANES}
     if all(j is None for j in slots.values()):
         return None
-    v0, v1 = float(scene.motion[ego].speed[k0]), float(scene.motion[ego].speed[k1])
+    v0, v1 = scene.speed_at_step(ego, k0), scene.speed_at_step(ego, k1)
     fields: dict[str, float | str] = {
         "ego_vel_begin_kmh": v0 * KMH, "ego_vel_end_kmh": v1 * KMH,
         "ego_dist_traveled_m": float(track.s[k1] - track.s[k0]),

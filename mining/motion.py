@@ -35,6 +35,76 @@ def smooth_motion(track: Track, window_s: float) -> Motion:
     return Motion(np.clip(speed, 0.0, None), accel)
 
 
+#: the speed fitted to and judged against: the positions' change (central differences of
+#: ``s``), then a centred moving average over this long (s): the most smoothing allowed
+POSITIONS_AVERAGE_S = 0.5
+#: a change of speed faster than this between two steps is no car's (m/s^2) ...
+NOISE_ACCELERATION_MS2 = 10.0
+#: ... when the speed jumps back within this long (s): the tracker's box jumped, not the car
+NOISE_RETURN_S = 2.0
+#: how a mined series' speeds were measured (``series["smoothing"]``, recorded.json)
+SMOOTHING = {
+    "speed_raw_ms": "speed from the recorded positions' change along the road (central "
+                    f"differences), centred moving average over {POSITIONS_AVERAGE_S:g} s",
+    "speed_ms": "the same series, tracking-noise samples left out (null): what phases are "
+                "fitted to",
+    "noise": f"1 where the positions' speed jumps faster than {NOISE_ACCELERATION_MS2:g} m/s^2 "
+             f"and back within {NOISE_RETURN_S:g} s (tracking noise, followed by no fit)",
+    "detection": "detectors threshold a 1 s Savitzky-Golay speed (mining/thresholds.json)",
+}
+
+
+@dataclass(frozen=True)
+class PositionsSpeed:
+    """A track's speed as its recorded positions give it, with the samples a tracker made
+    up: what scenarios are fitted to and judged against (issue 31)."""
+
+    #: positions' change, :data:`POSITIONS_AVERAGE_S` moving average (m/s)
+    speed: Floats
+    #: True where the speed jumps and returns faster than a car can (tracking noise)
+    noise: Mask
+
+    @property
+    def fitted(self) -> Floats:
+        """The speed with the noise left out (NaN): what phases follow."""
+        return np.where(self.noise, np.nan, self.speed)
+
+
+def positions_speed(t: Floats, s: Floats, recorded: Floats) -> PositionsSpeed:
+    """The speed from the change of ``s`` (position along the road, or along an urban path;
+    central differences, one-sided at the ends), averaged over a centred window of
+    :data:`POSITIONS_AVERAGE_S` (shorter at the ends), and the samples of tracking noise in
+    it. A track of one step keeps its ``recorded`` speed."""
+    t, s = np.asarray(t, dtype=float), np.asarray(s, dtype=float)
+    if len(t) < 2 or _step(t) <= 0:
+        return PositionsSpeed(np.asarray(recorded, dtype=float), np.zeros(len(t), bool))
+    raw = np.clip(np.gradient(s, t), 0.0, None)
+    half = max(int(round(POSITIONS_AVERAGE_S / _step(t) / 2)), 0)
+    kernel = np.ones(2 * half + 1)
+    sums = np.convolve(np.pad(raw, half), kernel, mode="valid")
+    counts = np.convolve(np.pad(np.ones(len(raw)), half), kernel, mode="valid")
+    return PositionsSpeed(sums / counts, _noise(t, s, half))
+
+
+def _noise(t: Floats, s: Floats, half: int) -> Mask:
+    """Steps whose speed between positions jumps by more than a car can
+    (:data:`NOISE_ACCELERATION_MS2`) and jumps back the other way within
+    :data:`NOISE_RETURN_S`: everything from the jump to the return, widened by the moving
+    average's half window (``half`` steps) it spreads into."""
+    noise = np.zeros(len(t), bool)
+    if len(t) < 3:
+        return noise
+    step_speed = np.diff(s) / np.diff(t)
+    jumps = np.diff(step_speed) / (np.diff(t[:-1]) + np.diff(t[1:])) * 2
+    hard = np.flatnonzero(np.abs(jumps) > NOISE_ACCELERATION_MS2)
+    for k in hard:
+        back = hard[(hard > k) & (t[hard + 1] - t[k + 1] <= NOISE_RETURN_S + 1e-6)
+                    & (np.sign(jumps[hard]) != np.sign(jumps[k]))]
+        if len(back):
+            noise[max(k + 1 - half, 0):min(back[0] + 1 + half, len(t) - 1) + 1] = True
+    return noise
+
+
 def _step(t: Floats) -> float:
     return float(np.median(np.diff(t))) if len(t) > 1 else 0.0
 
@@ -109,6 +179,18 @@ def lateral_offsets(tracks: list[Track]) -> list[Floats]:
     bends = len(tracks) >= MIN_TRACKS_FOR_BENDS
     course = _road_course(s_all, np.concatenate(lat), lane_all, bends)
     return [v - course(tr.s) for v, tr in zip(lat, tracks, strict=True)]
+
+
+def lane_spacing(tracks: list[Track], lateral: list[Floats]) -> float | None:
+    """How far apart lane centres lie in :func:`lateral_offsets`' terms: the centre of lane
+    index ``k`` is at ``spacing * k`` (negative: indexes grow to the right, offsets to the
+    left). The median over every step with a lane index and a lateral position; None where
+    no step has both."""
+    ratios = [np.asarray(lat, dtype=float) / _lane_numbers(tr)
+              for tr, lat in zip(tracks, lateral, strict=True)]
+    found = np.concatenate(ratios) if ratios else np.empty(0)
+    found = found[np.isfinite(found)]
+    return float(np.median(found)) if len(found) else None
 
 
 def _road_course(s: Floats, lat: Floats, lane: Floats, bends: bool,

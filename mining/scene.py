@@ -4,10 +4,19 @@ queries (:class:`Scene`), and what it returns (:class:`Event`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from scenweave.mining.motion import Motion, lateral_offsets, smooth_motion
+from scenweave.mining.motion import (
+    SMOOTHING,
+    Motion,
+    PositionsSpeed,
+    lane_spacing,
+    lateral_offsets,
+    positions_speed,
+    smooth_motion,
+)
 from scenweave.mining.tracks import Floats, Recording, Steps, Track
 from scenweave.mining.traffic import Traffic
 
@@ -26,7 +35,7 @@ class Event:
     end_s: float
     fields: dict[str, float | str]
     #: the recorded series over the event (t from its start; speeds m/s; gap m)
-    series: dict[str, list[float | None]] = field(default_factory=dict)
+    series: dict[str, Any] = field(default_factory=dict)
     #: urban events: the event as an ADScene object, MOOVE's urban file format
     adscene: dict | None = None
     #: why no scenario can play it, where the detector knows (it is reported, not written)
@@ -41,14 +50,22 @@ class Scene:
     thresholds: dict[str, dict[str, float]]
     traffic: Traffic = field(init=False)
     motion: list[Motion] = field(init=False)
+    #: each track's speed from its positions (0.5 s average) with its tracking noise: what a
+    #: record's fields and series give, and scenarios are fitted to (``mining.motion``)
+    positions: list[PositionsSpeed] = field(init=False)
     #: each track's lateral position (m, + left) from the road's course (``mining.motion``)
     lateral: list[Floats] = field(init=False)
+    #: lane ``k``'s centre lies at ``lane_spacing * k`` of :attr:`lateral` (None: unknown)
+    lane_spacing: float | None = field(init=False)
 
     def __post_init__(self) -> None:
         self.traffic = Traffic(self.recording)
         window = self.thresholds["smoothing"]["window_s"]
         self.motion = [smooth_motion(track, window) for track in self.recording.tracks]
+        self.positions = [positions_speed(track.t, track.s, track.speed)
+                          for track in self.recording.tracks]
         self.lateral = lateral_offsets(self.recording.tracks)
+        self.lane_spacing = lane_spacing(self.recording.tracks, self.lateral)
 
     @property
     def tracks(self) -> list[Track]:
@@ -63,7 +80,15 @@ class Scene:
 
     def speed(self, i: int, t: float) -> float | None:
         step = self.step_at(i, t)
-        return None if step is None else float(self.motion[i].speed[step])
+        return None if step is None else self.speed_at_step(i, step)
+
+    def speed_at_step(self, i: int, step: int) -> float:
+        """Track ``i``'s speed from its positions at ``step`` (what the record's series
+        gives); the detectors' smoothed speed where that sample is tracking noise."""
+        measured = self.positions[i]
+        if measured.noise[step]:
+            return float(self.motion[i].speed[step])
+        return float(measured.speed[step])
 
     def gap(self, ego: int, npc: int, t: float) -> float | None:
         """Signed bumper gap from ``ego`` to ``npc`` along the road (+: npc ahead)."""
@@ -76,20 +101,25 @@ class Scene:
         return float(np.copysign(max(abs(centre) - room, 0.0), centre))  # side by side: 0
 
     def series(self, roles: dict[str, int], ego: int, start: float,
-               end: float) -> dict[str, list[float | None]]:
+               end: float) -> dict[str, Any]:
         """Each role's speed, position along the road, lateral position and lane, and the
         NPCs' gaps to the ego, every step of the ego (``t`` from ``start``)."""
         track = self.tracks[ego]
         inside = (track.t >= start - 1e-6) & (track.t <= end + 1e-6)
         times = track.t[inside]
-        found: dict[str, list[float | None]] = {"t": [round(float(t - start), 3) for t in times]}
+        found: dict[str, Any] = {"t": [round(float(t - start), 3) for t in times],
+                                 "smoothing": SMOOTHING}
         for role, i in roles.items():
             steps = self._steps_at(i, times)
             other = self.tracks[i]
-            found[f"{role}_speed_ms"] = self._values(self.motion[i].speed, steps)
+            measured = self.positions[i]
+            found[f"{role}_speed_ms"] = self._values(measured.fitted, steps)
+            found[f"{role}_speed_raw_ms"] = self._values(measured.speed, steps)
+            found[f"{role}_noise"] = self._values(measured.noise.astype(float), steps)
             found[f"{role}_s_m"] = self._values(other.s, steps)
             found[f"{role}_lateral_m"] = self._values(self.lateral[i], steps)
             found[f"{role}_lane"] = self._values(other.lane_index, steps)
+            found[f"{role}_lane_offset_m"] = self._values(self.lane_offset(i), steps)
             if role != "ego":
                 room = (track.length_m + other.length_m) / 2
                 centre = np.where(steps >= 0, other.s[np.maximum(steps, 0)] - track.s[inside],
@@ -97,6 +127,15 @@ class Scene:
                 gaps = np.copysign(np.maximum(np.abs(centre) - room, 0.0), centre)
                 found[f"{role}_gap_m"] = self._values(gaps, np.arange(len(times)))
         return found
+
+    def lane_offset(self, i: int) -> Floats:
+        """Track ``i``'s offset from the centre of the lane it is labelled in (m, + left;
+        NaN where the lanes' spacing or its lane is unknown): what a player's lane offset
+        shows, to draw beside it."""
+        track = self.tracks[i]
+        if self.lane_spacing is None or len(track.lane_index) != len(track.t):
+            return np.full(len(track.t), np.nan)
+        return self.lateral[i] - self.lane_spacing * np.asarray(track.lane_index, dtype=float)
 
     def _steps_at(self, i: int, times: Floats) -> Steps:
         """Track ``i``'s step nearest each of ``times`` (-1 where it was not seen then)."""

@@ -28,7 +28,7 @@ import numpy as np
 from scipy.signal import savgol_filter
 
 from scenweave.mining.lights import CODE_OF_STATE, adscene_header, frame_of, state_at
-from scenweave.mining.motion import runs
+from scenweave.mining.motion import PositionsSpeed, positions_speed, runs
 from scenweave.mining.scene import Event, Scene
 from scenweave.mining.tracks import Floats, Mask, TrafficLight
 
@@ -120,6 +120,18 @@ class UrbanScene:
     @property
     def limits(self) -> dict[str, float]:
         return self.scene.thresholds["urban"]
+
+    def measured(self, i: int) -> PositionsSpeed:
+        """Track ``i``'s speed along its path from its positions, with its tracking noise
+        (``mining.motion.positions_speed``): what its record gives."""
+        track = self.scene.tracks[i]
+        return positions_speed(track.t, self.paths[i], track.speed)
+
+    def record_speeds(self, i: int) -> Floats:
+        """The speeds a record gives: from the positions, the detectors' where that is
+        tracking noise."""
+        measured = self.measured(i)
+        return np.where(measured.noise, self.speeds[i], measured.speed)
 
     def front(self, i: int) -> tuple[Floats, Floats]:
         track = self.scene.tracks[i]
@@ -272,7 +284,11 @@ class UrbanScene:
         light = None if seen is None else (seen[0] + track.length_m / 2, seen[1])
         adscene = self.adscene(code, i, first, last, light)
         series = self.scene.series({"ego": i}, i, start, end)
-        series["ego_speed_ms"] = [round(float(v), 3) for v in self.speeds[i][first:last + 1]]
+        measured = self.measured(i)
+        for key, values in (("ego_speed_ms", measured.fitted), ("ego_speed_raw_ms", measured.speed),
+                            ("ego_noise", measured.noise.astype(float))):
+            series[key] = [None if not np.isfinite(v) else round(float(v), 3)
+                           for v in values[first:last + 1]]
         return Event(code, track.id, None, round(start, 3), round(end, 3), {}, series,
                      adscene=adscene)
 
@@ -280,7 +296,7 @@ class UrbanScene:
                 light: tuple[float, str] | None) -> dict:
         """The event as an ADScene object; ``light``: where the light stands from the car's
         centre at ``first`` (m) and its colour (``None``: no light)."""
-        path, speed = self.paths[i], self.speeds[i]
+        path, speed = self.paths[i], self.record_speeds(i)
         frames = [frame_of(self.scene, i, k, float(speed[k]), float(path[k] - path[first]))
                   for k in range(first, last + 1)]
         track = self.scene.tracks[i]

@@ -37,6 +37,7 @@ from scenweave.scenario_lib.kinematics import (
     start_gap_m,
     stop_at_line,
 )
+from scenweave.scenario_lib.lateral import recorded_lane_change, road_offset
 from scenweave.scenario_lib.phases import (
     Phase,
     PhasedProfile,
@@ -142,8 +143,10 @@ def manoeuvre_timing(params: Mapping[str, Any]) -> tuple[float, float]:
 # --- positions -------------------------------------------------------------------------------
 
 def lane_position(params: Mapping[str, Any], actor: str) -> xosc.LanePosition:
-    """The LanePosition the spawn stage chose for ``actor`` (``ego``, ``npc``, a FR slot)."""
-    return xosc.LanePosition(number(params, f"{actor}_s"), 0, integer(params, f"{actor}_lane_id"),
+    """The LanePosition the spawn stage chose for ``actor`` (``ego``, ``npc``, a FR slot), on
+    its lane's centre or as far off it as recorded (``<actor>_lane_offset_m``)."""
+    return xosc.LanePosition(number(params, f"{actor}_s"), road_offset(params, actor),
+                             integer(params, f"{actor}_lane_id"),
                              integer(params, f"{actor}_road_id"))
 
 
@@ -347,6 +350,29 @@ def lane_change(entity: str, direction: str, v_start_ms: float, v_end_ms: float,
     return story_event(entity, f"{entity}_lane_change", action, start_s)
 
 
+def recorded_lane_change_events(params: Mapping[str, Any], entity: str,
+                                 prefix: str) -> list[StoryEvent] | None:
+    """A mined lane change as recorded (``scenario_lib.lateral``): toward the new lane so
+    as to cross the line when the car did, then settling in it by the end of ``duration_s``,
+    each linear over the distance the car drives meanwhile; None when params do not time the
+    crossing."""
+    timing = recorded_lane_change(params, prefix)
+    direction = params["lane_change_direction"]
+    if timing is None or direction not in LANE_CHANGE_SIGN:
+        return None
+    toward = xosc.TransitionDynamics(xosc.DynamicsShapes.linear,
+                                     xosc.DynamicsDimension.distance, timing.first_m)
+    events = [story_event(entity, f"{entity}_lane_change", xosc.RelativeLaneChangeAction(
+        LANE_CHANGE_SIGN[direction], entity, toward), timing.start_s)]
+    if timing.settle_start_s is not None and timing.settle_m is not None:
+        settle = xosc.TransitionDynamics(xosc.DynamicsShapes.linear,
+                                         xosc.DynamicsDimension.distance, timing.settle_m)
+        events.append(story_event(entity, f"{entity}_lane_settle",
+                                  xosc.RelativeLaneChangeAction(0, entity, settle),
+                                  timing.settle_start_s))
+    return events
+
+
 def hero_speed_profile(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The recorded ego speed profile: its phases (``ego_phases``), or ``ego_end_speed_ms``
     over ``duration_s``."""
@@ -424,8 +450,8 @@ def npc_lane_change_story(params: Mapping[str, Any],
     """Cut-in and cut-out: at the recorded gap the NPC changes one lane toward
     ``lane_change_direction`` and changes its speed; the ego drives its recorded speed profile
     (or ``hero_event``, e.g. its reaction to a slower cutter)."""
-    return [*(hero_event or hero_speed_profile(params)), npc_lane_change(params),
-            *npc_speed_profile(params)]
+    change = recorded_lane_change_events(params, "npc", "npc") or [npc_lane_change(params)]
+    return [*(hero_event or hero_speed_profile(params)), *change, *npc_speed_profile(params)]
 
 
 def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
@@ -437,7 +463,8 @@ def following_story(params: Mapping[str, Any]) -> list[StoryEvent]:
 
 def ego_lane_change_story(params: Mapping[str, Any]) -> list[StoryEvent]:
     """The ego changes one lane toward ``lane_change_direction`` and drives its speed profile."""
-    return [hero_lane_change(params), *hero_speed_profile(params)]
+    change = recorded_lane_change_events(params, HERO, "ego") or [hero_lane_change(params)]
+    return [*change, *hero_speed_profile(params)]
 
 
 def hero_reacts_to_braking_lead(params: Mapping[str, Any]) -> list[StoryEvent]:

@@ -74,6 +74,11 @@ class Params(TypedDict, total=False):
     brake_intensity: ReadOnly[float]
     other_dir_traffic: ReadOnly[bool]
     lane_change_direction: ReadOnly[Side]
+    #: a mined lane change as its lateral position recorded it (docs/params.md): when the
+    #: changer crossed the line (s after maneuver_start_s) and how far apart the two lanes'
+    #: centres lie (m); where it starts across its lane is ``<actor>_lane_offset_m``
+    lane_change_cross_s: ReadOnly[float]
+    lane_change_width_m: ReadOnly[float]
     behavior_type: ReadOnly[Literal["B1", "B2", "B3", "B4"]]
     ego_dist_traveled_m: ReadOnly[float]
     driving_side: ReadOnly[Side]
@@ -135,7 +140,7 @@ SLOT_KEYS: dict[str, Any] = {
 POSE_KEYS: dict[str, Any] = {
     "x": float | None, "y": float | None, "z": float | None, "h": float | None,
     "road_id": int | None, "lane_id": int | None, "s": float | None,
-    "in_junction": bool | None}
+    "in_junction": bool | None, "lane_offset_m": float | None}
 
 
 class ParamsInvalid(InputError, ValueError):
@@ -259,7 +264,7 @@ def all_finite(*values: float | None) -> tuple[float, ...] | None:
 FlagKey = Literal["present", "in_junction"]
 LaneKey = Literal["road_id", "lane_id"]
 NumberKey = Literal["speed_ms", "end_speed_ms", "distance_m", "end_distance_m",
-                    "x", "y", "z", "h", "s"]
+                    "x", "y", "z", "h", "s", "lane_offset_m"]
 #: the suffix of a key of an actor's family: ``SLOT_KEYS`` and ``POSE_KEYS`` (a test pins it)
 ActorKey = FlagKey | LaneKey | NumberKey | Literal["vehicle_type", "phases"]
 

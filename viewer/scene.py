@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from scenweave.judge.replay import gap_along_lane, light_state
+from scenweave.judge.replay import ROLE_ENTITIES, gap_along_lane, light_state
 from scenweave.player import Playback
 from scenweave.scenario_lib.vehicles import reference_gap_m
 from scenweave.schemas.params import Params, finite, unchecked
@@ -178,11 +178,27 @@ def _charts(playback: Playback, params: Params, folder: Path, map_path: Path | N
         "gap": _gap_chart(playback, params, recorded, map_path, verdict),
         "lateral": {"offset": {n: t["lane_offset"] for n, t in playback.tracks.items()},
                     "lane": {n: t["lane"] for n, t in playback.tracks.items()},
+                    "recorded": _recorded_offsets(playback, recorded),
+                    "recorded_t": recorded.get("t"),
                     "tol_s": tolerances["lane_change_s"] if tolerances else None},
         "light": [light_state(playback, t) for t in playback.times] if playback.lights else [],
         "maneuver": [finite(params.get("maneuver_start_s")), finite(params.get("duration_s"))],
         "stop_line": _stop_line_chart(playback, params),
     }
+
+
+def _recorded_offsets(playback: Playback, recorded: dict) -> dict[str, list[float | None]]:
+    """Each car's recorded offset from the centre of its lane (a mined record's
+    ``<role>_lane_offset_m``, + left of its travel) in the frame the played offset is drawn
+    in: OpenDRIVE's ``t``, turned for a car in a positive lane (driving against ``s``)."""
+    found = {}
+    for role, entity in ROLE_ENTITIES.items():
+        values = recorded.get(f"{role}_lane_offset_m")
+        if not isinstance(values, list) or entity not in playback.tracks:
+            continue
+        turn = 1 if playback.tracks[entity]["lane"][0] < 0 else -1
+        found[entity] = [None if v is None else v * turn for v in values]
+    return found
 
 
 def _marks(marks: list[VerdictMark]) -> list[dict]:

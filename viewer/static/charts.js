@@ -128,7 +128,11 @@ function lateralChart(holder, scene, clock, colours, findings) {
     ...names.map((n) => ({ label: `${n} offset`, stroke: colours[n], width: 1.6 })),
     ...names.map((n) => ({ label: `${n} lane`, stroke: colours[n], width: 1, dash: [2, 3], scale: "lane", paths: uPlot.paths.stepped({ align: 1 }) })),
   ];
-  return makeChart(holder, "offset from the lane centre (m, solid) and lane id (dotted)",
+  for (const [name, values] of Object.entries(c.recorded || {})) {  // a mined record's own
+    data.push(resampled(scene.times, c.recorded_t, values));
+    series.push({ label: `${name} recorded offset`, stroke: colours[name], dash: [6, 4], width: 1.2 });
+  }
+  return makeChart(holder, "offset from the lane centre (m, solid; recorded: dashed) and lane id (dotted)",
     { name: "lateral", unit: "m", data, series, findings,
       scales: { y: { range: (u, min, max) => [Math.min(min, -2), Math.max(max, 2)] }, lane: {} }, axes: [{ scale: "lane", side: 1, label: "lane", size: 40, grid: { show: false } }] }, clock);
 }

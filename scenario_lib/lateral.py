@@ -1,0 +1,114 @@
+"""A mined lane change timed as recorded: it starts when the car started to move across,
+crosses the line when it crossed and settles when it settled (issue 31).
+
+One linear LaneChangeAction crosses the line halfway through its lateral path, yet recorded
+lane changes cross anywhere from early to late in them, and a car recorded mid-change starts
+off its lane's centre. So a mined lane change is two actions (docs/scenario-conventions.md):
+
+- ``<entity>_lane_change``: from ``maneuver_start_s``, where the car starts across its lane
+  (``<actor>_lane_offset_m``), linearly toward the new lane's centre, as fast as makes it
+  reach the line at ``lane_change_cross_s``;
+- ``<entity>_lane_settle``: :data:`SETTLE_AFTER_CROSSING_S` after the crossing, from where it is
+  to the centre of the lane it is now in, by the end of ``duration_s`` (it replaces the first,
+  which runs on the same lateral domain).
+
+Both are given as the distance the car drives meanwhile (dynamics ``distance``: scenario_runner
+ignores ``time`` for a LaneChangeAction; docs/scenario-conventions.md), from its speed profile.
+
+A record without these keys (MOOVE rows: begin/end values and a duration) keeps the single
+linear change over ``duration_s``. Arithmetic on params and the speed profile: the builder
+and the judge both use it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from scenweave.scenario_lib.kinematics import LANE_CHANGE_MIN_LENGTH_M
+from scenweave.scenario_lib.phases import profile_of
+
+#: the settling part starts this long after the car crossed the line (s): by then it is in
+#: its new lane, which "this lane" (RelativeTargetLane 0) then names
+SETTLE_AFTER_CROSSING_S = 0.2
+#: a car must start at least this far before the line (m) and cross at least this long after
+#: the manoeuvre starts (s) for the crossing to be timed; else the single change plays
+MIN_TO_LINE_M = 0.2
+MIN_CROSS_S = 0.1
+#: a settling part shorter than this (s) is left out: the first part ends about there
+MIN_SETTLE_S = 0.2
+
+
+@dataclass(frozen=True)
+class RecordedLaneChange:
+    """When the parts of a recorded lane change run, in scenario time (s)."""
+
+    #: the first part starts (``maneuver_start_s``) and lasts this long (linear in time)
+    start_s: float
+    first_s: float
+    #: the car crosses the line then
+    cross_s: float
+    #: the settling part starts then and lasts this long (None: no settling part)
+    settle_start_s: float | None
+    settle_s: float | None
+    #: where the car starts across its lane, toward the new lane (m)
+    offset_toward_m: float
+    #: the distance the car drives during each part (m): the actions' dynamics
+    first_m: float = 0.0
+    settle_m: float | None = None
+
+
+def recorded_lane_change(params: Mapping[str, Any], prefix: str) -> RecordedLaneChange | None:
+    """The two parts of ``prefix``'s recorded lane change (``ego`` or ``npc``), None when params
+    do not time it (no ``lane_change_cross_s``) or it cannot be timed so (the car starts at
+    or past the line, or crosses as the manoeuvre starts)."""
+    values = [_number(params.get(key)) for key in ("lane_change_cross_s", "lane_change_width_m",
+                                                   "maneuver_start_s", "duration_s")]
+    if None in values:
+        return None
+    cross, width, start, duration = (v or 0.0 for v in values)
+    toward = (1.0 if params.get("lane_change_direction") == "left" else -1.0) \
+        * (_number(params.get(f"{prefix}_lane_offset_m")) or 0.0)
+    to_line = width / 2 - toward
+    if to_line < MIN_TO_LINE_M or cross < MIN_CROSS_S:
+        return None
+    first = cross * (width - toward) / to_line  # linear: reaches the line after ``cross``
+    settle_from = cross + SETTLE_AFTER_CROSSING_S
+    settle = duration - settle_from
+    driven = profile_of(params, prefix).distance
+    first_m = _length(driven(start + first) - driven(start))
+    if settle < MIN_SETTLE_S:
+        return RecordedLaneChange(start, _ms(first), start + cross, None, None, toward, first_m)
+    settle_m = _length(driven(start + duration) - driven(start + settle_from))
+    return RecordedLaneChange(start, _ms(first), start + cross, _ms(start + settle_from),
+                              _ms(settle), toward, first_m, settle_m)
+
+
+def _length(metres: float) -> float:
+    """A lane change's length as the file gives it: millimetres, at least the floor below
+    which a player makes it a jump."""
+    return max(LANE_CHANGE_MIN_LENGTH_M, round(metres, 3))
+
+
+def road_offset(params: Mapping[str, Any], actor: str) -> float | int:
+    """``<actor>_lane_offset_m`` (+ to the left of its travel) as OpenDRIVE's ``t`` (+ to the
+    left of the road's reference line): cars in negative lanes drive along it, in positive
+    lanes against it. 0 (the lane's centre) without it."""
+    left = _number(params.get(f"{actor}_lane_offset_m"))
+    lane = _number(params.get(f"{actor}_lane_id"))
+    if left is None or lane is None:
+        return 0
+    return round(left if lane < 0 else -left, 3)
+
+
+def _number(value: Any) -> float | None:
+    """``value`` as a float when it is a finite number, else None."""
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _ms(value: float) -> float:
+    return round(value, 3)

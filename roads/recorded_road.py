@@ -48,6 +48,8 @@ from scenweave.roads.recorded_geometry import (
 
 #: bumped whenever the written map changes for the same input (cache keys include it)
 CONVERTER_VERSION = "4"
+#: a border shorter than this makes no lane (m); a short lanelet is fine (one piece)
+MIN_BORDER_M = 0.01
 #: two strips share a road where their common border differs by less than this (m)
 SHARED_BORDER_M = 0.1
 #: OpenDRIVE signal type of a traffic light (as CARLA and esmini read it)
@@ -176,10 +178,10 @@ def check_strip(strip: LaneStrip) -> None:
         if not np.isfinite(border).all():
             raise RecordedRoadError(f"lanelet {strip.id}: its {side} border holds NaN or "
                                     "infinite coordinates")
-        if float(np.hypot(*np.diff(border, axis=0).T).sum()) < MIN_SPACING_M:
-            raise RecordedRoadError(f"lanelet {strip.id}: its {side} border is "
-                                    f"{float(np.hypot(*np.diff(border, axis=0).T).sum()):.2f} m "
-                                    f"long, shorter than {MIN_SPACING_M} m")
+        length = float(np.hypot(*np.diff(border, axis=0).T).sum())
+        if length < MIN_BORDER_M:
+            raise RecordedRoadError(f"lanelet {strip.id}: its {side} border is {length:.3f} m "
+                                    f"long, shorter than {MIN_BORDER_M} m")
 
 
 def _shares_border(left: LaneStrip, right: LaneStrip) -> bool:

@@ -17,7 +17,7 @@ from scenweave.judge.map_check import check_map, positions_on_driving_lanes
 from scenweave.player import PlayerUnavailable, find_esmini
 from scenweave.roads import advance_along_lane, load_opendrive
 from scenweave.roads.errors import RecordedRoadError
-from scenweave.roads.recorded_road import ConvertedRoad, RecordedLight, convert
+from scenweave.roads.recorded_road import ConvertedRoad, LaneStrip, RecordedLight, convert
 from tests.roads.recorded_network import HALF, LANE, lights, strips
 
 
@@ -228,3 +228,19 @@ def test_recorded_positions_are_counted_on_driving_lanes(xodr: Path) -> None:
     check = positions_on_driving_lanes(xodr, [inside, outside])
     assert check.loaded and check.positions == 4
     assert check.on_driving_lane == pytest.approx(0.75)
+
+
+def test_a_lanelet_shorter_than_the_vertex_spacing_still_makes_a_road(tmp_path: Path) -> None:
+    """A 0.3 m lanelet (recorded maps cut lanes at odd places) is one short road, linked on."""
+    short = LaneStrip("1", np.array([[0.0, HALF], [0.3, HALF]]),
+                      np.array([[0.0, -HALF], [0.3, -HALF]]), successors=("2",))
+    after = LaneStrip("2", np.array([[0.3, HALF], [30.0, HALF]]),
+                      np.array([[0.3, -HALF], [30.0, -HALF]]), predecessors=("1",))
+    road = convert([short, after])
+    path = tmp_path / "road.xodr"
+    path.write_bytes(road.xodr)
+    assert load_opendrive(path).roads["1"].length == pytest.approx(0.3, abs=1e-6)
+    assert load_opendrive(path).roads["1"].successor.element_id == "2"
+    _esmini_or_skip()
+    check = check_map(path, [short, after], road.lanes)
+    assert check.loaded and check.own_lane == 1.0

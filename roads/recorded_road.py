@@ -20,7 +20,8 @@ driving direction, its predecessors, successors and side neighbours) and
   strip's road and lane at its stop line, ``s`` always within ``[0, length)`` (esmini aborts
   the whole process on a signal past its road's end).
 
-Only numpy and the error root are imported; reading a format into strips is the readers' job.
+Of ours only the error root is imported (numpy, SciPy and lxml besides); reading a format into
+strips is the readers' job.
 """
 
 from __future__ import annotations

@@ -269,3 +269,14 @@ def test_every_import_of_ours_goes_through_the_scenweave_namespace():
             bare += [f"{path.relative_to(ROOT)}:{node.lineno} {name}" for name in names
                      if name.split(".")[0] in FOLDERS[1:]]
     assert bare == []
+
+
+def test_only_the_spawn_review_picture_imports_matplotlib():
+    """matplotlib is the optional ``plot`` extra: one drawing (``spawn-db show``) needs it."""
+    users = sorted({name for name, path in MODULES.items()
+                   for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+                   if isinstance(node, ast.Import | ast.ImportFrom)
+                   and any(n.split(".")[0] == "matplotlib" for n in (
+                       [a.name for a in node.names] if isinstance(node, ast.Import)
+                       else [node.module or ""]))})
+    assert users == ["scenweave.spawn_db.map_plot"]

@@ -60,8 +60,13 @@ def build(map_ref: MapRef, out_path: Path | None, keep_reviews: bool) -> None:
 @click.option("--json", "as_json", is_flag=True,
               help="Also print the spawn points as JSON lines (id, context, place, review).")
 def show(db_path: Path | None, map_ref: MapRef, out_path: Path, as_json: bool) -> None:
-    """Draw the map and its spawn points (by context and priority) into a PNG for review."""
-    from scenweave.spawn_db.map_plot import plot_spawn_points  # matplotlib only when drawing
+    """Draw the map and its spawn points (by context and priority) into a PNG for review
+    (needs the optional matplotlib: ``pip install 'scenweave[plot]'``)."""
+    try:
+        from scenweave.spawn_db.map_plot import plot_spawn_points
+    except ImportError as err:  # the one drawing that needs matplotlib: an extra, not a must
+        raise click.ClickException(f"spawn-db show draws with matplotlib, which is not "
+                                   f"installed ({err}): pip install 'scenweave[plot]'") from err
 
     database = load_database(db_path or spawn_database(map_ref, spawn_db_cache()))
     plot_spawn_points(road_network(map_ref.path), database, out_path)

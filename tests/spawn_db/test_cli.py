@@ -51,3 +51,16 @@ def test_show_writes_a_png_and_lists_as_json(tmp_path):
     reviewed = sum(e["annotations"]["manually_reviewed"] for e in entries)
     assert lines[-1].startswith(f"spawn-db show: {total} spawn points, {reviewed} reviewed")
     assert len(lines) == total + 1
+
+
+def test_show_without_matplotlib_names_the_extra_to_install(tmp_path, monkeypatch):
+    """matplotlib is optional (``scenweave[plot]``): without it, show says what to install
+    and writes nothing; the other commands do not need it."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib -> ImportError
+    monkeypatch.delitem(sys.modules, "scenweave.spawn_db.map_plot", raising=False)
+    out = tmp_path / "spawns.png"
+    result = CliRunner().invoke(cli, ["spawn-db", "show", "--out", str(out)])
+    assert result.exit_code == 1 and "pip install 'scenweave[plot]'" in result.output
+    assert not out.exists()

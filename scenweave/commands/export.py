@@ -56,8 +56,7 @@ def export(paths: tuple[Path, ...], target: str, out_dir: Path) -> None:
     if not found:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
     out_dir.mkdir(parents=True, exist_ok=True)
-    in_situ = {xosc: f"{xosc.parent.parent.name}/{xosc.parent.name}" for xosc in found
-               if is_in_situ(xosc.parent)}
+    in_situ = {xosc: _in_situ_name(xosc) for xosc in found if is_in_situ(xosc.parent)}
     files = [xosc for xosc in found if xosc not in in_situ]
     names = _folder_names(files)
     if target == "carla":
@@ -79,6 +78,13 @@ def export(paths: tuple[Path, ...], target: str, out_dir: Path) -> None:
     click.echo(f"export: {len(found) - len(problems)}/{len(found)} scenarios play in plain "
                f"esmini ({len(in_situ)} in situ) -> {out_dir}")
     _fail(problems)
+
+
+def _in_situ_name(xosc: Path) -> str:
+    """Where an in-situ scenario goes: ``<scenario>/in_situ`` as a run's scenario folder holds
+    it, or its own folder's name (``scenweave mine --in-situ`` names each by its record)."""
+    folder = xosc.parent
+    return f"{folder.parent.name}/{folder.name}" if folder.name == "in_situ" else folder.name
 
 
 def _fail(problems: list[str]) -> None:

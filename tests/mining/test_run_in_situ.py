@@ -37,3 +37,29 @@ def test_run_of_mined_records_writes_each_event_in_situ(esmini, data, tmp_path, 
         for name in ("scenario.xosc", "road.xodr", "in_situ.json", "replay.json"):
             assert (folder / "in_situ" / name).is_file(), name
     assert written >= 1
+
+
+def test_the_folders_of_mine_in_situ_are_one_run_to_view_and_export(esmini, data, tmp_path,
+                                                                    monkeypatch):
+    from scenweave.viewer import catalog
+
+    monkeypatch.setenv("SCENWEAVE_HOME", str(tmp_path / "home"))
+    out = tmp_path / "out"
+    CliRunner().invoke(cli, ["mine", str(data / "commonroad_small.xml"), "--out", str(out),
+                             "--in-situ", "--context-s", "1"])
+    folders = sorted(p for p in (out / "in_situ").iterdir() if (p / "scenario.xosc").is_file())
+    assert folders
+    runs = catalog.find_runs([out])
+    assert list(runs) == ["in_situ"]  # the folder mine --in-situ writes is one run
+    rows = catalog.run_list(runs)[0]["scenarios"]
+    assert [r["id"] for r in rows] == [p.name for p in folders]
+    row = rows[0]
+    assert row["in_situ"]["key"] == row["key"] and row["in_situ"]["vehicles"] >= 1
+    scene = catalog.scenario_detail(runs, row["key"])["scene"]
+    assert scene["played"] and scene["in_situ"]["judge"]["overall"]["samples"] > 0
+    exported = tmp_path / "carla"
+    result = CliRunner().invoke(cli, ["export", str(out / "in_situ"), "--for", "carla",
+                                      "--out", str(exported)])
+    assert result.exit_code == 0, result.output
+    for folder in folders:  # named by their records, as mine named them
+        assert (exported / folder.name / "replay_in_carla.py").is_file()

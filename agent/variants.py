@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, cast
 
@@ -131,7 +130,7 @@ def _changes(params: Params, asked: Params) -> dict[str, list]:
             if params.get(key) != value}
 
 
-def _replay_errors(scenario: Path, params: Mapping[str, Any], replay: Any) -> list[str]:
+def _replay_errors(scenario: Path, params: Params, replay: Any) -> list[str]:
     """Valid and playing the record, against its params with the variant's own weather (the
     one value the record fixes that a variant may change)."""
     from lxml import etree

@@ -18,12 +18,10 @@ import io
 import os
 import re
 import sys
-from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from types import ModuleType
-from typing import Any
 
 import numpy as np
 
@@ -81,7 +79,7 @@ def _corpus_scripts() -> tuple[Path, ...]:
     return tuple(sorted(CORPUS_DIR.glob("gen_*.py")))
 
 
-def retrieve(params_or_query: Mapping[str, Any] | str) -> Retrieval:
+def retrieve(params_or_query: Params | str) -> Retrieval:
     """The reference script for a params dict or for a class code, tag or free-text query."""
     tags = class_tags()
     if isinstance(params_or_query, str):
@@ -127,7 +125,7 @@ def _load_script(script: Path) -> ModuleType:
     return sys.modules[name]
 
 
-def _who(params: Mapping[str, Any], script: Path) -> str:
+def _who(params: Params, script: Path) -> str:
     return f"scenario {params.get('scenario_id', '?')} ({script.name})"
 
 
@@ -161,7 +159,7 @@ def _by_tag(tag: str) -> Retrieval | None:
     return _read(path, "tag", 1.0) if path else None
 
 
-def _params_query(params: Mapping[str, Any]) -> str:
+def _params_query(params: Params) -> str:
     """Thesis query form: "{maneuver} speed {v} m/s distance {d} m"."""
     maneuver = (params.get("description") or params.get("maneuver_tag") or
                 params.get("maneuver_class") or "driving")

@@ -3,21 +3,20 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 from scenweave.agent.code import apply_corrections, extract_python_code
 from scenweave.agent.llm.base import LLM, LLMReply, Prompt
 from scenweave.agent.prompts import generation_prompt
 from scenweave.agent.state import Attempt
+from scenweave.schemas.params import Params
 
 
 @dataclass
 class Request:
     """What a strategy works from."""
 
-    params: Mapping[str, Any]
+    params: Params
     reference: str
     """Source of the retrieved reference script."""
     attempts: list[Attempt]

@@ -43,6 +43,8 @@ from scenweave.judge.in_situ_doc import (
 SCRIPT_NAME = "replay_in_carla.py"
 TEMPLATE = Path(__file__).with_name(f"{SCRIPT_NAME}.txt")
 TRAJECTORIES_NAME = "trajectories.json"
+#: the CARLA lint's findings on the scenario, for a scenario_runner user
+LINT_NAME = "carla_lint.txt"
 RECORDING_NAME = "replay.dat"
 README_NAME = "README.md"
 #: seconds one esmini run may take before it is stopped
@@ -157,12 +159,27 @@ def export_carla(folder: Path, out: Path) -> InSituDoc:
     source = str(choice.get("file") or "")
     data = trajectories(doc, source, _step_s(folder, doc))
     write_text_atomic(out / TRAJECTORIES_NAME, json.dumps(data, separators=(",", ":")) + "\n")
-    title = (f"{folder.parent.name}: ego track {choice.get('ego_track', '?')}, "
+    owner = folder.parent.name if folder.name == "in_situ" else folder.name
+    title = (f"{owner}: ego track {choice.get('ego_track', '?')}, "
              f"{len(doc.vehicles)} recorded vehicles, {doc.duration_s:g} s")
     script = out / SCRIPT_NAME
     write_text_atomic(script, replay_script(title, source, data["step_s"]))
     script.chmod(0o755)
+    write_text_atomic(out / LINT_NAME, lint_report(out / XOSC_NAME))
     return doc
+
+
+def lint_report(xosc: Path) -> str:
+    """What the CARLA lint says of the scenario for scenario_runner, one finding a line (its
+    CARLA_PARTIAL warning on the trajectories is why the replay script is there)."""
+    from lxml import etree
+
+    from scenweave.judge.carla_lint import carla_lint
+    from scenweave.judge.scenario_doc import ScenarioDoc
+
+    found = carla_lint(ScenarioDoc(etree.parse(str(xosc))))
+    lines = [f"{f.severity} {f.code}: {f.message}" for f in found]
+    return "\n".join(lines or ["no finding: scenario_runner plays the scenario as written"]) + "\n"
 
 
 # --- what the export's README says of them -----------------------------------------------------
@@ -213,5 +230,6 @@ yaw = -heading in degrees), spawning each when its track starts and removing it 
 scenario_runner can open `{XOSC_NAME}` too (`LogicFile` names the `.xodr`, which it loads as a
 standalone world), but it plays FollowTrajectoryAction only in the Story and as a Polyline, and
 leaves the following to each actor's controller: the vehicles follow their records less
-closely than in esmini. The script is the replay as recorded.
+closely than in esmini (`{LINT_NAME}`: the CARLA lint's findings, `CARLA_PARTIAL` saying
+this). The script is the replay as recorded.
 """

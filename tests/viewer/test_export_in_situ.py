@@ -84,6 +84,9 @@ def test_the_carla_export_holds_the_road_the_script_and_its_data(carla_export, i
     assert "generate_opendrive_world" in text and "synchronous_mode = True" in text
     assert "STEP_S = 0.1\n" in text
     assert (carla_export / "replay_in_carla.py").stat().st_mode & 0o111
+    lint = (carla_export / "carla_lint.txt").read_text()
+    assert "warning CARLA_PARTIAL" in lint and "error" not in lint
+    assert f"{SCENARIO}: ego track 1, 4 recorded vehicles" in text
     readme = (carla_export.parent.parent / "README.md").read_text()
     assert f"`{SCENARIO}/in_situ/`" in readme and "--ego external" in readme
 

@@ -12,8 +12,8 @@ from scenweave.errors import InputError
 from scenweave.maneuvers.maneuver import Domain, Maneuver
 from scenweave.plugins import DOCS, PLUGINS_ENV, Registry
 
-__all__ = ["PLUGINS_ENV", "UnknownManeuver", "by_tag", "codes", "find", "get", "maneuvers",
-           "register", "seeding_order", "unregister"]
+__all__ = ["PLUGINS_ENV", "UnknownManeuver", "by_tag", "codes", "find", "get", "is_builtin",
+           "maneuvers", "register", "seeding_order", "unregister"]
 
 BUILTIN_MODULES = ("brake", "cut", "lane_change", "follow", "free_ride", "urban")
 
@@ -71,10 +71,16 @@ def codes(domain: Domain | None = None) -> list[str]:
     return [m.code for m in maneuvers(domain)]
 
 
+def is_builtin(code: str) -> bool:
+    """True for a class ScenWeave ships; False for a plugin's or one registered by hand
+    (the docs' tables count only the built-in ones, ``scripts/doc_tables.py``)."""
+    return _classes.is_builtin(code)
+
+
 def seeding_order(domain: Domain) -> list[Maneuver]:
     """The built-in classes by code, then the added ones by code: sample data seeded by
     position stays the same for the built-in classes whatever a plugin adds."""
-    return sorted(maneuvers(domain), key=lambda m: (not _classes.is_builtin(m.code), m.code))
+    return sorted(maneuvers(domain), key=lambda m: (not is_builtin(m.code), m.code))
 
 
 def by_tag(tag: str) -> Maneuver | None:

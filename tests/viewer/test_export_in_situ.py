@@ -219,3 +219,59 @@ def test_carla_parses_every_shared_map_and_the_recorded_traffic_lies_on_driving_
         share = sum(counts[::2]) / sum(counts[1::2])
         print(f"{location}: {100 * share:.2f} % of {int(sum(counts[1::2]))} on a driving lane")
         assert share >= ON_LANE.get(location, 0.98), (location, share)
+
+
+@needs_carla
+def test_the_scripts_transforms_put_each_box_centre_on_its_record_on_carlas_road(carla_export,
+                                                                                 script):
+    """The script's transform_at with CARLA's own Map, Transform and BoundingBox (no server):
+    an actor whose box centre lies 1.2 m ahead of its origin is put 1.2 m behind the recorded
+    centre along its yaw, on the road's height."""
+    import carla
+
+    world_map = carla.Map("in_situ", (carla_export / "road.xodr").read_text())
+
+    class Parked:  # what transform_at reads of an actor: its bounding box
+        bounding_box = carla.BoundingBox(carla.Location(x=1.2, y=0.0, z=0.7),
+                                         carla.Vector3D(2.3, 0.95, 0.7))
+
+    scene = script.json.loads(script.TRAJECTORIES.read_text())
+    for vehicle in scene["vehicles"]:
+        for k in range(0, len(vehicle["t"]), 3):
+            pose = (vehicle["x"][k], vehicle["y"][k], vehicle["heading"][k])
+            placed = script.transform_at(carla, world_map, Parked(), pose)
+            yaw = math.radians(placed.rotation.yaw)
+            centre = (placed.location.x + 1.2 * math.cos(yaw),
+                      placed.location.y + 1.2 * math.sin(yaw))
+            assert centre == pytest.approx((pose[0], -pose[1]), abs=1e-3)
+            assert placed.rotation.yaw == pytest.approx(-math.degrees(pose[2]), abs=1e-3)
+            assert abs(placed.location.z - 0.05) < 0.01  # the fixture road is flat at z = 0
+
+
+#: what replay_in_carla.py calls of CARLA's client API, by the class that has it
+CARLA_API = {"Client": ("generate_opendrive_world", "get_world", "set_timeout"),
+             "World": ("get_settings", "apply_settings", "tick", "spawn_actor", "get_map",
+                       "get_blueprint_library", "get_spectator", "get_actors"),
+             "WorldSettings": ("synchronous_mode", "fixed_delta_seconds"),
+             "Actor": ("set_transform", "set_simulate_physics", "destroy", "get_transform",
+                       "bounding_box"),
+             "Map": ("get_waypoint",), "BlueprintLibrary": ("filter",),
+             "ActorBlueprint": ("has_attribute", "set_attribute"), "ActorList": ("filter",),
+             "TrafficLight": ("set_state", "freeze", "get_opendrive_id"),
+             "TrafficLightState": ("Green", "Yellow", "Red", "Off")}
+
+
+@needs_carla
+def test_everything_the_script_calls_is_in_carlas_client_package(script):
+    """Without a server the calls cannot run; the installed client package (the server's
+    version) has each of them, and takes the script's road mesh parameters."""
+    import carla
+
+    text = Path(script.__file__).read_text()
+    for owner, names in CARLA_API.items():
+        for name in names:
+            # the list is what the script calls (a light's state by its name)
+            assert f".{name}" in text or f'"{name}"' in text, name
+            assert hasattr(getattr(carla, owner), name), f"carla.{owner}.{name}"
+    parameters = carla.OpendriveGenerationParameters(**script.MESH)
+    assert parameters.wall_height == script.MESH["wall_height"]

@@ -52,10 +52,6 @@ class ClassLayout:
         return tuple(c.name for c in self.columns)
 
     @cached_property
-    def column_by_name(self) -> dict[str, Column]:
-        return {c.name: c for c in self.columns}
-
-    @cached_property
     def conventions(self) -> dict:
         """What extraction must know of this layout beyond the column names; copied into
         every canonical record (``conventions``) so params follow the layout the file was

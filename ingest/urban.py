@@ -23,7 +23,6 @@ from scenweave.ingest.issues import Issue, RecordIssue, unexpected_issue
 RECORD_VERSION = "urban.v1"
 REGULAR_STEP_TOLERANCE = 0.1  # steps within 10 % of the median count as regular
 DEFAULT_PERTURBATION = {"dl_noise_std": 0.2, "v_noise_std": 0.5, "t_noise_std": 0.2}
-TIMED_FIELDS = ("ego_vehicle", "temporal_climatic", "obstacles")
 EGO_FIELDS = ("ego_speed", "longitudinal_acceleration_wheels", "steer_wheel_angle", "ego_brake",
               "ego_lane", "turning_signal_state", "yaw_rate", "covered_distance_by_ego",
               "dist_to_marking_left", "dist_to_marking_right")

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TypeGuard
 
 from lxml import etree
 
@@ -267,21 +266,6 @@ def _init_speeds(check: _Check) -> None:
 
 
 SpeedChange = tuple[str, float | None, float | None, float | None]
-
-
-def speed_targets(changes: list[SpeedChange]) -> list[tuple[str, float, float]]:
-    """(entity, target speed, when it is to be reached) of each speed change whose target,
-    duration and start are all known: what the replay figure and the viewer mark."""
-    found: list[tuple[str, float, float]] = []
-    for name, target, duration, start in changes:
-        if _finite(target) and _finite(duration) and _finite(start):
-            found.append((name.removesuffix("_speed_change"), float(target),
-                          float(start) + float(duration)))
-    return found
-
-
-def _finite(value: object) -> TypeGuard[int | float]:
-    return isinstance(value, int | float) and math.isfinite(value)
 
 
 def expected_speed_changes(doc: ScenarioDoc, params: Params) -> list[SpeedChange]:

@@ -53,11 +53,6 @@ class ValidationResult:
     #: the ``player.Playback`` itself (not serialised: the caller writes it as replay.json)
     playback: Playback | None = field(default=None, repr=False, compare=False)
 
-    @property
-    def error_codes(self) -> list[str]:
-        """Codes of the error-severity findings, in order."""
-        return [f.code for f in self.errors if f.severity == "error"]
-
     def write_replay(self, folder: Path) -> None:
         """Write what the replay showed into ``folder`` (``write_replay``)."""
         write_replay(folder, self.playback, self.verdict)

@@ -60,11 +60,6 @@ class Variation:
     #: it matches the ``reference`` (what it was asked to change), not the faithful scenario
     as_asked: bool = False
 
-    @property
-    def is_variant(self) -> bool:
-        """It changed something allowed and nothing fixed."""
-        return bool(self.changed) and not self.violations
-
 
 def compare(faithful: Path, variant: Path, reference: Path | None = None) -> Variation:
     """How ``variant`` differs from the ``faithful`` scenario file; ``reference``: the

@@ -191,10 +191,6 @@ class RoadNetwork:
             return None
         return LaneKey(key.road_id, key.section, lane_id)
 
-    def oncoming_lane(self, key: LaneKey) -> LaneKey | None:
-        """The drivable lane nearest the centre line whose traffic comes the other way."""
-        return next(iter(self.oncoming_lanes(key)), None)
-
     def oncoming_lanes(self, key: LaneKey) -> list[LaneKey]:
         """The drivable lanes whose traffic comes the other way, nearest the centre first."""
         section = self.road(key.road_id).sections[key.section]

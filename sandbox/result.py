@@ -71,13 +71,6 @@ class ExecResult:
         data["ok"] = self.ok
         return data
 
-    @property
-    def overhead_s(self) -> float | None:
-        """Wall time the sandbox added on top of the script's own time."""
-        if self.script_duration_s is None:
-            return None
-        return self.duration_s - self.script_duration_s
-
 
 @dataclass
 class Report:

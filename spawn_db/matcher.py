@@ -24,7 +24,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections import Counter
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -38,7 +38,7 @@ from scenweave.roads.map_ref import MapRef, resolve_map
 from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.roads.signals import junction_approach
 from scenweave.scenario_lib.kinematics import lane_change_length_m, start_gap_m
-from scenweave.schemas.params import NumberReader, Params
+from scenweave.schemas.params import NumberReader, Params, actor_value, unchecked
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
     load_database,
@@ -169,7 +169,7 @@ class Requirements:
     light_free_m: float = 0.0
 
     @classmethod
-    def from_params(cls, params: Mapping[str, Any]) -> Requirements:
+    def from_params(cls, params: Params) -> Requirements:
         """Read the contract keys (docs/params.md) the matcher needs."""
         scenario_id = str(params.get("scenario_id", "<no scenario_id>"))
         number = NumberReader(params)
@@ -209,7 +209,7 @@ class Requirements:
 
 
 
-def _light_movement(params: Mapping[str, Any]) -> str | None:
+def _light_movement(params: Params) -> str | None:
     maneuver = maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
         str(params.get("maneuver_tag", "")))
     return None if maneuver is None or maneuver.light is None else maneuver.turn
@@ -232,7 +232,7 @@ class SpawnMatcher:
             self._by_context.setdefault(entry["context"], []).append((_fixed_score(entry), entry))
         for ranked in self._by_context.values():
             ranked.sort(key=lambda pair: (-pair[0], pair[1]["spawn_id"]))
-        self._last_params: Mapping[str, Any] | None = None
+        self._last_params: Params | None = None
         #: lane walks of ``_lane_path``: start -> (metres walked, walk ended, path)
         self._lane_paths: dict[tuple[str, int, float], tuple[float, bool, LanePath]] = {}
 
@@ -264,11 +264,11 @@ class SpawnMatcher:
         return {a.spawn_id: a.rejections for a in self.assess(self._last_params)
                 if not a.accepted}
 
-    def assess(self, params: Mapping[str, Any]) -> list[Assessment]:
+    def assess(self, params: Params) -> list[Assessment]:
         """Every spawn point judged against ``params``, in database order."""
         return self._assess(Requirements.from_params(params), params)
 
-    def _assess(self, needs: Requirements, params: Mapping[str, Any]) -> list[Assessment]:
+    def _assess(self, needs: Requirements, params: Params) -> list[Assessment]:
         assessments = []
         for entry in self.entries:
             rejections = tuple(_hard_filters(entry, needs)) or self._route_rejections(entry,
@@ -285,7 +285,7 @@ class SpawnMatcher:
         if top_n < 1:
             raise ParamsError(f"top_n must be at least 1, got {top_n}")
         needs = Requirements.from_params(params)
-        self._last_params = dict(params)
+        self._last_params = unchecked(dict(params))
         accepted = self._accepted(needs, params, top_n)
         if not accepted and needs.domain == "highway":
             # prefer a drive free of lights to the stop trigger, need one to the manoeuvre's end
@@ -295,7 +295,7 @@ class SpawnMatcher:
             raise NoSpawnFits(_no_fit_message(params, self.map.name, self._assess(needs, params)))
         return _spread_over_roads(accepted)[:top_n]
 
-    def _accepted(self, needs: Requirements, params: Mapping[str, Any],
+    def _accepted(self, needs: Requirements, params: Params,
                   top_n: int) -> list[SpawnCandidate]:
         """The spawn points passing every filter, as far down the ranking as the top N go."""
         accepted: list[SpawnCandidate] = []
@@ -320,7 +320,7 @@ class SpawnMatcher:
         candidates = self.find(params, top_n)
         return self.place(params, candidates[index % len(candidates)])
 
-    def spawns_beside(self, placed: Mapping[str, Any]) -> list[SpawnCandidate]:
+    def spawns_beside(self, placed: Params) -> list[SpawnCandidate]:
         """The spawn points one lane over from ``placed`` (params ``assign`` filled): in each
         same-direction lane beside the ego's on the same road, the one nearest the ego's ``s``
         that fits the scenario, the nearer first (left on a tie). What a lane variant is
@@ -329,8 +329,8 @@ class SpawnMatcher:
         Raises :class:`NoSpawnFits` when neither neighbouring lane has such a spawn point.
         """
         needs = Requirements.from_params(placed)
-        here = self._ego_key(placed, needs)
-        ego = LanePoint(here.road_id, here.lane_id, placed["ego_s"])
+        here, ego_s = self._ego_lane(placed, needs)
+        ego = LanePoint(here.road_id, here.lane_id, ego_s)
         lanes = {(neighbour.road_id, neighbour.lane_id): side for side in ("left", "right")
                  if (neighbour := self.network.neighbour(here, side)) is not None}
         nearest: dict[tuple[str, int], tuple[float, int, dict[str, Any]]] = {}
@@ -350,7 +350,7 @@ class SpawnMatcher:
         return [SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
                 for *_, entry in sorted(nearest.values(), key=lambda found: found[:2])]
 
-    def lane_free_of_record(self, placed: Mapping[str, Any], ahead_m: float,
+    def lane_free_of_record(self, placed: Params, ahead_m: float,
                             index: int = 0) -> LanePoint:
         """A point ``ahead_m`` ahead of the ego along a same-direction lane that no actor of
         ``placed`` starts in or moves into (``required_lane_sides``), with drivable lane for a
@@ -362,8 +362,8 @@ class SpawnMatcher:
         """
         needs = Requirements.from_params(placed)
         number = NumberReader(placed)
-        here = self._ego_key(placed, needs)
-        used = {(str(placed.get(f"{actor}_road_id")), placed.get(f"{actor}_lane_id"))
+        here, ego_s = self._ego_lane(placed, needs)
+        used = {(str(actor_value(placed, actor, "road_id")), actor_value(placed, actor, "lane_id"))
                 for actor in ("ego", *(name for name, _, _ in _placed_actors(placed)))}
         used |= {(key.road_id, key.lane_id) for side in needs.sides
                  if (key := self.network.neighbour(here, side)) is not None}
@@ -372,7 +372,7 @@ class SpawnMatcher:
         for offset in range(len(free)):
             key = free[(index + offset) % len(free)]
             try:
-                point = self.network.advance(key.road_id, key.lane_id, placed["ego_s"], ahead_m)
+                point = self.network.advance(key.road_id, key.lane_id, ego_s, ahead_m)
             except LaneEndsError:
                 continue
             if self.network.drivable_length(point.road_id, point.lane_id, point.s, True,
@@ -389,10 +389,13 @@ class SpawnMatcher:
         pose = self.network.lane_to_world(point.road_id, point.lane_id, point.s)
         return {**_pose_keys(actor, pose.x, pose.y, pose.z, pose.h), **_lane_keys(actor, point)}
 
-    def _ego_key(self, placed: Mapping[str, Any], needs: Requirements) -> LaneKey:
+    def _ego_lane(self, placed: Params, needs: Requirements) -> tuple[LaneKey, float]:
+        """The ego's lane and ``s`` where the spawn stage placed it."""
+        lane, s = actor_value(placed, "ego", "lane_id"), actor_value(placed, "ego", "s")
         try:
-            return self.network.key_at(str(placed.get("ego_road_id")), placed["ego_lane_id"],
-                                       placed["ego_s"])
+            if lane is None or s is None:
+                raise KeyError("ego_lane_id" if lane is None else "ego_s")
+            return self.network.key_at(str(actor_value(placed, "ego", "road_id")), lane, s), s
         except (KeyError, TypeError, ValueError, OpenDriveError) as err:
             raise ParamsError(f"{needs.scenario_id}: ego_road_id/ego_lane_id/ego_s do not name "
                               f"a lane of map {self.map.name}: {err}") from err
@@ -408,7 +411,7 @@ class SpawnMatcher:
                 key = self.network.neighbour(key, side)
         return [key for *_, key in sorted(found, key=lambda item: item[:2])]
 
-    def named_spawn(self, params: Mapping[str, Any]) -> SpawnCandidate:
+    def named_spawn(self, params: Params) -> SpawnCandidate:
         """The spawn point ``params`` name (``spawn_id``), when it still fits them: for a
         record whose values changed but whose place did not (a variant with another vehicle
         model, whose reference-point gaps differ). Raises :class:`NoSpawnFits` otherwise."""
@@ -421,17 +424,17 @@ class SpawnMatcher:
                               f"{self.map.name} does not fit the changed scenario ({why})")
         return SpawnCandidate(entry["spawn_id"], _score(entry, needs), entry)
 
-    def place(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> Params:
+    def place(self, params: Params, candidate: SpawnCandidate) -> Params:
         """``params`` with the spawn keys filled from ``candidate`` (as ``assign`` fills them
         from its pick)."""
         return cast(Params, self._placed(params, candidate))  # the params with the spawn keys
 
     def _why_not(self, entry: dict[str, Any], needs: Requirements,
-                 params: Mapping[str, Any]) -> str:
+                 params: Params) -> str:
         rejections = (*_hard_filters(entry, needs), *self._route_rejections(entry, params))
         return str(rejections[0]) if rejections else "no reason found"
 
-    def _fits(self, entry: dict[str, Any], needs: Requirements, params: Mapping[str, Any]) -> bool:
+    def _fits(self, entry: dict[str, Any], needs: Requirements, params: Params) -> bool:
         if next(_hard_filters(entry, needs), None) is None and not self._route_rejections(entry,
                                                                                          params):
             return True
@@ -439,7 +442,7 @@ class SpawnMatcher:
         return (needs.domain == "highway" and next(_hard_filters(entry, relaxed), None) is None
                 and not self._route_rejections(entry, params))
 
-    def _placed(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
+    def _placed(self, params: Params, candidate: SpawnCandidate) -> dict[str, Any]:
         """``params`` with the spawn keys filled from ``candidate``; :class:`NoSpawnFits` when
         an actor's lane ends before its place (the road model's ``LaneEndsError``)."""
         try:
@@ -448,7 +451,7 @@ class SpawnMatcher:
             raise NoSpawnFits(f"{params.get('scenario_id')}: spawn point {candidate.spawn_id} "
                               f"of map {self.map.name}: {err}") from err
 
-    def _filled(self, params: Mapping[str, Any], candidate: SpawnCandidate) -> dict[str, Any]:
+    def _filled(self, params: Params, candidate: SpawnCandidate) -> dict[str, Any]:
         result = dict(params)
         result["map"] = self.map.logic_file
         result["spawn_id"] = candidate.spawn_id
@@ -503,7 +506,7 @@ class SpawnMatcher:
         return network.advance(exit_lane.road_id, exit_lane.lane_id,
                                network.entry_s(exit_lane), TURN_EXIT_INTO_M)
 
-    def _route_rejections(self, entry: dict[str, Any], params: Mapping[str, Any]
+    def _route_rejections(self, entry: dict[str, Any], params: Params
                           ) -> tuple[Rejection, ...]:
         """Beyond the database's facts: a lane change must keep its lane ids.
 
@@ -536,7 +539,7 @@ class SpawnMatcher:
         return (Rejection("lane_change_lane_ids", f"the {actor}'s lane changes its id during "
                           f"the lane change ({begin:.0f}-{end:.0f} m on: {path})"),)
 
-    def _changer_lane(self, entry: dict[str, Any], actor: str, params: Mapping[str, Any]
+    def _changer_lane(self, entry: dict[str, Any], actor: str, params: Params
                       ) -> tuple[LanePoint | None, float]:
         """The lane the lane-changing actor starts in, at the spawn's ``s``, and how far along
         it the actor stands at t = 0."""
@@ -575,7 +578,7 @@ class SpawnMatcher:
         return path
 
     def _place(self, ego: LanePoint, side: str | None, distance: float,
-               params: Mapping[str, Any]) -> LanePoint:
+               params: Params) -> LanePoint:
         if side == ONCOMING:
             return self._place_oncoming(ego, distance, params)
         key = self.network.key_at(ego.road_id, ego.lane_id, ego.s)
@@ -588,7 +591,7 @@ class SpawnMatcher:
         return self.network.advance(key.road_id, key.lane_id, ego.s, distance)
 
     def _place_oncoming(self, ego: LanePoint, distance: float,
-                        params: Mapping[str, Any]) -> LanePoint:
+                        params: Params) -> LanePoint:
         """In the nearest lane of the other direction whose traffic does not turn left across
         the ego's path, ``distance`` ahead along the ego's lane (or, where the road there has
         none, as far ahead as one is, in 5 m steps)."""
@@ -749,7 +752,7 @@ ONCOMING = "oncoming"
 ONCOMING_SEARCH_STEP_M = 5.0
 
 
-def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, float]]:
+def _placed_actors(params: Params) -> list[tuple[str, str | None, float]]:
     """``(actor, adjacent side or None, signed distance along the lane at t = 0)`` of every
     NPC: a highway NPC where its recorded gap holds at ``maneuver_start_s``, the urban lead
     ``lead_distance_m`` ahead along the ego's lane (on its lane, facing its traffic), the
@@ -768,18 +771,18 @@ def _placed_actors(params: Mapping[str, Any]) -> list[tuple[str, str | None, flo
     maneuver = maneuvers.find(params.get("maneuver_class"))
     by_slot = maneuver is not None and maneuver.surrounding_slots
     if params.get("has_npc") and not by_slot:
-        side = None
+        side: str | None = None
         if maneuver is not None and maneuver.npc_starts_beside:
             sides = params.get("required_lane_sides") or []
             side = sides[0] if sides else None
         placed.append(("npc", side, _start_distance(params, "npc")))
     for slot, side in FREE_RIDE_SLOTS.items():
-        if params.get(f"{slot}_present"):
+        if actor_value(params, slot, "present"):
             placed.append((slot, side, _start_distance(params, slot)))
     return placed
 
 
-def _start_distance(params: Mapping[str, Any], actor: str) -> float:
+def _start_distance(params: Params, actor: str) -> float:
     """Where ``actor`` stands at t = 0, ahead of the ego (m): its recorded gap minus the
     lead-in drift (``scenario_lib.kinematics.start_gap_m``)."""
     number = NumberReader(params)
@@ -810,7 +813,7 @@ def _light_keys(entry: dict[str, Any], needs: Requirements) -> dict[str, Any]:
     }
 
 
-def _no_fit_message(params: Mapping[str, Any], map_name: str,
+def _no_fit_message(params: Params, map_name: str,
                     assessments: list[Assessment]) -> str:
     scenario = params.get("scenario_id", "<no scenario_id>")
     in_context = [a for a in assessments

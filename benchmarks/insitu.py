@@ -220,10 +220,10 @@ class ReplayTally:
         return (f"{label}: {self.written}/{total} in situ ({sum(self.refused.values())} "
                 f"refused); positions within 0.1 m {100 * self.fit.position_share:.2f} % of "
                 f"{self.fit.samples} (worst {self.fit.worst_position_m:.2f} m, vehicles beyond "
-                f"0.5 m {self.far}); headings within 0.05 rad "
+                f"0.5 m {self.far}; {self.fit.held_samples} samples held as standstill noise, "
+                f"up to {self.fit.worst_held_m:.2f} m off); headings within 0.05 rad "
                 f"{100 * self.fit.heading_share:.2f} %; speeds within 0.1 m/s of the "
-                f"positions' change {100 * self.fit.speed_share:.2f} % ("
-                f"{self.fit.backward_samples} steps held as standstill noise); replay median "
+                f"positions' change {100 * self.fit.speed_share:.2f} %; replay median "
                 f"{statistics.median(times):.2f} s, max {times[-1]:.2f} s (esmini loading and "
                 f"stepping: median {statistics.median(esmini):.2f} s, max {esmini[-1]:.2f} s)")
 

@@ -6,8 +6,10 @@ recorded, measured against the *raw* record (never only against the scenario's o
 it, which holds standstill jitter):
 
 - position: the box centre within ``POSITION_TOL_M`` of the recorded position at every
-  recorded sample (share and worst, per vehicle and overall); beyond ``POSITION_FAR_M`` or
-  under ``MIN_SHARE`` of the samples within the tolerance is an error;
+  recorded sample (share and worst, per vehicle and overall); under ``MIN_SHARE`` of the
+  samples within the tolerance, or a sample the scenario follows beyond ``POSITION_FAR_M``,
+  is an error; samples the scenario holds as standstill noise count in the share and are
+  named with their farthest offset (``IN_SITU_HELD``, a warning);
 - heading: within ``HEADING_TOL_RAD`` (the same rules);
 - speed: esmini's speed against the change of the recorded positions over the step before
   the sample (the records' own ``velocity`` contradicts their positions:
@@ -91,6 +93,10 @@ class Fit:
     backward_samples: int = 0
     #: the vehicle whose worst sample this is (overall fits)
     worst_position_of: str | None = None
+    #: recorded samples the scenario holds off the record (standstill noise), and the
+    #: farthest of them from its recorded position (m): named, not counted in the worst
+    held_samples: int = 0
+    worst_held_m: float = 0.0
 
     @property
     def position_share(self) -> float:
@@ -112,6 +118,8 @@ class Fit:
         self.speed_samples += other.speed_samples
         self.speed_within += other.speed_within
         self.backward_samples += other.backward_samples
+        self.held_samples += other.held_samples
+        self.worst_held_m = max(self.worst_held_m, other.worst_held_m)
         if other.worst_position_m >= self.worst_position_m:
             self.worst_position_m = other.worst_position_m
             self.worst_position_at_s = other.worst_position_at_s
@@ -132,7 +140,9 @@ class Fit:
                              "worst_m": rounded(self.worst_position_m),
                              "worst_at_s": rounded(self.worst_position_at_s, 3),
                              **({"worst_of": self.worst_position_of}
-                                if self.worst_position_of else {})},
+                                if self.worst_position_of else {}),
+                             "held_samples": self.held_samples,
+                             "worst_held_m": rounded(self.worst_held_m)},
                 "heading": {"share": rounded(self.heading_share, 5),
                             "worst_rad": rounded(self.worst_heading_rad),
                             "worst_at_s": rounded(self.worst_heading_at_s, 3)},
@@ -215,9 +225,15 @@ def vehicle_fit(playback: Playback, path: RecordedPath) -> Fit:
     turned = np.abs(np.angle(np.exp(1j * (np.asarray(track["h"], float)[k] - h))))
     fit.position_within = int((off <= POSITION_TOL_M).sum())
     fit.heading_within = int((turned <= HEADING_TOL_RAD).sum())
-    if len(off):
-        worst = int(np.argmax(off))
+    held = np.asarray(hold_backward(path.x, path.y, path.heading)[2], dtype=bool)[seen]
+    fit.held_samples = int(held.sum())
+    if held.any():
+        fit.worst_held_m = float(off[held].max())
+    if (~held).any():
+        followed = np.where(held, -1.0, off)
+        worst = int(np.argmax(followed))
         fit.worst_position_m, fit.worst_position_at_s = float(off[worst]), float(t[worst])
+    if len(off):
         worst = int(np.argmax(turned))
         fit.worst_heading_rad, fit.worst_heading_at_s = float(turned[worst]), float(t[worst])
     if not seen.all():
@@ -274,8 +290,15 @@ def _fit_findings(verdict: InSituVerdict) -> list[Finding]:
         found.append(Finding(
             "IN_SITU_POSITION",
             f"{overall.position_share:.2%} of {overall.samples} recorded positions played within "
-            f"{POSITION_TOL_M} m; worst {worst_of} {overall.worst_position_m:.2f} m at "
-            f"{overall.worst_position_at_s or 0.0:.2f} s", "error" if bad else "warning"))
+            f"{POSITION_TOL_M} m; worst where it follows the record {worst_of} "
+            f"{overall.worst_position_m:.2f} m at {overall.worst_position_at_s or 0.0:.2f} s",
+            "error" if bad else "warning"))
+    if overall.worst_held_m > POSITION_TOL_M:
+        found.append(Finding(
+            "IN_SITU_HELD",
+            f"{overall.held_samples} recorded samples are standstill noise the scenario holds "
+            f"(the record steps back and forth while the car stands), up to "
+            f"{overall.worst_held_m:.2f} m from the recorded position", "warning"))
     if overall.heading_within < overall.samples:
         bad = overall.heading_share < MIN_SHARE
         found.append(Finding(

@@ -74,10 +74,14 @@ def test_standstill_noise_is_named_not_compared():
     record = [RecordedPath("v3", [0.1 * k for k in range(6)], x, [0.0] * 6, [0.0] * 6, 4, 2)]
     playback = Playback(times=list(record[0].t), tracks={"v3": {
         "x": [5.0] * 6, "y": [0.0] * 6, "h": [0.0] * 6, "speed": [0.0] * 6}})
-    fit = judge_in_situ(playback, record).vehicles["v3"]
+    verdict = judge_in_situ(playback, record)
+    fit = verdict.vehicles["v3"]
     # the scenario holds the first three samples between 5.0 and 4.7: three steps are noise
-    assert fit.backward_samples == 3
-    assert fit.worst_position_m == pytest.approx(0.3) and fit.position_within == 5
+    assert fit.backward_samples == 3 and fit.held_samples == 3
+    assert fit.position_within == 5  # the share counts the held samples against the record
+    assert fit.worst_held_m == pytest.approx(0.3) and fit.worst_position_m == 0.0
+    (held,) = [f for f in verdict.findings if f.code == "IN_SITU_HELD"]
+    assert held.severity == "warning" and "0.30 m" in held.message
     assert fit.speed_samples == 2 and fit.speed_within == 2  # the two steps after the hold
 
 

@@ -90,8 +90,10 @@ def test_every_vehicle_plays_its_record_except_the_held_jitter(played):
         assert fit.worst_position_m < 0.02 and fit.heading_share == 1.0
         assert fit.speed_share == 1.0, (name, fit.to_dict())
     standing = verdict.vehicles["v3"]
-    assert 0.05 < standing.worst_position_m <= JITTER_M  # held between its jittered positions
+    assert 0.05 < standing.worst_held_m <= JITTER_M  # held between its jittered positions
     assert standing.backward_samples > 0 and standing.position_share < 1.0
+    assert standing.worst_position_m < 0.02  # where it follows the record, it is exact
+    assert "IN_SITU_HELD" in [f.code for f in verdict.findings]
     assert not [f for f in verdict.findings if f.code == "IN_SITU_COLLISION"]
 
 

@@ -44,6 +44,9 @@ class PipelineSettings:
     agent: Any = None  # agent.AgentSettings when no_llm is False
     #: player.ReplaySettings: play every scenario in esmini and judge it (None: no replay)
     replay: Any = None
+    #: why scenarios are not played when ``replay`` is None (``scenweave.unplayed``): run.json
+    #: and summary.json say so, and a resumed run with a player plays them
+    replay_not_run: str | None = None
     #: the map scenarios are made for: a bundled town's name or an .xodr path (None: Town04)
     map: str | None = None
     #: variants the LLM writes of each delivered scenario (``agent.variants``; agent only)

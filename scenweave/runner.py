@@ -49,6 +49,8 @@ class RunResult:
     summary: dict
     skipped: int = 0
     input_issues: list = field(default_factory=list)
+    #: finished scenarios never played before, played by this resumed run (scenweave.unplayed)
+    played_later: int = 0
 
     @property
     def refused(self) -> int:
@@ -66,7 +68,8 @@ class RunResult:
         """The one-line summary printed at the end of a run."""
         counts = self.summary["counts"]
         parts = ", ".join(f"{counts[s]} {s}" for s in STATUSES)
-        resumed = f" ({self.skipped} already done)" if self.skipped else ""
+        later = f", {self.played_later} of them played now" if self.played_later else ""
+        resumed = f" ({self.skipped} already done{later})" if self.skipped else ""
         refused = self.refused
         issues = f", {refused} refused" if refused else ""
         replay = self.summary.get("replay") or {}
@@ -127,6 +130,10 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
         if not done or (retry_failed and done.get("status") == "failed"):
             todo.append((index, params))
     skipped = len(loaded.params) - len(todo)
+    from scenweave.unplayed import play_unplayed
+
+    # a resumed run with a player plays what a run without one delivered unplayed
+    later = play_unplayed(folder, settings.replay) if settings.replay is not None else []
     stage = partial(_staging, folder, loaded.recorded)
     work = (_in_processes(todo, stage, settings, matcher, jobs) if jobs > 1 else
             _in_this_process(todo, stage, settings, matcher))
@@ -140,7 +147,7 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
     summary = summarize(folder, issues)
     folder.write(SUMMARY_FILE, summary)
     write_run_report(folder.root)
-    return RunResult(folder, summary, skipped, issues)
+    return RunResult(folder, summary, skipped, issues, played_later=len(later))
 
 
 def _in_situ_writer(loaded: LoadedInput, settings: PipelineSettings) -> InSituWriter | None:
@@ -230,6 +237,8 @@ def round_robin(params_list: list[Params]) -> Iterator[tuple[int, Params]]:
 
 def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
     """Totals, per-class counts and the error taxonomy over every finished scenario."""
+    from scenweave.unplayed import not_played_summary
+
     outcomes = folder.outcomes()
     counts = Counter(o["status"] for o in outcomes)
     by_class: dict[str, Counter] = {}
@@ -250,7 +259,7 @@ def summarize(folder: RunFolder, input_issues: list[dict]) -> dict:
         "first_attempt_success": sum(bool(o.get("first_attempt_success")) for o in outcomes),
         "fallbacks": sum(bool(o.get("fallback")) for o in outcomes),
         "node_latency_s": node_latency(outcomes),
-        "replay": replay_summary(outcomes),
+        "replay": {**replay_summary(outcomes), **not_played_summary(folder, outcomes)},
         "variants": variant_summary(outcomes),
         "input_issues": input_issues,
         "scenarios": outcomes,
@@ -295,7 +304,10 @@ def node_latency(outcomes: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, f
 
 def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
                     settings: PipelineSettings, folder: RunFolder) -> dict:
-    """What ``run.json`` says: input, selection, mode and settings of the run."""
+    """What ``run.json`` says: input, selection, mode and settings of the run, and why its
+    scenarios are not played when they are not."""
+    from scenweave.unplayed import RUN_KEY
+
     agent_settings = settings.agent
     return {
         "run_id": folder.run_id,
@@ -307,4 +319,5 @@ def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
         "map": settings.map or "Town04",
         "top_n": settings.top_n,
         "agent": agent_settings.to_dict() if hasattr(agent_settings, "to_dict") else None,
+        RUN_KEY: settings.replay_not_run,
     }

@@ -129,7 +129,9 @@ def run_row(run: Run) -> dict:
 
 def _replay_counts(summary: dict) -> dict | None:
     replay = summary.get("replay")
-    return {"played": replay.get("played"), "passed": replay.get("passed")} \
+    return {"played": replay.get("played"), "passed": replay.get("passed"),
+            "not_played": replay.get("not_played") or 0,
+            "not_played_because": replay.get("not_played_because")} \
         if isinstance(replay, dict) else None
 
 

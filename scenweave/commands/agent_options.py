@@ -146,7 +146,8 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                       map_ref: Any = None) -> PipelineSettings:
     """Pipeline settings from the options; ``--no-llm`` or ``--llm none`` = reference scripts;
     ``map_ref`` (``--map``) is the map scenarios are made for (None: Town04)."""
-    replay_settings = replay_settings_for(replay)
+    plan = replay_plan_for(replay)
+    replay_settings = plan.settings
     map_name = None if map_ref is None else map_ref.logic_file
     _check_repair(repair)  # a bad option is a usage error whichever LLM runs
     if llm == "replay" and replay_file is None:
@@ -154,7 +155,8 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
     if llm == "auto" and not no_llm:
         llm = auto_llm(ollama_host)
     if no_llm or llm == "none":
-        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings, map=map_name)
+        return PipelineSettings(no_llm=True, top_n=top_n, replay=replay_settings, map=map_name,
+                                replay_not_run=plan.not_run_because)
     from scenweave.agent import AgentSettings
     from scenweave.agent.settings import batch_sandbox
 
@@ -164,7 +166,7 @@ def pipeline_settings(no_llm: bool, top_n: int, llm: str = "none", model: str | 
                           replay_file=replay_file, on_llm_error=on_llm_error,
                           sandbox=batch_sandbox(sandbox), replay=replay_settings)
     return PipelineSettings(no_llm=False, top_n=top_n, agent=agent, replay=replay_settings,
-                            map=map_name)
+                            map=map_name, replay_not_run=plan.not_run_because)
 
 
 def _check_repair(repair: str) -> None:
@@ -179,17 +181,29 @@ def _check_repair(repair: str) -> None:
 def replay_settings_for(wanted: bool | None) -> Any:
     """``ReplaySettings`` when scenarios are to be played: asked for (``--replay``: esmini must
     be there), or by default when esmini is found; None for ``--no-replay``."""
-    if wanted is False:
-        return None
-    from scenweave.player import PlayerUnavailable, ReplaySettings, find_esmini
+    return replay_plan_for(wanted).settings
+
+
+def replay_plan_for(wanted: bool | None) -> Any:
+    """``scenweave.unplayed.replay_plan``: the settings, and why scenarios are not played
+    (``--replay`` without esmini is a usage error naming ESMINI_HOME)."""
+    from scenweave.player import PlayerUnavailable
+    from scenweave.unplayed import replay_plan
 
     try:
-        find_esmini()
+        return replay_plan(wanted)
     except PlayerUnavailable as err:
-        if wanted:
-            raise click.UsageError(f"--replay: {err}") from err
-        return None
-    return ReplaySettings()
+        raise click.UsageError(f"--replay: {err}") from err
+
+
+def echo_not_played(summary: dict, run_dir: Path) -> None:
+    """The one line saying how many of a run's scenarios were not played in esmini, why and
+    what to do (``scenweave.unplayed.not_played_line``); nothing when all were."""
+    from scenweave.unplayed import not_played_line
+
+    line = not_played_line(summary, run_dir)
+    if line:
+        click.echo(line, err=True)
 
 
 def auto_llm(ollama_host: str | None) -> str:

@@ -13,7 +13,7 @@ from typing import Any
 import click
 
 from scenweave import exit_codes
-from scenweave.commands.agent_options import json_option
+from scenweave.commands.agent_options import echo_not_played, json_option
 from scenweave.console import problem_lines
 from scenweave.queue.connection import QUEUE_ENV
 from scenweave.schemas.scenario_folder import RUN_FILE, SUMMARY_FILE
@@ -65,6 +65,7 @@ def collect(run_dir: Path, url: str | None, wait: bool, timeout: float | None,
         click.echo(json.dumps(result.summary, indent=1))
     else:
         click.echo(result.line())
+        echo_not_played(result.summary, run_dir)
         for line in problem_lines(result.summary.get("input_issues", []),
                                   result.summary.get("scenarios", []),
                                   str(run_dir / SUMMARY_FILE)):

@@ -7,6 +7,10 @@ fresh machine shows the whole pipeline in a few minutes.
 
 from __future__ import annotations
 
+import fcntl
+import importlib
+import importlib.util
+import time
 from pathlib import Path
 
 import click
@@ -14,8 +18,9 @@ import click
 from scenweave.commands.agent_options import (
     LlmChoice,
     auto_llm,
+    echo_not_played,
     pipeline_settings,
-    replay_settings_for,
+    replay_plan_for,
 )
 from scenweave.ingest import ingest_directory
 from scenweave.ingest.samples import write_highway_samples, write_urban_samples
@@ -26,6 +31,9 @@ from scenweave.runner import run_batch
 #: car-following rows per FL class that only a speed profile of two phases shows (issue 22):
 #: they follow the seeded rows, which stay the same
 PHASED_ROWS = 1
+#: held while ``scripts/setup.sh --llm-later`` installs llama-cpp-python in the background
+#: (a clone's build folder; a pip install has none)
+LLAMA_INSTALL_LOCK = Path(__file__).resolve().parents[2] / "build" / "llama-install.lock"
 
 
 @click.command("demo")
@@ -52,23 +60,43 @@ def demo(out_dir: Path, seed: int, per_class: int, llm: str, agent_classes: str,
     report = ingest_directory(raw, records)
     click.echo(f"demo: sample data in {raw}; {report.records_written} canonical records in "
                f"{records} ({len(report.errors)} input errors)")
+    plan = replay_plan_for(None)
     result = run_batch(records, out_dir / "runs", InputSelection(),
-                       PipelineSettings(no_llm=True, replay=replay_settings_for(None)),
+                       PipelineSettings(no_llm=True, replay=plan.settings,
+                                        replay_not_run=plan.not_run_because),
                        run_id="no-llm")
     click.echo(result.line())
+    echo_not_played(result.summary, result.folder.root)
     if llm == "auto":
         llm = auto_llm(None)
     if llm == "none":
         return
+    if llm == "embedded":
+        wait_for_embedded_runtime()
     classes = tuple(c.strip() for c in agent_classes.split(",") if c.strip())
     agent = run_batch(records, out_dir / "runs", InputSelection(classes=classes, per_class=1),
                       pipeline_settings(False, 5, llm=llm, repair=repair),
                       run_id=f"agent-{llm}")
     click.echo(agent.line())
+    echo_not_played(agent.summary, agent.folder.root)
     click.echo(attempts_line(agent.summary))
     click.echo(f"demo: inspect a scenario with: scenweave trace "
                f"{agent.summary['scenarios'][0]['scenario_id']} --runs {out_dir / 'runs'}"
                if agent.summary["scenarios"] else "demo: the agent had no records to run")
+
+
+def wait_for_embedded_runtime(lock: Path = LLAMA_INSTALL_LOCK) -> None:
+    """When setup left llama-cpp-python compiling (``setup.sh --llm-later``), wait until it is
+    installed: the reference part ran meanwhile, the agent part needs it."""
+    if importlib.util.find_spec("llama_cpp") is not None or not lock.is_file():
+        return
+    click.echo("demo: waiting for llama-cpp-python, compiling since setup (log "
+               f"{lock.parent / 'llama-prebuild.log'})")
+    started = time.monotonic()
+    with open(lock) as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+    importlib.invalidate_caches()
+    click.echo(f"demo: llama-cpp-python ready after {time.monotonic() - started:.0f} s")
 
 
 def attempts_line(summary: dict) -> str:

@@ -48,7 +48,8 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
     if not files:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
     map_path = None if map_ref is None else map_ref.path
-    results = [replay_one(xosc, settings, figures, map_path, force)
+    later = play_unplayed_runs(paths, settings, map_path)
+    results = [later.get(xosc) or replay_one(xosc, settings, figures, map_path, force)
                for xosc in progress(files, desc="replay")]
     for result in results:
         if result.get("forced") and not as_json:
@@ -62,6 +63,44 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
     else:
         click.echo(f"replay: {passed}/{len(results)} played as recorded")
     exit_codes.finish(passed < len(results))
+
+
+def play_unplayed_runs(paths: tuple[Path, ...], settings: Any,
+                       map_path: Path | None) -> dict[Path, dict]:
+    """The delivered scenarios of the run folders named that were never played (``scenweave
+    .unplayed``): played, each committed again with its replay (failed when it does not
+    replay as recorded), the run's summary.json and report.html rewritten; by .xosc path."""
+    from scenweave.presentation.report import write_run_report
+    from scenweave.run_folder import RunFolder
+    from scenweave.runner import summarize
+    from scenweave.schemas.scenario_folder import RUN_FILE, SUMMARY_FILE, read_json_object
+    from scenweave.unplayed import play_unplayed
+
+    results: dict[Path, dict] = {}
+    for path in paths:
+        if not (path / RUN_FILE).is_file():
+            continue
+        folder = RunFolder(path)
+        played = play_unplayed(folder, settings, map_path)
+        for outcome in played:
+            xosc = scenario_files((folder.scenario_dir(outcome["scenario_id"]),))
+            results.update({file: _played_later(outcome) for file in xosc})
+        if played:
+            issues = read_json_object(path / SUMMARY_FILE).get("input_issues") or []
+            folder.write(SUMMARY_FILE, summarize(folder, issues))
+            write_run_report(folder.root)
+    return results
+
+
+def _played_later(outcome: dict) -> dict:
+    """A scenario played by ``play_unplayed_runs`` as ``replay_one`` reports one."""
+    replay = outcome.get("replay") or {}
+    errors = (outcome.get("validation") or {}).get("errors") or [] \
+        if outcome.get("status") == "failed" else []
+    return {"scenario": outcome["scenario_id"], "played": bool(replay.get("played")),
+            "passed": bool(replay.get("passed")) and not errors,
+            "codes": sorted({e["code"] for e in errors} | set(replay.get("codes") or [])),
+            "errors": [f"{e['code']}: {e.get('message', '')}" for e in errors]}
 
 
 def scenario_files(paths: tuple[Path, ...]) -> list[Path]:

@@ -12,6 +12,7 @@ from scenweave import exit_codes
 from scenweave.commands.agent_options import (
     agent_options,
     class_codes,
+    echo_not_played,
     json_option,
     map_option,
     pipeline_settings,
@@ -88,6 +89,7 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, classes: t
         click.echo(json.dumps(result.summary, indent=1))
     else:
         click.echo(result.line())
+        echo_not_played(result.summary, result.folder.root)
         for line in problem_lines(result.input_issues, result.summary["scenarios"],
                                   str(result.folder.root / SUMMARY_FILE)):
             click.echo(line, err=True)

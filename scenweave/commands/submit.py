@@ -13,7 +13,11 @@ from typing import Any
 import click
 
 from scenweave import exit_codes
-from scenweave.commands.agent_options import AGENT_OPTION_NAMES, pipeline_settings
+from scenweave.commands.agent_options import (
+    AGENT_OPTION_NAMES,
+    echo_not_played,
+    pipeline_settings,
+)
 from scenweave.commands.collect import QUEUE_HELP, collect_run
 from scenweave.commands.run import run as run_command
 from scenweave.console import problem_lines, refused_records
@@ -79,6 +83,7 @@ def _submit(url: str | None, retries: int, retry_delays: str, job_timeout: int, 
     outcomes = collected.summary.get("scenarios", []) if wait else []
     if wait and not as_json:
         click.echo(collected.line())
+        echo_not_played(collected.summary, result.folder.root)
     if not as_json:
         for line in problem_lines(result.input_issues, outcomes,
                                   str(result.folder.root / SUMMARY_FILE)):

@@ -143,11 +143,23 @@ def run_report_context(run_dir: Path) -> dict[str, Any]:
         "per_class": _per_class_table(by_class(outcomes), m, outcomes),
         "taxonomy": Table(["error", "count"], [[k, v] for k, v in m["error_taxonomy"].items()]),
         "replay": _replay_overview(run_dir, replayed) if replayed else None,
+        "not_played": _not_played(summary),
         "figures": _run_figures(run_dir, outcomes) if outcomes else [],
         "variants": variant_table([o for o in outcomes if o.get("variants")]),
         "scenarios": _scenario_table(run_dir, outcomes),
         "issues": _issue_tables(summary.get("input_issues") or []),
     }
+
+
+def _not_played(summary: dict) -> dict | None:
+    """How many delivered scenarios were never played in esmini and why (``summary.json``'s
+    ``replay.not_played``, ``scenweave.unplayed``), for the banner; None when all were."""
+    replay = summary.get("replay") or {}
+    if not replay.get("not_played"):
+        return None
+    because = str(replay.get("not_played_because") or "unknown")
+    return {"count": replay["not_played"], "because": because.split(" (", 1)[0],
+            "detail": because}
 
 
 def _issue_tables(issues: list[dict]) -> list[tuple[str, Table]]:

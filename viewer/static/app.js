@@ -55,8 +55,21 @@ async function showRuns() {
       && words.every((w) => [s.id, s.maneuver_class, s.status, s.verdict, ...s.codes].join(" ").toLowerCase().includes(w)))));
   };
   for (const input of [search, classFilter, statusFilter, verdictFilter]) input.addEventListener("input", render);
-  main.replaceChildren(runs.length ? el("div", { class: "filters" }, search, classFilter, statusFilter, verdictFilter) : el("p", { class: "note" }, "No run found in the folders given."), list);
+  main.replaceChildren(...[notPlayedBanner(runs), runs.length ? el("div", { class: "filters" }, search, classFilter, statusFilter, verdictFilter) : el("p", { class: "note" }, "No run found in the folders given."), list].filter(Boolean));
   render();
+}
+
+// One banner over the runs when scenarios were delivered without being played in esmini
+// (summary.json's replay.not_played): their "ok" was never checked against the record.
+function notPlayedBanner(runs) {
+  const unplayed = runs.filter((r) => r.replay && r.replay.not_played);
+  if (!unplayed.length) return null;
+  const reason = (r) => String(r.replay.not_played_because || "unknown").split(" (")[0];
+  return el("div", { class: "banner", id: "not-played-banner", role: "alert" },
+    el("strong", {}, "Replay not run."),
+    unplayed.map((r) => el("div", { class: "not-played-run", dataset: { run: r.run } },
+      `${r.replay.not_played} scenarios of ${r.run} were never played in esmini (${reason(r)}): validated, but not checked against the record.`)),
+    el("div", {}, "scenweave doctor says how to get the player; scenweave replay RUN_DIR then plays them."));
 }
 
 function runCard(run, keep) {

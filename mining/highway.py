@@ -192,20 +192,24 @@ def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float
         else float(track.t[window[-1]])
     duration = (last - first) / (1 - 2 * share)
     start = max(first - share * duration, float(track.t[0]))
-    cross, offset = _line_crossing(scene, i, after, old, new, start)
+    cross, offset = _line_crossing(scene, i, before, after, start)
     return LaneChange(i, before, after, old, new, start,
                       min(first - share * duration + duration, float(track.t[-1])), duration,
                       abs(moved), cross, offset)
 
 
-def _line_crossing(scene: Scene, i: int, after: int, old: float, new: float,
+def _line_crossing(scene: Scene, i: int, before: int, after: int,
                    start: float) -> tuple[float, float]:
-    """When track ``i`` crossed the line between lanes ``old`` and ``new`` (its lateral
-    position passing the middle of their centres, interpolated between steps, the passing
-    nearest the step the lane label changed at), and how far it was from the old lane's
-    centre toward the new one at ``start``; NaNs where the lanes' centres are unknown."""
+    """When track ``i`` crossed the line between its lanes at steps ``before`` and ``after``
+    (its lateral position passing the middle of their centres, interpolated between steps,
+    the passing nearest ``after``), and how far it was from the old lane's centre toward the
+    new one at ``start``; NaNs where the lanes' centres are unknown (no lane indexes)."""
     track, lateral, spacing = scene.tracks[i], scene.lateral[i], scene.lane_spacing
-    if spacing is None or not np.isfinite([old, new]).all():
+    indexes = np.asarray(track.lane_index, dtype=float)
+    if spacing is None or len(indexes) != len(track.t):
+        return float("nan"), float("nan")
+    old, new = float(indexes[before]), float(indexes[after])
+    if not np.isfinite([old, new]).all() or old == new:
         return float("nan"), float("nan")
     toward = float(np.sign(spacing * (new - old)))
     across = (lateral - spacing * old) * toward  # m from the old centre toward the new one
@@ -276,9 +280,10 @@ def lateral_fields(scene: Scene, change: LaneChange) -> dict[str, float | str]:
     """When the changer crossed the line (s from the event's start), how far off its old
     lane's centre toward the new one it was then (m) and how far apart the two lanes'
     centres are (m); none where the lateral positions do not tell."""
-    spacing = scene.lane_spacing
-    values = (change.cross_s - change.start_s, change.start_offset_m,
-              abs(spacing * (change.new_lane - change.old_lane)) if spacing else float("nan"))
+    spacing, indexes = scene.lane_spacing, scene.tracks[change.track].lane_index
+    across = abs(spacing * (indexes[change.after] - indexes[change.before])) \
+        if spacing and len(indexes) > change.after else float("nan")
+    values = (change.cross_s - change.start_s, change.start_offset_m, across)
     if not np.isfinite(values).all():
         return {}
     return {key: float(value) for key, value in zip(LATERAL_FIELDS, values, strict=True)}

@@ -35,8 +35,8 @@ from scenweave.scenario_lib.phases import profile_of
 SETTLE_AFTER_CROSSING_S = 0.2
 #: a car must start at least this far before the line (m) and cross at least this long after
 #: the manoeuvre starts (s) for the crossing to be timed; else the single change plays
-MIN_TO_LINE_M = 0.2
-MIN_CROSS_S = 0.1
+MIN_TO_LINE_M = 0.05
+MIN_CROSS_S = 0.05
 #: a settling part shorter than this (s) is left out: the first part ends about there
 MIN_SETTLE_S = 0.2
 

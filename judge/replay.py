@@ -692,6 +692,19 @@ def gap_along_lane(playback: Playback, entity: str, time_s: float, map_path: Map
     return None
 
 
+def gap_series(playback: Playback, entity: str, times: Iterable[float],
+               map_path: MapPath = None) -> list[float | None]:
+    """``gap_along_lane`` at each of ``times``, None where it cannot be measured: for a
+    picture of the replay, which shows what it can (never raises)."""
+    found: list[float | None] = []
+    for time_s in times:
+        try:
+            found.append(gap_along_lane(playback, entity, time_s, map_path))
+        except Exception:  # noqa: BLE001 - a picture shows what it can measure
+            found.append(None)
+    return found
+
+
 def _lanes_beside(road: int | str, ego_lane: int, shared_lane: int | None, s: float,
                   map_path: MapPath) -> list[int]:
     """Lane ids on the ego's road to measure from: the other's own (same road), the ego's,

@@ -21,12 +21,14 @@ from scenweave.roads.errors import LaneEndsError, OpenDriveError
 from scenweave.roads.lanes import (
     WorldPose,
     driving_direction,
+    lane_border_offsets,
     lane_distance,
     lane_pose,
     lane_width,
     normalize_angle,
     point_at,
     s_after_distance,
+    section_samples,
 )
 from scenweave.roads.opendrive import OpenDriveMap, Road, RoadLink
 
@@ -52,6 +54,22 @@ class LanePoint(NamedTuple):
     road_id: str
     lane_id: int
     s: float
+
+
+@dataclass(frozen=True)
+class BorderLine:
+    """One border of a drivable lane section as a polyline in the map's frame, for drawing
+    (the viewer's lanes, the replay figure's map)."""
+
+    #: (n, 2) points ``x, y``
+    points: np.ndarray
+    in_junction: bool
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(x0, x1, y0, y1) of the line."""
+        return (float(self.points[:, 0].min()), float(self.points[:, 0].max()),
+                float(self.points[:, 1].min()), float(self.points[:, 1].max()))
 
 
 @dataclass(frozen=True)
@@ -96,6 +114,22 @@ class RoadNetwork:
                 for lane_id, lane in sorted(section.lanes.items()):
                     if lane_id != 0 and lane.drivable:
                         yield LaneKey(road.id, index, lane_id)
+
+    def border_lines(self, step_m: float = 2.0) -> list[BorderLine]:
+        """Both borders of every drivable lane section, sampled about ``step_m`` apart along
+        the road, in file order."""
+        found = []
+        for key in self.drivable_lanes():
+            road = self.road(key.road_id)
+            section = road.sections[key.section]
+            s = section_samples(section, step_m)
+            pose = road.plan_view.pose(s)
+            for offsets in lane_border_offsets(road, section, key.lane_id, s):
+                t = offsets[0]
+                points = np.column_stack([pose.x - t * np.sin(pose.hdg),
+                                          pose.y + t * np.cos(pose.hdg)])
+                found.append(BorderLine(points, bool(road.in_junction)))
+        return found
 
     def key_at(self, road_id: str | int, lane_id: int, s: float) -> LaneKey:
         """The lane-section node holding ``s`` on ``lane_id`` of the road."""

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from scenweave.judge.replay import ROLE_ENTITIES, gap_along_lane, light_state
+from scenweave.judge.replay import ROLE_ENTITIES, gap_series, light_state
 from scenweave.player import Playback
 from scenweave.scenario_lib.vehicles import reference_gap_m
 from scenweave.schemas.params import Params, finite, unchecked
@@ -140,22 +140,9 @@ def _lane_polylines(map_path: str) -> list[tuple[tuple[float, ...], bool, list[l
     """(x0, x1, y0, y1), in a junction, [[x, y], ...] of both borders of every drivable lane
     section of the map (once per map and process)."""
     from scenweave import roads
-    from scenweave.roads.lanes import lane_border_offsets, section_samples
 
-    network = roads.road_network(map_path)
-    found: list[tuple[tuple[float, ...], bool, list[list[float]]]] = []
-    for key in network.drivable_lanes():
-        road = network.road(key.road_id)
-        section = road.sections[key.section]
-        s = section_samples(section, LANE_STEP_M)
-        pose = road.plan_view.pose(s)
-        for offsets in lane_border_offsets(road, section, key.lane_id, s):
-            t = offsets[0]
-            xs, ys = pose.x - t * np.sin(pose.hdg), pose.y + t * np.cos(pose.hdg)
-            points = np.round(np.column_stack([xs, ys]), 2).tolist()
-            found.append(((float(xs.min()), float(xs.max()), float(ys.min()), float(ys.max())),
-                          bool(road.in_junction), points))
-    return found
+    return [(line.bounds, line.in_junction, np.round(line.points, 2).tolist())
+            for line in roads.road_network(map_path).border_lines(LANE_STEP_M)]
 
 
 # --- the charts ------------------------------------------------------------------------------
@@ -253,16 +240,8 @@ def _gap_chart(playback: Playback, params: Params, recorded: dict, map_path: Pat
     if not others or EGO not in playback.tracks:
         return {}
     times = np.round(np.arange(0.0, playback.duration_s + 1e-9, GAP_STEP_S), 3).tolist()
-    series = {}
-    for name in others:
-        gaps = []
-        for t in times:
-            try:
-                gap = gap_along_lane(playback, name, t, map_path)
-            except Exception:  # noqa: BLE001 - a chart shows what it can measure
-                gap = None
-            gaps.append(None if gap is None else round(gap, 3))
-        series[name] = gaps
+    series = {name: [None if gap is None else round(gap, 3)
+                     for gap in gap_series(playback, name, times, map_path)] for name in others}
     tolerances = verdict["tolerances"] if verdict else None
     kind = params.get("npc_vehicle_type")
     # the record's gap is between bumpers; the chart's, like the judge's, between reference points

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from scenweave.judge.replay import gap_along_lane, lane_changes
+from scenweave.judge.replay import gap_series, lane_changes
 from scenweave.player import Playback
 from scenweave.presentation.charts import (
     DASH_DOT,
@@ -113,14 +113,8 @@ def _lane_change_times(playback: Playback, entity: str) -> list[float]:
 
 
 def _gaps(playback: Playback, entity: str, times: Sequence[float], map_path: Any) -> np.ndarray:
-    gaps = []
-    for time_s in times:
-        try:
-            gap = gap_along_lane(playback, entity, time_s, map_path)
-        except Exception:  # noqa: BLE001 - a picture shows what it can measure
-            gap = None
-        gaps.append(math.nan if gap is None else gap)
-    return np.asarray(gaps, dtype=float)
+    return np.asarray([math.nan if gap is None else gap
+                       for gap in gap_series(playback, entity, times, map_path)], dtype=float)
 
 
 def _gap_curve(playback: Playback, entity: str, anchors: list[float],
@@ -350,19 +344,5 @@ def _network(map_path: Any) -> Any:
 def _lane_borders(network: Any) -> list[tuple[tuple[float, float, float, float], bool,
                                               np.ndarray]]:
     """(x0, x1, y0, y1), in a junction, (n, 2) points of each border of every drivable lane,
-    sampled every ~2 m along the road (as spawn_db's map picture does). Once per map."""
-    from scenweave.roads.lanes import lane_border_offsets, section_samples
-
-    found = []
-    for key in network.drivable_lanes():
-        road = network.road(key.road_id)
-        section = road.sections[key.section]
-        s = section_samples(section)
-        inner, outer = lane_border_offsets(road, section, key.lane_id, s)
-        pose = road.plan_view.pose(s)
-        for t in (inner[0], outer[0]):
-            line = np.column_stack([pose.x - t * np.sin(pose.hdg), pose.y + t * np.cos(pose.hdg)])
-            bounds = (float(line[:, 0].min()), float(line[:, 0].max()),
-                      float(line[:, 1].min()), float(line[:, 1].max()))
-            found.append((bounds, bool(road.in_junction), line))
-    return found
+    sampled every ~2 m along the road. Once per map."""
+    return [(line.bounds, line.in_junction, line.points) for line in network.border_lines()]

@@ -68,7 +68,7 @@ def test_the_presenters_import_neither_the_agent_nor_the_judges_checks():
         tree = ast.parse(MODULES[name].read_text())
         used = {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
                 and node.module == "scenweave.judge.replay" for alias in node.names}
-        assert used <= {"gap_along_lane", "light_state", "lane_changes", "ROLE_ENTITIES"}, \
+        assert used <= {"gap_series", "light_state", "lane_changes", "ROLE_ENTITIES"}, \
             (name, used)
 
 

@@ -44,7 +44,7 @@ def replay(paths: tuple[Path, ...], time_step: float, wall_time: float, figures:
 
     find_esmini()  # PlayerUnavailable is one line naming ESMINI_HOME
     settings = ReplaySettings(time_step_s=time_step, wall_time_s=wall_time)
-    files = scenario_files(paths)
+    files = _without_in_situ(scenario_files(paths), quiet=as_json)
     if not files:
         raise click.UsageError("no .xosc files found in " + ", ".join(map(str, paths)))
     map_path = None if map_ref is None else map_ref.path
@@ -101,6 +101,20 @@ def _played_later(outcome: dict) -> dict:
             "passed": bool(replay.get("passed")) and not errors,
             "codes": sorted({e["code"] for e in errors} | set(replay.get("codes") or [])),
             "errors": [f"{e['code']}: {e.get('message', '')}" for e in errors]}
+
+
+def _without_in_situ(files: list[Path], quiet: bool) -> list[Path]:
+    """The scenarios to replay: not a mined event's in-situ scenario, which was played and
+    judged against its recording when it was written (``in_situ/judge.json``); one line says
+    how many were left as they are."""
+    from scenweave.judge.in_situ_doc import is_in_situ
+
+    kept = [xosc for xosc in files if not is_in_situ(xosc.parent)]
+    if len(kept) < len(files) and not quiet:
+        click.echo(f"replay: {len(files) - len(kept)} in-situ scenarios left as played when "
+                   "written (judged against their recording in judge.json; scenweave view "
+                   "shows them)", err=True)
+    return kept
 
 
 def scenario_files(paths: tuple[Path, ...]) -> list[Path]:

@@ -37,6 +37,11 @@ def test_run_of_mined_records_writes_each_event_in_situ(esmini, data, tmp_path, 
         for name in ("scenario.xosc", "road.xodr", "in_situ.json", "replay.json"):
             assert (folder / "in_situ" / name).is_file(), name
     assert written >= 1
+    # replaying the run plays its Town04 scenarios; the in-situ ones stay as played and judged
+    replayed = CliRunner().invoke(cli, ["replay", str(tmp_path / "runs" / "mined"), "--json"])
+    results = json.loads(replayed.output[replayed.output.index("["):])
+    assert len(results) == len(folders)
+    assert not [r for r in results if "in_situ" in str(r.get("scenario"))]
 
 
 def test_the_folders_of_mine_in_situ_are_one_run_to_view_and_export(esmini, data, tmp_path,

@@ -42,6 +42,16 @@ def test_run_of_mined_records_writes_each_event_in_situ(esmini, data, tmp_path, 
     results = json.loads(replayed.output[replayed.output.index("["):])
     assert len(results) == len(folders)
     assert not [r for r in results if "in_situ" in str(r.get("scenario"))]
+    # exported for esmini: each Town04 copy with its event in situ inside its folder
+    exported = tmp_path / "esmini"
+    result = CliRunner().invoke(cli, ["export", str(tmp_path / "runs" / "mined"), "--for",
+                                      "esmini", "--out", str(exported)])
+    assert result.exit_code == 0, result.output
+    for folder in folders:
+        assert (exported / folder.name / "scenario.xosc").is_file()
+        if (folder / "in_situ").is_dir():
+            for name in ("scenario.xosc", "road.xodr", "replay.dat"):
+                assert (exported / folder.name / "in_situ" / name).is_file(), name
 
 
 def test_the_folders_of_mine_in_situ_are_one_run_to_view_and_export(esmini, data, tmp_path,

@@ -21,17 +21,18 @@ from typing import Any
 from lxml import etree
 
 from scenweave.judge.scenario_doc import number
+from scenweave.schemas.scenario_folder import (
+    HERO_REFERENCE_NAME,
+    IN_SITU_CHOICE_NAME,
+    IN_SITU_VERDICT_NAME,
+    ROAD_NAME,
+    VERDICT_NAME,
+    XOSC_NAME,
+)
 
-#: the in-situ folder's files (``mining.in_situ`` writes them)
-XOSC_NAME = "scenario.xosc"
-ROAD_NAME = "road.xodr"
-CHOICE_NAME = "in_situ.json"
-REFERENCE_NAME = "hero_reference.csv"
-#: what esmini played (``player.Playback``)
-REPLAY_NAME = "replay.json"
-#: the judge's numbers: ``judge.json`` as ``mining.in_situ`` writes it, ``verdict.json`` as
-#: the scenario folder's contract names a judge's verdict
-JUDGE_NAMES = ("judge.json", "verdict.json")
+#: the judge's numbers: the in-situ judge's verdict as ``mining.in_situ`` writes it, else a
+#: replay verdict (the scenario-folder contract names both)
+JUDGE_NAMES = (IN_SITU_VERDICT_NAME, VERDICT_NAME)
 
 
 class InSituDocError(ValueError):
@@ -101,7 +102,7 @@ def judge_numbers(folder: Path) -> dict[str, Any]:
 
 def is_in_situ(folder: Path) -> bool:
     """Whether ``folder`` holds an in-situ scenario (its scenario beside its recorded road)."""
-    return (folder / XOSC_NAME).is_file() and ((folder / CHOICE_NAME).is_file()
+    return (folder / XOSC_NAME).is_file() and ((folder / IN_SITU_CHOICE_NAME).is_file()
                                                or (folder / ROAD_NAME).is_file())
 
 
@@ -150,7 +151,7 @@ def _vehicle(xosc: Path, root: etree._Element, item: etree._Element) -> PlayedVe
     times, x, y, h = _polyline(xosc, root, name)
     external = not times
     if external:
-        times, x, y, h = _reference(xosc.parent / REFERENCE_NAME, xosc, name)
+        times, x, y, h = _reference(xosc.parent / HERO_REFERENCE_NAME, xosc, name)
     track = properties.get("track_id") or (name[1:] if name.startswith("v") else None)
     return PlayedVehicle(name, vehicle.get("name") or "", vehicle.get("vehicleCategory") or "car",
                          _positive(xosc, box, "length", name), _positive(xosc, box, "width", name),

@@ -52,16 +52,17 @@ from scenweave.scenario_lib.trajectories import (
     reference_csv,
     scenario_summary,
 )
+from scenweave.schemas.scenario_folder import (
+    HERO_REFERENCE_NAME,
+    IN_SITU_CHOICE_NAME,
+    IN_SITU_DIR,
+    IN_SITU_REPORT_NAME,
+    IN_SITU_VERDICT_NAME,
+    REPLAY_NAME,
+    ROAD_NAME,
+    XOSC_NAME,
+)
 
-FOLDER = "in_situ"
-SCENARIO_NAME = "scenario.xosc"
-ROAD_NAME = "road.xodr"
-CHOICE_NAME = "in_situ.json"
-JUDGE_NAME = "judge.json"
-REPLAY_NAME = "replay.json"
-REFERENCE_NAME = "hero_reference.csv"
-#: the batch's report beside the in-situ folders of ``scenweave mine --in-situ``
-REPORT_NAME = "in_situ_report.json"
 #: a step longer than this many recording steps is a gap in the track
 GAP_STEPS = 1.5
 #: a trajectory vertex is left out where the line between its neighbours passes within this
@@ -294,12 +295,12 @@ def scene_of(recording: Recording, choice: InSituChoice, road: RecordedRoad,
                        choice.step_s,
                        light_controllers(recording.lights, road.signals, choice.start_s,
                                          choice.end_s),
-                       external=external, reference_file=REFERENCE_NAME if external else None)
+                       external=external, reference_file=HERO_REFERENCE_NAME if external else None)
 
 
 def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_dir: Path,
                   road: RecordedRoad, settings: InSituSettings | None = None,
-                  name: str = FOLDER) -> InSituResult:
+                  name: str = IN_SITU_DIR) -> InSituResult:
     """Write ``<out_dir>/<name>/`` (default ``in_situ``) for ``event`` of ``recording`` (see
     the module's docstring); played and judged unless ``settings.replay`` is off. Raises
     :class:`InSituRefused` (one line) for input it cannot play; the folder is then not
@@ -312,19 +313,19 @@ def write_in_situ(recording: Recording, event: Event | Mapping[str, Any], out_di
     folder = Path(out_dir) / name
     staging = Path(tempfile.mkdtemp(prefix=f".{name}.", dir=_made(Path(out_dir))))
     try:
-        scenario = write_scenario(in_situ_scenario(scene), staging / SCENARIO_NAME)
+        scenario = write_scenario(in_situ_scenario(scene), staging / XOSC_NAME)
         _place_road(road.xodr, staging / ROAD_NAME)
         if settings.external_ego:
             hero = next(p for p in choice.record if p.name == HERO)
-            write_text_atomic(staging / REFERENCE_NAME,
+            write_text_atomic(staging / HERO_REFERENCE_NAME,
                               reference_csv(hero.t, hero.x, hero.y, hero.heading))
         written = time.perf_counter()
-        result = InSituResult(folder, folder / SCENARIO_NAME, choice)
+        result = InSituResult(folder, folder / XOSC_NAME, choice)
         if settings.replay:
             result.verdict, played = _play_and_judge(scenario, road.xodr, choice, settings,
                                                      staging)
             result.timings_s.update(played)
-        write_json_atomic(staging / CHOICE_NAME, {**choice.to_dict(),
+        write_json_atomic(staging / IN_SITU_CHOICE_NAME, {**choice.to_dict(),
                                                   **scenario_summary(scene)})
         _publish(staging, folder)
     except BaseException:
@@ -353,7 +354,7 @@ def _play_and_judge(scenario: Path, road: Path, choice: InSituChoice,
     verdict = judge_in_situ(playback, choice.record, skip)
     verdict.findings[:0] = xsd_findings(etree.parse(str(scenario)))
     playback.write(staging / REPLAY_NAME)
-    write_json_atomic(staging / JUDGE_NAME, {**verdict.to_dict(),
+    write_json_atomic(staging / IN_SITU_VERDICT_NAME, {**verdict.to_dict(),
                                              "timings_s": playback.timings_s})
     timings = playback.timings_s
     return verdict, {"replay": float(timings.get("total", 0.0)),
@@ -453,5 +454,5 @@ def write_in_situ_records(records: Iterable[Mapping[str, Any]], out_dir: Path, c
                                                    name=scenario_id))
             except InSituRefused as err:
                 batch.refused.append(f"{scenario_id}: {err}")
-    write_json_atomic(Path(out_dir) / REPORT_NAME, batch.to_dict())
+    write_json_atomic(Path(out_dir) / IN_SITU_REPORT_NAME, batch.to_dict())
     return batch

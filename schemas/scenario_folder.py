@@ -13,7 +13,7 @@ A scenario folder::
     scenario.xosc  scenario.py  params.json  status.json  trace.jsonl  checkpoints.sqlite
     replay.json  verdict.json  replay.svg  recorded.json  attempts/<n>/...
     variants/<id>/{variant.json, reference.xosc, scenario.xosc, ...}
-    in_situ/{scenario.xosc, road.xodr, in_situ.json, replay.json, verdict.json,
+    in_situ/{scenario.xosc, road.xodr, in_situ.json, replay.json, judge.json,
              hero_reference.csv}
 
 This module imports nothing of ScenWeave, so every stage can import it.
@@ -82,6 +82,11 @@ ROAD_NAME = "road.xodr"
 IN_SITU_CHOICE_NAME = "in_situ.json"
 #: the ego's recorded trajectory, for a driving stack in the ego's seat
 HERO_REFERENCE_NAME = "hero_reference.csv"
+#: the in-situ judge's verdict (``judge.in_situ.InSituVerdict``: every recorded vehicle and
+#: sample against the replay), where a scenario's replay has VERDICT_NAME
+IN_SITU_VERDICT_NAME = "judge.json"
+#: beside the in-situ folders ``scenweave mine --in-situ`` writes: what was written, refused
+IN_SITU_REPORT_NAME = "in_situ_report.json"
 
 # --- beside the records a run is made from (``scenweave ingest``, ``scenweave mine``) --------
 

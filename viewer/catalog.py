@@ -18,6 +18,8 @@ from typing import Any
 
 from scenweave.errors import InputError
 from scenweave.schemas.scenario_folder import (
+    IN_SITU_DIR,
+    IN_SITU_REPORT_NAME,
     MINING_REPORT_PAGE,
     PARAMS_NAME,
     REPLAY_NAME,
@@ -34,9 +36,7 @@ from scenweave.schemas.scenario_folder import (
     read_json_object,
 )
 from scenweave.viewer.in_situ import (
-    IN_SITU_DIR,
     IN_SITU_FILES,
-    IN_SITU_REPORT_NAME,
     in_situ_of,
     in_situ_row,
     in_situ_scene,

@@ -18,12 +18,7 @@ from typing import Any
 import numpy as np
 
 from scenweave.judge.in_situ_doc import (
-    CHOICE_NAME,
     JUDGE_NAMES,
-    REFERENCE_NAME,
-    REPLAY_NAME,
-    ROAD_NAME,
-    XOSC_NAME,
     InSituDoc,
     InSituDocError,
     is_in_situ,
@@ -32,19 +27,23 @@ from scenweave.judge.in_situ_doc import (
     read_object,
 )
 from scenweave.player import Playback
+from scenweave.schemas.scenario_folder import (
+    HERO_REFERENCE_NAME,
+    IN_SITU_CHOICE_NAME,
+    IN_SITU_DIR,
+    REPLAY_NAME,
+    ROAD_NAME,
+    XOSC_NAME,
+)
 from scenweave.viewer.scene import EGO, MAP_MARGIN_M, _actors, _lane_polylines
 
-#: the in-situ scenario's folder inside a scenario folder
-IN_SITU_DIR = "in_situ"
 #: a finding's first time ("at 4.20 s", "from 4.20 s")
 FINDING_TIME = re.compile(r"\b(?:at|from) (?P<t>-?\d+(?:\.\d+)?) s\b")
-#: beside the in-situ folders ``scenweave mine --in-situ`` writes: what was written, refused
-IN_SITU_REPORT_NAME = "in_situ_report.json"
 #: the files of an in-situ folder the page lists and serves
-IN_SITU_FILES = (XOSC_NAME, ROAD_NAME, CHOICE_NAME, REPLAY_NAME, *JUDGE_NAMES, REFERENCE_NAME)
+IN_SITU_FILES = (XOSC_NAME, ROAD_NAME, IN_SITU_CHOICE_NAME, REPLAY_NAME, *JUDGE_NAMES,
+                 HERO_REFERENCE_NAME)
 
-__all__ = ["IN_SITU_DIR", "IN_SITU_FILES", "IN_SITU_REPORT_NAME", "in_situ_of", "in_situ_row",
-           "in_situ_scene", "is_in_situ"]
+__all__ = ["IN_SITU_FILES", "in_situ_of", "in_situ_row", "in_situ_scene", "is_in_situ"]
 
 
 def in_situ_of(folder: Path) -> Path | None:
@@ -56,7 +55,7 @@ def in_situ_of(folder: Path) -> Path | None:
 def in_situ_row(folder: Path) -> dict[str, Any]:
     """What the run list says of a scenario's in-situ folder: vehicles, verdict, the share
     within 0.1 m and the worst sample."""
-    choice = read_object(folder / CHOICE_NAME)
+    choice = read_object(folder / IN_SITU_CHOICE_NAME)
     judged = judge_numbers(folder)
     position = (judged.get("overall") or {}).get("position") or {}
     return {"vehicles": choice.get("vehicles") or len(choice.get("tracks") or {}) or None,
@@ -68,7 +67,7 @@ def in_situ_row(folder: Path) -> dict[str, Any]:
 def in_situ_scene(folder: Path) -> dict[str, Any]:
     """The in-situ scenario in ``folder`` as the page animates it (the keys of
     ``viewer.scene.scene``, plus ``in_situ``: the choice and the judge's numbers)."""
-    choice = read_object(folder / CHOICE_NAME)
+    choice = read_object(folder / IN_SITU_CHOICE_NAME)
     judged = judge_numbers(folder)
     out: dict[str, Any] = {"scenario_id": _title(folder, choice), "maneuver_class": "in situ",
                            "domain": Path(str(choice.get("file") or "")).name or None,

@@ -12,7 +12,7 @@ from scenweave import exit_codes
 from scenweave.commands.agent_options import class_codes, json_option
 from scenweave.console import counted_lines
 from scenweave.progress import progress
-from scenweave.schemas.scenario_folder import MINING_REPORT_NAME
+from scenweave.schemas.scenario_folder import IN_SITU_DIR, IN_SITU_REPORT_NAME, MINING_REPORT_NAME
 
 
 @click.command("mine")
@@ -65,22 +65,20 @@ def _in_situ(out_dir: Path, context_s: float) -> Any:
     $SCENWEAVE_HOME/roads)."""
     from scenweave.agent.home import home
     from scenweave.ingest import load_records
-    from scenweave.mining.in_situ import FOLDER, InSituSettings, write_in_situ_records
+    from scenweave.mining.in_situ import InSituSettings, write_in_situ_records
 
     records = progress(list(load_records(out_dir)), desc="in situ")
-    return write_in_situ_records(records, out_dir / FOLDER, home() / "roads",
+    return write_in_situ_records(records, out_dir / IN_SITU_DIR, home() / "roads",
                                  InSituSettings(context_s=context_s))
 
 
 def _tell_in_situ(batch: Any, out_dir: Path) -> None:
-    from scenweave.mining.in_situ import FOLDER, REPORT_NAME
-
     passed = sum(1 for r in batch.written if r.verdict is not None and r.verdict.passed)
     click.echo(f"in situ: {len(batch.written)} scenarios ({passed} played as recorded), "
-               f"{len(batch.refused)} refused -> {out_dir / FOLDER}")
+               f"{len(batch.refused)} refused -> {out_dir / IN_SITU_DIR}")
     if batch.refused:
         for line in counted_lines(f"refused in situ: {len(batch.refused)}", batch.refused,
-                                  str(out_dir / FOLDER / REPORT_NAME)):
+                                  str(out_dir / IN_SITU_DIR / IN_SITU_REPORT_NAME)):
             click.echo(line, err=True)
 
 

@@ -252,8 +252,9 @@ def test_a_batch_of_records_goes_on_past_refusals(esmini, data, tmp_path):
     """One record plays, one names a track its recording lacks, one a file whose road cannot
     be converted: two one-line refusals, the batch goes on, the report says it all."""
     _converter()
-    from scenweave.mining.in_situ import REPORT_NAME, write_in_situ_records
+    from scenweave.mining.in_situ import write_in_situ_records
     from scenweave.mining.readers import read_file
+    from scenweave.schemas.scenario_folder import IN_SITU_REPORT_NAME
 
     source = data / "commonroad_small.xml"
     ego = max(read_file(source).tracks, key=lambda t: t.duration_s)
@@ -277,7 +278,7 @@ def test_a_batch_of_records_goes_on_past_refusals(esmini, data, tmp_path):
     assert lost.startswith("lost: ") and str(source) in lost and "track nobody" in lost
     assert unconvertible.startswith("unconvertible: ") and str(bad) in unconvertible
     assert "lanelet" in unconvertible
-    report = json.loads((tmp_path / "in_situ" / REPORT_NAME).read_text())
+    report = json.loads((tmp_path / "in_situ" / IN_SITU_REPORT_NAME).read_text())
     assert report["refused"] == batch.refused and report["written"][0]["passed"] is True
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from scenweave.errors import InputError
 from scenweave.scenario_lib.kinematics import GAP_TOL_M, MAX_PLAYABLE_DECELERATION_MS2
-from scenweave.scenario_lib.phases import Phase, PhasedProfile
+from scenweave.scenario_lib.phases import Phase, PhasedProfile, hardest_second
 
 #: a fitted profile's speed may differ this much from a recorded sample (m/s)
 SPEED_TOL_MS = 0.3
@@ -32,6 +32,11 @@ DISTANCE_TOL_M = 0.5
 #: ... and an NPC's gap to the ego this much (m): tighter than the replay's 1 m, which also
 #: absorbs the player's step and lanes of different length on curves
 GAP_FIT_TOL_M = 0.3
+#: a record that loses at least this much speed within a second brakes (m/s) ...
+PEAK_MIN_MS = 2.0
+#: ... and its fit keeps that hardest second within this share, or is made again within half
+#: the speed tolerance (issue 31: the replay's is reported within 10 %)
+PEAK_TOL_SHARE = 0.05
 #: a phase changing the speed less than this is no phase (m/s)
 NO_CHANGE_MS = 1e-3
 #: a phase's corner speed may lie this far from the recorded sample it ends at (m/s): room to
@@ -89,20 +94,42 @@ def fit_series(times: Sequence[float | None], speeds: Sequence[float | None], st
     targets: Targets = [(driven, DISTANCE_TOL_M)]
     if relative is not None:
         targets.append((gaps, GAP_FIT_TOL_M))
+    fitted = _phases(t, v, targets, start_s, v_start, SPEED_TOL_MS)
+    wanted = hardest_second(t, v)
+    if wanted < PEAK_MIN_MS or _peak_share(fitted, t, v_start, start_s, wanted) <= PEAK_TOL_SHARE:
+        return fitted
+    # the hardest second of braking is what a brake is remembered by: a fit that softens or
+    # sharpens it by more than PEAK_TOL_SHARE is made again, closer to the record
+    closer = _phases(t, v, targets, start_s, v_start, SPEED_TOL_MS / 2)
+    keeps = _peak_share(closer, t, v_start, start_s, wanted)
+    return closer if keeps < _peak_share(fitted, t, v_start, start_s, wanted) else fitted
+
+
+def _phases(t: list[float], v: list[float], targets: Targets, start_s: float, v_start: float,
+            tolerance: float) -> tuple[Phase, ...]:
+    """The fewest phases within ``tolerance`` of the speeds (and the ``targets``)."""
     phases: list[Phase] = []
     knot = v_start
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field
         phases.append(Phase(_ms(start_s + t[0]), 0.0, _ms(v[0]), "step"))
         knot = v[0]
-    for i, j, corner in _fewest_segments(t, v, targets, knot):
+    for i, j, corner in _fewest_segments(t, v, targets, knot, tolerance):
         if abs(corner - knot) > NO_CHANGE_MS:
             phases.append(Phase(_ms(start_s + t[i]), _ms(t[j] - t[i]), corner))
         knot = corner
     return tuple(phases)
 
 
+def _peak_share(phases: tuple[Phase, ...], t: list[float], v_start: float, start_s: float,
+                wanted: float) -> float:
+    """How far the fitted hardest second is from the recorded one, as a share of it."""
+    profile = PhasedProfile(v_start, phases)
+    fitted = hardest_second(t, [profile.speed(start_s + time) for time in t])
+    return abs(fitted - wanted) / wanted
+
+
 def _fewest_segments(t: list[float], v: list[float], targets: Targets,
-                     knot: float) -> list[tuple[int, int, float]]:
+                     knot: float, tolerance: float) -> list[tuple[int, int, float]]:
     """``(from sample, to sample, corner speed)`` of the straight segments that cover the
     samples with the fewest speed changes (a segment that keeps its speed costs none),
     closest to the recorded speeds among equals (least squares: the curve's shape, where a
@@ -117,7 +144,7 @@ def _fewest_segments(t: list[float], v: list[float], targets: Targets,
             continue
         count, so_far, start, fitted, _ = best[i]
         for j, corner, reached, error in _segments_from(times, speeds, wanted, i, start,
-                                                       fitted):
+                                                       fitted, tolerance):
             cost = count + (abs(corner - start) > NO_CHANGE_MS)
             if j not in best or (cost, so_far + error) < best[j][:2]:
                 best[j] = (cost, so_far + error, corner, reached, i)
@@ -142,7 +169,7 @@ def _outrun(best: dict[int, tuple[int, float, float, float, int]], i: int) -> bo
 
 def _segments_from(times: np.ndarray, speeds: np.ndarray,
                    wanted: list[tuple[np.ndarray, float]], i: int, knot: float,
-                   fitted: float) -> list[tuple[int, float, float, float]]:
+                   fitted: float, tolerance: float) -> list[tuple[int, float, float, float]]:
     """Every straight segment from ``(times[i], knot)`` to ``(times[j], speeds[j] + shift)``
     (each of ``CORNER_SHIFTS_MS``) that keeps the tolerances at each sample between:
     ``(j, corner, fitted distance at j, squared speed error over the segment)``. One matrix:
@@ -151,8 +178,8 @@ def _segments_from(times: np.ndarray, speeds: np.ndarray,
     # no line from the knot reaches past where the slopes that keep every sample's speed
     # within the tolerance run out (a cone narrowing sample by sample)
     since = times[after] - times[i]
-    lowest = np.maximum.accumulate((speeds[after] - SPEED_TOL_MS - knot) / since)
-    highest = np.minimum.accumulate((speeds[after] + SPEED_TOL_MS - knot) / since)
+    lowest = np.maximum.accumulate((speeds[after] - tolerance - knot) / since)
+    highest = np.minimum.accumulate((speeds[after] + tolerance - knot) / since)
     closed = lowest > highest + 1e-12
     if closed.any():
         after = after[:int(np.argmax(closed))]
@@ -166,7 +193,7 @@ def _segments_from(times: np.ndarray, speeds: np.ndarray,
     line = knot + ((corners - knot) / since[ends])[:, None] * since[None, :]
     inside = np.arange(len(after))[None, :] <= ends[:, None]
     off = np.where(inside, line - speeds[after][None, :], 0.0)
-    ok = (corners >= 0) & ~np.any(np.abs(off) > SPEED_TOL_MS + 1e-9, axis=1)
+    ok = (corners >= 0) & ~np.any(np.abs(off) > tolerance + 1e-9, axis=1)
     error = np.sum(off * off, axis=1)
     steps = np.diff(np.concatenate([[times[i]], times[after]]))
     before = np.concatenate([np.full((len(ends), 1), knot), line[:, :-1]], axis=1)

@@ -20,6 +20,7 @@ from scenweave.judge.findings import Finding
 from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.scenario_lib.kinematics import GAP_TOL_M, STOP_LINE_MARGIN_M
 from scenweave.scenario_lib.lateral import RecordedLaneChange, recorded_lane_change
+from scenweave.scenario_lib.phases import hardest_second
 from scenweave.schemas.params import Params, actor_value, all_finite, finite
 from scenweave.schemas.scenario_folder import ReplayVerdict, Tolerances, VerdictMark
 
@@ -605,16 +606,6 @@ def recorded_speeds(series: dict[str, list[float | None]],
     noise = series.get(f"{role}_noise") or [None] * len(times)
     return [(t, v) for t, v, n in zip(times, speeds, noise, strict=False)
             if t is not None and v is not None and not n]
-
-
-def hardest_second(times: list[float], speeds: list[float]) -> float:
-    """The most speed lost within one second (m/s) over the samples."""
-    best = 0.0
-    for k, (t, v) in enumerate(zip(times, speeds, strict=True)):
-        later = [w for u, w in zip(times[k + 1:], speeds[k + 1:], strict=True) if u <= t + 1.0]
-        if later:
-            best = max(best, v - min(later))
-    return best
 
 
 def brake_peaks(playback: Playback, params: Params) -> dict[str, dict[str, float | int]]:

@@ -69,6 +69,8 @@ def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last:
     # the record's intensity from the speed it gives (0.5 s), not the detector's 1 s one,
     # which flattens the hardest second; tracking noise counts for nothing
     best_ms2 = best_second_deceleration(track.t, measured.speed, first, last, ~measured.noise)
+    if best_ms2 < limits["deceleration_ms2"] or v0 - v1 < limits["min_speed_drop_ms"]:
+        return None  # the smoothing's brake, which the record's own speed does not show
     start, end = float(track.t[first]), float(track.t[last])
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
     if ego_speed is None or gap is None:
@@ -172,9 +174,12 @@ def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float
     if not np.isfinite(lateral[[before, after]]).all():  # lanes only: a change of set length
         half = limits["duration_s"] / 2
         crossing = float(track.t[after])
-        return LaneChange(i, before, after, old, new, max(float(track.t[0]), crossing - half),
+        # the lane label changes where the car's centre crosses into the next lane (a
+        # lanelet's border is the line): the crossing, from an unknown offset (its centre)
+        start = max(float(track.t[0]), crossing - half)
+        return LaneChange(i, before, after, old, new, start,
                           min(float(track.t[-1]), crossing + half), limits["duration_s"],
-                          float("nan"))
+                          float("nan"), crossing, 0.0)
     near = np.abs(track.t - track.t[after]) <= limits["max_duration_s"]
     window = np.flatnonzero(near & np.isfinite(lateral))
     y0, y1 = float(lateral[window[0]]), float(lateral[window[-1]])
@@ -271,6 +276,9 @@ def _cut_event(scene: Scene, code: str, change: LaneChange, ego: int) -> Event |
     return make_event(scene, code, ego, npc, change.start_s, change.end_s, fields)
 
 
+#: lanes' spacing where the lateral positions do not tell it (urban maps): with the changer
+#: taken to start on its lane's centre, the scenario's timing does not depend on it (m)
+NOMINAL_LANE_M = 3.5
 #: the lane change as measured from the lateral position, in a mined record's params (not in
 #: MOOVE's layouts: a MOOVE row keeps its duration and is played as one linear change)
 LATERAL_FIELDS = ("lane_change_cross_s", "lane_change_offset_m", "lane_change_width_m")
@@ -282,7 +290,7 @@ def lateral_fields(scene: Scene, change: LaneChange) -> dict[str, float | str]:
     centres are (m); none where the lateral positions do not tell."""
     spacing, indexes = scene.lane_spacing, scene.tracks[change.track].lane_index
     across = abs(spacing * (indexes[change.after] - indexes[change.before])) \
-        if spacing and len(indexes) > change.after else float("nan")
+        if spacing and len(indexes) > change.after else NOMINAL_LANE_M
     values = (change.cross_s - change.start_s, change.start_offset_m, across)
     if not np.isfinite(values).all():
         return {}

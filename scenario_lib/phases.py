@@ -231,6 +231,17 @@ def is_single_ramp(params: Mapping[str, Any], actor: str) -> bool:
     return given is None or phases_of(params, actor) == default_phases(params, actor)
 
 
+def hardest_second(t: Sequence[float], v: Sequence[float]) -> float:
+    """The most speed lost within one second over samples at times ``t`` (m/s): how hard a
+    brake was, which the fit keeps and the judge reports (issue 31)."""
+    best = 0.0
+    for k, (now, speed) in enumerate(zip(t, v, strict=True)):
+        later = [w for u, w in zip(t[k + 1:], v[k + 1:], strict=True) if u <= now + 1.0 + 1e-6]
+        if later:
+            best = max(best, speed - min(later))
+    return best
+
+
 def profile_of(params: Mapping[str, Any], actor: str) -> SpeedProfile | PhasedProfile:
     """``actor``'s motion from t = 0: the single-ramp ``SpeedProfile`` when that is what it
     drives (the same arithmetic as before phases), else its ``PhasedProfile``."""

@@ -13,7 +13,6 @@ carla``) reads it through :func:`read_in_situ`, so they play what esmini plays.
 from __future__ import annotations
 
 import csv
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +27,7 @@ from scenweave.schemas.scenario_folder import (
     ROAD_NAME,
     VERDICT_NAME,
     XOSC_NAME,
+    read_json_object,
 )
 
 #: the judge's numbers: the in-situ judge's verdict as ``mining.in_situ`` writes it, else a
@@ -81,20 +81,10 @@ class InSituDoc:
     signals: dict[str, list[tuple[float, float, str]]]
 
 
-def read_object(path: Path) -> dict[str, Any]:
-    """A JSON object of the folder (``in_situ.json``, ``judge.json``); ``{}`` when it is
-    missing or damaged: a reader shows what it can."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
-
-
 def judge_numbers(folder: Path) -> dict[str, Any]:
     """The in-situ judge's verdict on the folder's replay (``{}``: not judged)."""
     for name in JUDGE_NAMES:
-        data = read_object(Path(folder) / name)
+        data = read_json_object(Path(folder) / name)
         if isinstance(data.get("overall"), dict):
             return data
     return {}

@@ -24,7 +24,6 @@ from scenweave.judge.in_situ_doc import (
     is_in_situ,
     judge_numbers,
     read_in_situ,
-    read_object,
 )
 from scenweave.player import Playback
 from scenweave.schemas.scenario_folder import (
@@ -34,6 +33,7 @@ from scenweave.schemas.scenario_folder import (
     REPLAY_NAME,
     ROAD_NAME,
     XOSC_NAME,
+    read_json_object,
 )
 from scenweave.viewer.scene import EGO, MAP_MARGIN_M, _actors, _lane_polylines
 
@@ -55,7 +55,7 @@ def in_situ_of(folder: Path) -> Path | None:
 def in_situ_row(folder: Path) -> dict[str, Any]:
     """What the run list says of a scenario's in-situ folder: vehicles, verdict, the share
     within 0.1 m and the worst sample."""
-    choice = read_object(folder / IN_SITU_CHOICE_NAME)
+    choice = read_json_object(folder / IN_SITU_CHOICE_NAME)
     judged = judge_numbers(folder)
     position = (judged.get("overall") or {}).get("position") or {}
     return {"vehicles": choice.get("vehicles") or len(choice.get("tracks") or {}) or None,
@@ -67,7 +67,7 @@ def in_situ_row(folder: Path) -> dict[str, Any]:
 def in_situ_scene(folder: Path) -> dict[str, Any]:
     """The in-situ scenario in ``folder`` as the page animates it (the keys of
     ``viewer.scene.scene``, plus ``in_situ``: the choice and the judge's numbers)."""
-    choice = read_object(folder / IN_SITU_CHOICE_NAME)
+    choice = read_json_object(folder / IN_SITU_CHOICE_NAME)
     judged = judge_numbers(folder)
     out: dict[str, Any] = {"scenario_id": _title(folder, choice), "maneuver_class": "in situ",
                            "domain": Path(str(choice.get("file") or "")).name or None,
@@ -82,7 +82,7 @@ def in_situ_scene(folder: Path) -> dict[str, Any]:
     if not (folder / REPLAY_NAME).is_file():
         out["problem"] = "not played: no replay.json in the in-situ folder"
         return out
-    playback = Playback.from_dict(read_object(folder / REPLAY_NAME))
+    playback = Playback.from_dict(read_json_object(folder / REPLAY_NAME))
     if playback.engine_error or not playback.times:
         out.update(problem=playback.engine_error or "esmini recorded no step",
                    log=playback.log[-10:])

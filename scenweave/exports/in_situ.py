@@ -33,13 +33,13 @@ from scenweave.judge.in_situ_doc import (
     InSituDoc,
     is_in_situ,
     read_in_situ,
-    read_object,
 )
 from scenweave.schemas.scenario_folder import (
     HERO_REFERENCE_NAME,
     IN_SITU_CHOICE_NAME,
     ROAD_NAME,
     XOSC_NAME,
+    read_json_object,
 )
 
 SCRIPT_NAME = "replay_in_carla.py"
@@ -119,7 +119,7 @@ def _step_s(folder: Path, doc: InSituDoc) -> float:
     """The recording's step (``in_situ.json``; 0.1 s for NGSIM and highD at 10 Hz), else the
     shortest step between two trajectory vertices (a trajectory keeps only the vertices a
     straight line between its neighbours would miss, so that one may be longer)."""
-    recorded = read_object(folder / IN_SITU_CHOICE_NAME).get("step_s")
+    recorded = read_json_object(folder / IN_SITU_CHOICE_NAME).get("step_s")
     if isinstance(recorded, int | float) and recorded > 0:
         return float(recorded)
     steps = [b - a for v in doc.vehicles for a, b in zip(v.times, v.times[1:], strict=False)]
@@ -157,7 +157,7 @@ def export_carla(folder: Path, out: Path) -> InSituDoc:
     """Write the in-situ scenario in ``folder`` for CARLA into ``out``: the scenario, the road
     (for ``generate_opendrive_world``), ``trajectories.json`` and ``replay_in_carla.py``."""
     doc = _copy_scene(folder, out)
-    choice = read_object(folder / IN_SITU_CHOICE_NAME)
+    choice = read_json_object(folder / IN_SITU_CHOICE_NAME)
     source = str(choice.get("file") or "")
     data = trajectories(doc, source, _step_s(folder, doc))
     write_text_atomic(out / TRAJECTORIES_NAME, json.dumps(data, separators=(",", ":")) + "\n")

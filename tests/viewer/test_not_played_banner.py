@@ -32,6 +32,7 @@ def test_a_run_never_played_gets_a_banner(page, sample_raw, tmp_path, monkeypatc
     assert (f"{SCENARIOS} scenarios of unplayed were never played in esmini (no player: esmini "
             "not found)") in text
     assert "scenweave doctor" in text
+    assert "replay: not run" in page.locator("section.run .facts").inner_text()
     assert page.locator("tr.scenario .badge.not.played, tr.scenario .badge").filter(
         has_text="not played").count() == SCENARIOS
     page.screenshot(path=str(artifacts / "not-played-banner.png"))

@@ -75,7 +75,9 @@ function notPlayedBanner(runs) {
 function runCard(run, keep) {
   const shown = run.scenarios.filter(keep);
   const counts = run.counts ? Object.entries(run.counts).map(([k, v]) => `${v} ${k}`).join(", ") : "";
-  const replay = run.replay ? `replay: ${run.replay.passed}/${run.replay.played} played as recorded` : "";
+  const replay = !run.replay ? "" : run.replay.not_played && !run.replay.played ? "replay: not run"
+    : `replay: ${run.replay.passed}/${run.replay.played} played as recorded`
+      + (run.replay.not_played ? `, ${run.replay.not_played} not played` : "");
   const links = [];
   if (run.report && !SW.api.isStatic()) links.push(el("a", { href: `run/${encodeURIComponent(run.run)}/report.html`, target: "_blank" }, "report.html"));
   if (run.mining_report && !SW.api.isStatic()) links.push(el("a", { href: `mining/${encodeURIComponent(run.run)}`, target: "_blank" }, "mining report"));

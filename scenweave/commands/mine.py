@@ -47,7 +47,7 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str,
                              classes)
     report.warnings[:0] = warnings
     html = write_mining_report(out_dir / MINING_REPORT_NAME)
-    batch = _in_situ(out_dir, context_s) if in_situ and sum(report.written.values()) else None
+    batch = _in_situ(out_dir, context_s) if in_situ and any(report.written.values()) else None
     if as_json:
         click.echo(json.dumps(report.to_dict() | ({"in_situ": batch.to_dict()} if batch else {}),
                               indent=1))

@@ -19,6 +19,7 @@ from typing import Any
 
 from lxml import etree
 
+from scenweave.errors import InputError
 from scenweave.judge.scenario_doc import number
 from scenweave.schemas.scenario_folder import (
     HERO_REFERENCE_NAME,
@@ -35,7 +36,7 @@ from scenweave.schemas.scenario_folder import (
 JUDGE_NAMES = (IN_SITU_VERDICT_NAME, VERDICT_NAME)
 
 
-class InSituDocError(ValueError):
+class InSituDocError(InputError, ValueError):
     """The folder is no in-situ scenario that can be read (one line naming file and
     element)."""
 

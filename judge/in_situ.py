@@ -167,7 +167,8 @@ class InSituVerdict:
         return not any(f.severity == "error" for f in self.findings)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"passed": self.passed, "findings": [f.to_dict() for f in self.findings],
+        return {"passed": self.passed,
+                "findings": [f.to_dict() | {"t": f.time_s} for f in self.findings],
                 "tolerances": {"position_m": POSITION_TOL_M, "position_far_m": POSITION_FAR_M,
                                "heading_rad": HEADING_TOL_RAD, "speed_ms": SPEED_TOL_MS,
                                "min_share": MIN_SHARE},
@@ -292,7 +293,7 @@ def _fit_findings(verdict: InSituVerdict) -> list[Finding]:
             f"{overall.position_share:.2%} of {overall.samples} recorded positions played within "
             f"{POSITION_TOL_M} m; worst where it follows the record {worst_of} "
             f"{overall.worst_position_m:.2f} m at {overall.worst_position_at_s or 0.0:.2f} s",
-            "error" if bad else "warning"))
+            "error" if bad else "warning", time_s=overall.worst_position_at_s))
     if overall.worst_held_m > POSITION_TOL_M:
         found.append(Finding(
             "IN_SITU_HELD",
@@ -305,14 +306,15 @@ def _fit_findings(verdict: InSituVerdict) -> list[Finding]:
             "IN_SITU_HEADING",
             f"{overall.heading_share:.2%} of {overall.samples} recorded headings played within "
             f"{HEADING_TOL_RAD} rad; worst {overall.worst_heading_rad:.3f} rad at "
-            f"{overall.worst_heading_at_s or 0.0:.2f} s", "error" if bad else "warning"))
+            f"{overall.worst_heading_at_s or 0.0:.2f} s", "error" if bad else "warning",
+            time_s=overall.worst_heading_at_s))
     if overall.speed_within < overall.speed_samples:
         found.append(Finding(
             "IN_SITU_SPEED",
             f"{overall.speed_share:.2%} of {overall.speed_samples} speeds within "
             f"{SPEED_TOL_MS} m/s of the recorded positions' change; worst "
             f"{overall.worst_speed_ms:.2f} m/s at {overall.worst_speed_at_s or 0.0:.2f} s",
-            "warning"))
+            "warning", time_s=overall.worst_speed_at_s))
     return found
 
 
@@ -334,7 +336,7 @@ def _collision_findings(playback: Playback, paths: dict[str, RecordedPath],
         else:
             stretches.append([time_s, time_s])
     return [Finding("IN_SITU_COLLISION", f"{a} and {b} collide from {first:.2f} s to "
-                    f"{last:.2f} s; the record shows them apart")
+                    f"{last:.2f} s; the record shows them apart", time_s=first)
             for (a, b), stretches in sorted(unrecorded.items()) for first, last in stretches]
 
 

@@ -11,7 +11,6 @@ played within 0.1 m, the worst sample, per vehicle) come along as ``in_situ``.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
@@ -37,8 +36,6 @@ from scenweave.schemas.scenario_folder import (
 )
 from scenweave.viewer.scene import EGO, MAP_MARGIN_M, _actors, _lane_polylines
 
-#: a finding's first time ("at 4.20 s", "from 4.20 s")
-FINDING_TIME = re.compile(r"\b(?:at|from) (?P<t>-?\d+(?:\.\d+)?) s\b")
 #: the files of an in-situ folder the page lists and serves
 IN_SITU_FILES = (XOSC_NAME, ROAD_NAME, IN_SITU_CHOICE_NAME, REPLAY_NAME, *JUDGE_NAMES,
                  HERO_REFERENCE_NAME)
@@ -160,14 +157,13 @@ def _charts(playback: Playback) -> dict[str, Any]:
 
 
 def _findings(judged: dict[str, Any]) -> list[dict]:
-    """The judge's IN_SITU_* findings, each at the first time its message names."""
+    """The judge's IN_SITU_* findings, each at the time the judge wrote beside it."""
     found = []
     for finding in judged.get("findings") or []:
         if not isinstance(finding, dict):
             continue
-        message = str(finding.get("message", ""))
-        when = FINDING_TIME.search(message)
-        found.append({"code": finding.get("code", ""), "message": message,
+        when = finding.get("t")
+        found.append({"code": finding.get("code", ""), "message": str(finding.get("message", "")),
                       "severity": finding.get("severity"),
-                      "t": float(when.group("t")) if when else None})
+                      "t": float(when) if isinstance(when, (int, float)) else None})
     return found

@@ -49,6 +49,9 @@ def test_one_sample_off_is_counted_and_named():
     (finding,) = [f for f in verdict.findings if f.code == "IN_SITU_POSITION"]
     assert "v1 0.30 m at 0.70 s" in finding.message
     assert finding.severity == "error"  # 41 of 42 is under 99.5 %
+    # the time is a field of the verdict the viewer reads, not only words in the message
+    (written,) = [f for f in verdict.to_dict()["findings"] if f["code"] == "IN_SITU_POSITION"]
+    assert written["t"] == pytest.approx(0.7)
 
 
 def test_beyond_half_a_metre_is_an_error_even_when_rare():
@@ -92,6 +95,7 @@ def test_a_collision_the_record_lacks_is_an_error_and_one_it_shows_is_not():
     assert [f.message for f in verdict.findings] == [
         "hero and v1 collide from 1.00 s to 1.20 s; the record shows them apart",
         "hero and v1 collide from 1.80 s to 1.80 s; the record shows them apart"]
+    assert [f["t"] for f in verdict.to_dict()["findings"]] == [1.0, 1.8]
     touching = [_path("hero", 0.0, 10.0), _path("v1", 3.95, 10.0)]
     verdict = judge_in_situ(_playback(*touching, collisions=[(1.0, "hero", "v1")]), touching)
     assert verdict.passed and verdict.recorded_collisions == [(1.0, "hero", "v1")]

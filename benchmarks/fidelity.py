@@ -202,6 +202,11 @@ def show(source: Source) -> None:
 
 
 def show_lateral_and_brake(source: Source) -> None:
+    """Mined sources: how the lane-line crossings and the hardest seconds of braking play
+    (MOOVE rows have no series: one linear change over their duration, their phases)."""
+    if not any(c is not None for c in source.crossings) \
+            and not any(p is not None for p in source.brake_peaks):
+        return
     if source.crossings:
         timed = [c for c in source.crossings if c is not None]
         within = sum(1 for c in timed if c <= SERIES_CROSSING_TOL_S + 1e-9)

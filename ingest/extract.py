@@ -284,11 +284,13 @@ def _fit_actor(params: Mapping[str, Any], series: dict, prefix: str) -> tuple:
         else series.get(f"{prefix}_s_m")
     args = (series["t"], series[f"{prefix}_speed_ms"], params["maneuver_start_s"],
             params[f"{prefix}_speed_ms"], positions)
-    own = fit_series(*args)
     targets = _gap_targets(params, series, prefix)
     if targets is None:
-        return own
+        return fit_series(*args)
     with_gap = fit_series(*args, targets)
+    if len(with_gap) <= 2:
+        return with_gap  # within twice the own fit's phases plus two, however few those are
+    own = fit_series(*args)
     return with_gap if len(with_gap) <= 2 * len(own) + 2 else own
 
 

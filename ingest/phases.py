@@ -111,7 +111,10 @@ def _phases(t: list[float], v: list[float], targets: Targets, start_s: float, v_
     phases: list[Phase] = []
     knot = v_start
     if abs(v_start - v[0]) > SPEED_TOL_MS:  # the record's first sample differs from its field
-        phases.append(Phase(_ms(start_s + t[0]), 0.0, _ms(v[0]), "step"))
+        # a first sample after the start (the ones before are tracking noise, left out) is
+        # reached by a ramp across them; one at the start by a step
+        phases.append(Phase(_ms(start_s), _ms(t[0]), _ms(v[0])) if t[0] > 0 else
+                      Phase(_ms(start_s + t[0]), 0.0, _ms(v[0]), "step"))
         knot = v[0]
     for i, j, corner in _fewest_segments(t, v, targets, knot, tolerance):
         if abs(corner - knot) > NO_CHANGE_MS:

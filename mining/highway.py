@@ -198,6 +198,10 @@ def _timed(scene: Scene, i: int, before: int, after: int, old: float, new: float
     duration = (last - first) / (1 - 2 * share)
     start = max(first - share * duration, float(track.t[0]))
     cross, offset = _line_crossing(scene, i, before, after, start)
+    if not np.isfinite(cross):  # no lane indexes (urban maps): halfway across is the line
+        halfway = window[:-1][(done[:-1] < 0.5) & (done[1:] >= 0.5)]
+        nearest = halfway[np.argmin(np.abs(halfway - after))] if len(halfway) else after - 1
+        cross, offset = _when(track.t, done, window, int(nearest), 0.5), 0.0
     return LaneChange(i, before, after, old, new, start,
                       min(first - share * duration + duration, float(track.t[-1])), duration,
                       abs(moved), cross, offset)

@@ -181,16 +181,21 @@ def lateral_offsets(tracks: list[Track]) -> list[Floats]:
     return [v - course(tr.s) for v, tr in zip(lat, tracks, strict=True)]
 
 
+#: lanes' centres closer than this are no lanes the lateral positions tell apart (m)
+MIN_LANE_SPACING_M = 2.0
+
+
 def lane_spacing(tracks: list[Track], lateral: list[Floats]) -> float | None:
     """How far apart lane centres lie in :func:`lateral_offsets`' terms: the centre of lane
     index ``k`` is at ``spacing * k`` (negative: indexes grow to the right, offsets to the
     left). The median over every step with a lane index and a lateral position; None where
-    no step has both."""
+    no step has both, or the lanes come out closer than :data:`MIN_LANE_SPACING_M`."""
     ratios = [np.asarray(lat, dtype=float) / _lane_numbers(tr)
               for tr, lat in zip(tracks, lateral, strict=True)]
     found = np.concatenate(ratios) if ratios else np.empty(0)
     found = found[np.isfinite(found)]
-    return float(np.median(found)) if len(found) else None
+    spacing = float(np.median(found)) if len(found) else 0.0
+    return spacing if abs(spacing) >= MIN_LANE_SPACING_M else None  # lanes not told apart
 
 
 def _road_course(s: Floats, lat: Floats, lane: Floats, bends: bool,

@@ -18,12 +18,13 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from scenweave.pipeline import base_outcome
 from scenweave.presentation.report import write_run_report
-from scenweave.queue.connection import QueueError, RunKeys, job_id
+from scenweave.queue.connection import QueueError, RunKeys, job_id, riding_out
 from scenweave.queue.handoff import ParcelError, unpack
 from scenweave.run_folder import RunFolder
 from scenweave.runner import summarize
@@ -77,7 +78,11 @@ class CollectResult:
 def collect(run_dir: Path, connection: Any, wait: bool = False, timeout_s: float | None = None,
             poll_s: float = 0.5, on_commit: Callable[[int], None] | None = None
             ) -> CollectResult:
-    """Commit the run's handed-back scenario folders; with ``wait``, until none is pending."""
+    """Commit the run's handed-back scenario folders; with ``wait``, until none is pending.
+
+    Redis going away meanwhile is waited out (``riding_out``: each round is idempotent); a
+    Redis back without its data (no append-only file) has forgotten the pending scenarios:
+    those seen pending and not in the run folder are named lost, to be submitted again."""
     from redis.exceptions import RedisError
 
     folder = RunFolder(Path(run_dir))
@@ -86,16 +91,19 @@ def collect(run_dir: Path, connection: Any, wait: bool = False, timeout_s: float
     result, keys = CollectResult(folder), RunKeys(folder.run_id)
     deadline = None if timeout_s is None else time.monotonic() + timeout_s
     suspects: set[str] = set()
+    seen: set[str] = set()
+    pending: set[str] = set()
     try:
         while True:
-            got = _collect_once(folder, connection, keys, result)
+            got, pending = riding_out(lambda: _round(folder, connection, keys, result),
+                                      connection)
+            seen |= pending
             if on_commit and got:
                 on_commit(got)
-            pending = {m.decode() for m in connection.smembers(keys.pending)}
             result.pending = len(pending)
             if not wait or not pending:
                 break
-            gone = _gone(connection, folder, pending)
+            gone = riding_out(partial(_gone, connection, folder, pending), connection)
             result.lost = sorted(gone & suspects)  # gone twice in a row: not a race
             suspects = gone
             if pending <= set(result.lost):
@@ -108,9 +116,21 @@ def collect(run_dir: Path, connection: Any, wait: bool = False, timeout_s: float
     except RedisError as err:
         raise QueueError(f"the job queue failed while collecting run {folder.run_id}: {err}; "
                          "check the Redis server, then run scenweave collect again") from err
+    if wait:  # pending once, now neither pending nor in the run folder: Redis forgot them
+        forgotten = {s for s in seen - pending - set(result.lost) if folder.outcome(s) is None}
+        result.lost = sorted({*result.lost, *forgotten})
+        result.pending += len(forgotten)
     result.summary = refresh_run(folder.root)
     result.expected = expected_scenarios(folder.root)
     return result
+
+
+def _round(folder: RunFolder, connection: Any, keys: RunKeys,
+           result: CollectResult) -> tuple[int, set[str]]:
+    """One look at the queue: commit what was handed back; return how many scenario folders
+    were written and which scenarios are still pending."""
+    got = _collect_once(folder, connection, keys, result)
+    return got, {m.decode() for m in connection.smembers(keys.pending)}
 
 
 def _collect_once(folder: RunFolder, connection: Any, keys: RunKeys,

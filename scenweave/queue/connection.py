@@ -6,8 +6,11 @@ hand-back. Every other module of the queue builds on these names.
 from __future__ import annotations
 
 import os
+import sys
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 from urllib.parse import urlsplit, urlunsplit
 
 from scenweave.errors import InfrastructureError
@@ -19,6 +22,14 @@ QUEUE_ENV = "SCENWEAVE_QUEUE"
 
 
 DEFAULT_QUEUE_URL = "redis://127.0.0.1:6379/0"
+
+#: how long a worker, ``submit --wait`` or ``collect --wait`` waits for Redis to come back
+OUTAGE_ENV = "SCENWEAVE_QUEUE_OUTAGE_S"
+DEFAULT_OUTAGE_S = 300.0
+#: the first and the longest pause between two knocks at a Redis that does not answer
+FIRST_KNOCK_S, LONGEST_KNOCK_S = 0.2, 5.0
+
+T = TypeVar("T")
 
 
 class QueueError(InfrastructureError):
@@ -97,3 +108,66 @@ def _is_refused_login(err: Exception) -> bool:
 def job_id(run_id: str, scenario_id: str) -> str:
     """The RQ job id of a scenario of a run (RQ allows letters, digits, ``_`` and ``-``)."""
     return safe_name(f"{run_id}--{scenario_id}").replace(".", "_")
+
+
+def outage_budget_s() -> float:
+    """How long to wait for an unreachable Redis: ``$SCENWEAVE_QUEUE_OUTAGE_S`` or 5 min."""
+    return float(os.environ.get(OUTAGE_ENV) or DEFAULT_OUTAGE_S)
+
+
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def wait_for_queue(connection: Any, err: Exception, budget_s: float | None = None,
+                   say: Callable[[str], None] = _say) -> float:
+    """Knock at Redis (backing off up to ``LONGEST_KNOCK_S``) until it answers again, saying
+    once that it is waited for and once that it is back; return the seconds waited.
+
+    A restarted Redis keeps what its append-only file kept (``--appendonly yes``): without
+    it the queue comes back empty, and the callers find their jobs gone and say so.
+    QueueError once ``budget_s`` (``outage_budget_s``) passed without an answer."""
+    from redis.exceptions import RedisError
+
+    budget_s = outage_budget_s() if budget_s is None else budget_s
+    where = _where(connection)
+    say(f"the job queue at {where} does not answer ({err}); waiting up to {budget_s:.0f} s "
+        f"for it to come back ({OUTAGE_ENV})")
+    start = time.monotonic()
+    pause = FIRST_KNOCK_S
+    while True:
+        time.sleep(pause)
+        try:
+            connection.ping()
+        except RedisError as again:
+            waited = time.monotonic() - start
+            if waited >= budget_s:
+                raise QueueError(f"the job queue at {where} did not come back within "
+                                 f"{budget_s:.0f} s ({again}); start redis-server there, then "
+                                 "run the same command again") from again
+            pause = min(pause * 2, LONGEST_KNOCK_S, max(budget_s - waited, 0.05))
+            continue
+        waited = time.monotonic() - start
+        say(f"the job queue at {where} is back after {waited:.1f} s; carrying on")
+        return waited
+
+
+def riding_out(call: Callable[[], T], connection: Any, budget_s: float | None = None,
+               say: Callable[[str], None] = _say) -> T:
+    """``call()``, called again each time Redis comes back from an outage (a refused or cut
+    connection, a time-out, a Redis still loading its data): for idempotent steps only."""
+    from redis.exceptions import ConnectionError as RedisConnectionError
+    from redis.exceptions import TimeoutError as RedisTimeoutError
+
+    budget_s = outage_budget_s() if budget_s is None else budget_s
+    deadline = time.monotonic() + budget_s
+    while True:
+        try:
+            return call()
+        except (RedisConnectionError, RedisTimeoutError) as err:
+            wait_for_queue(connection, err, max(deadline - time.monotonic(), 0.0), say)
+
+
+def _where(connection: Any) -> str:
+    kwargs = connection.connection_pool.connection_kwargs
+    return f"{kwargs.get('host', '?')}:{kwargs.get('port', '?')}"

@@ -23,7 +23,8 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.pipeline import PipelineSettings, base_outcome
-from scenweave.queue.connection import QueueError, RunKeys, job_id, map_key
+from scenweave.player.scratch import owned_folder, scratch_parent, use_scratch_parent
+from scenweave.queue.connection import QueueError, RunKeys, job_id, map_key, riding_out
 from scenweave.queue.handoff import Limits, pack
 from scenweave.runner import make_scenario
 from scenweave.schemas.scenario_folder import RECORDED_NAME, STATUS_NAME
@@ -49,13 +50,14 @@ class JobOptions:
 _scratch_root: Path | None = None
 def scratch_root() -> Path:
     """This worker's scratch folder: ``--scratch``, ``$SCENWEAVE_WORKER_SCRATCH``, or a
-    folder of its own under the system's temp folder."""
+    folder of its own beside the player's (named after this process: the next start sweeps
+    it once this worker is gone, killed or not). The player's folders go inside it."""
     global _scratch_root
     if _scratch_root is None:
         chosen = os.environ.get(SCRATCH_ENV)
-        _scratch_root = Path(chosen) if chosen else Path(
-            tempfile.mkdtemp(prefix="scenweave-worker-"))
+        _scratch_root = Path(chosen) if chosen else owned_folder(scratch_parent(), "worker")
     _scratch_root.mkdir(parents=True, exist_ok=True)
+    use_scratch_parent(_scratch_root)
     return _scratch_root
 
 
@@ -63,6 +65,7 @@ def use_scratch_root(path: Path) -> None:
     """Make scenarios under ``path`` from now on (``scenweave worker --scratch``)."""
     global _scratch_root
     _scratch_root = Path(path)
+    use_scratch_parent(_scratch_root)
 
 
 def run_job(spec: dict) -> str:
@@ -80,7 +83,7 @@ def run_job(spec: dict) -> str:
     connection = job.connection
     keys = RunKeys(spec["run_id"])
     scenario_id = spec["params"]["scenario_id"]
-    made_by = connection.hget(keys.made, scenario_id)
+    made_by = riding_out(lambda: connection.hget(keys.made, scenario_id), connection)
     if isinstance(made_by, bytes):
         made_by = made_by.decode()
     if made_by is not None and made_by == spec.get("submission"):
@@ -119,12 +122,18 @@ def hand_back(connection: Any, spec: dict, folder: Path, outcome: dict) -> int:
     parcel = pack(folder, limits, extra=status)
     keys, scenario_id = RunKeys(spec["run_id"]), spec["params"]["scenario_id"]
     ttl = int(spec.get("ttl_s") or JobOptions.result_ttl_s)
-    with connection.pipeline(transaction=True) as pipe:
-        pipe.hset(keys.parcels, scenario_id, parcel.data)
-        pipe.hset(keys.made, scenario_id, spec.get("submission") or "")
-        pipe.expire(keys.parcels, ttl)
-        pipe.expire(keys.made, ttl)
-        pipe.execute()
+
+    def put() -> None:  # one transaction, the same each time: handing back twice is once
+        with connection.pipeline(transaction=True) as pipe:
+            pipe.hset(keys.parcels, scenario_id, parcel.data)
+            pipe.hset(keys.made, scenario_id, spec.get("submission") or "")
+            pipe.expire(keys.parcels, ttl)
+            pipe.expire(keys.made, ttl)
+            pipe.execute()
+
+    # Redis away: the made folder waits for it here (a QueueError past the outage budget
+    # fails the attempt, and RQ's retry makes and hands it back again)
+    riding_out(put, connection)
     return len(parcel.data)
 
 

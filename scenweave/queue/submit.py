@@ -13,13 +13,21 @@ import hashlib
 import uuid
 import zlib
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from scenweave.inputs import InputSelection, load_input
 from scenweave.pipeline import PipelineSettings
 from scenweave.progress import progress
-from scenweave.queue.connection import QUEUE_NAME, QueueError, RunKeys, job_id, map_key
+from scenweave.queue.connection import (
+    QUEUE_NAME,
+    QueueError,
+    RunKeys,
+    job_id,
+    map_key,
+    riding_out,
+)
 from scenweave.queue.job import JobOptions, on_job_failure, run_job
 from scenweave.run_folder import RunFolder
 from scenweave.runner import round_robin, run_description
@@ -64,7 +72,8 @@ def submit(data: Path, out_root: Path, selection: InputSelection, settings: Pipe
                             "input_issues": result.input_issues})
     try:
         queue = _queue(connection)
-        job_map = share_map(connection, settings.map, options.result_ttl_s)
+        job_map = riding_out(partial(share_map, connection, settings.map, options.result_ttl_s),
+                             connection)
         for index, params in progress(round_robin(loaded.params), desc="enqueue",
                                       total=len(loaded.params)):
             spec = {"run_id": folder.run_id, "params": params, "index": index,
@@ -72,7 +81,8 @@ def submit(data: Path, out_root: Path, selection: InputSelection, settings: Pipe
                     "recorded": loaded.recorded.get(params["scenario_id"]),
                     "limits": options.limits, "submission": result.submission,
                     "ttl_s": options.result_ttl_s}
-            _submit_one(queue, folder, spec, retry_failed, options, result)
+            riding_out(partial(_submit_one, queue, folder, spec, retry_failed, options, result),
+                       connection)  # idempotent: a job queued already is not queued again
     except RedisError as err:
         raise QueueError(f"the job queue failed while enqueueing run {folder.run_id}: {err}; "
                          "check the Redis server, then submit the same --run-id again") from err

@@ -8,19 +8,22 @@ finds the abandoned job in the StartedJobRegistry and retries it.
 
 from __future__ import annotations
 
+import ctypes
 import importlib
 import multiprocessing
 import os
 import signal
+import sys
 import tempfile
 import threading
 from contextlib import suppress
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any, cast
 
 from scenweave.pipeline import PipelineSettings
-from scenweave.queue.connection import QUEUE_NAME, connect
+from scenweave.queue.connection import QUEUE_NAME, connect, riding_out, wait_for_queue
 from scenweave.queue.job import scratch_root, use_scratch_root
 from scenweave.runner import make_scenario
 from scenweave.schemas.params import Params
@@ -60,8 +63,12 @@ def make_worker(connection: Any, options: WorkerOptions) -> Any:
     runs in the worker, which dies with it: nothing outlives a killed worker to race the
     retry) with a heartbeat thread, so a job's registry entry still lives only two heartbeats
     plus 10 s; an idle worker wakes every maintenance interval to look for abandoned jobs
-    (RQ's default is every 10 minutes).
+    (RQ's default is every 10 minutes). Redis going away is waited out (``riding_out``) in
+    every step of RQ's work loop that would otherwise end the worker; RQ's own dequeue already
+    retries with a backoff.
     """
+    from redis.exceptions import ConnectionError as RedisConnectionError
+    from redis.exceptions import TimeoutError as RedisTimeoutError
     from rq import SimpleWorker
     from rq.worker import WorkerStatus
 
@@ -72,6 +79,27 @@ def make_worker(connection: Any, options: WorkerOptions) -> Any:
             return 2 * self.job_monitoring_interval + 10
 
         def execute_job(self, job: Any, queue: Any) -> None:
+            try:
+                self._execute_beating(job, queue)
+            except (RedisConnectionError, RedisTimeoutError) as err:
+                # RQ's own bookkeeping of the job met a Redis outage. The job's hand-back,
+                # if made, is in Redis already (run_job waits it out); the job, left started,
+                # is found abandoned and retried, and its retry sees it handed back
+                wait_for_queue(self.connection, err)
+            self.set_state(WorkerStatus.IDLE)
+
+        def run_maintenance_tasks(self) -> None:
+            riding_out(super().run_maintenance_tasks, self.connection)
+
+        def check_for_suspension(self, burst: bool) -> None:
+            riding_out(partial(super().check_for_suspension, burst), self.connection)
+
+        def heartbeat(self, timeout: int | None = None, pipeline: Any = None) -> Any:
+            if pipeline is not None:  # queued in the caller's pipeline: no call to Redis yet
+                return super().heartbeat(timeout, pipeline)
+            return riding_out(partial(super().heartbeat, timeout), self.connection)
+
+        def _execute_beating(self, job: Any, queue: Any) -> None:
             execution = self.prepare_execution(job)
             stop = threading.Event()
             beat = threading.Thread(target=self._beat, args=(job, execution, stop),
@@ -82,7 +110,6 @@ def make_worker(connection: Any, options: WorkerOptions) -> Any:
                 self.perform_job(job, queue, execution)
             finally:
                 self._stop_beating()
-            self.set_state(WorkerStatus.IDLE)
 
         def _beat(self, job: Any, execution: Any, stop: threading.Event) -> None:
             while not stop.wait(self.job_monitoring_interval):
@@ -152,6 +179,7 @@ def work(url: str | None, options: WorkerOptions) -> bool:
     """Run one worker in this process until stopped (or the queue is empty with ``burst``)."""
     connection = connect(url)
     preload(options)
+    children_die_with_this_process()
     return make_worker(connection, options).work(burst=options.burst, with_scheduler=True)
 
 
@@ -159,6 +187,7 @@ def work_in_processes(url: str | None, options: WorkerOptions, count: int) -> in
     """Run ``count`` workers, each in its own process; return how many exited cleanly."""
     connect(url)  # fail here, once, with the clear message
     preload(options)
+    children_die_with_this_process()
     context = multiprocessing.get_context("fork")
     processes = [context.Process(target=work, args=(url, options), name=f"scenweave-worker-{i}")
                  for i in range(count)]
@@ -177,3 +206,29 @@ def _stop(processes: list[Any]) -> None:
     for process in processes:
         if process.is_alive():
             os.kill(process.pid, signal.SIGTERM)  # RQ: warm shutdown after the current job
+
+
+#: prctl's option that has the kernel signal a process when its parent ends (linux/prctl.h)
+PR_SET_PDEATHSIG = 1
+_forking_parent = [0]
+_lifeline_tied = [False]
+
+
+def children_die_with_this_process() -> None:
+    """Every process forked from here on (RQ's scheduler, ``--workers N``'s workers) gets
+    SIGTERM when this process ends, however it ends: a SIGKILLed worker leaves no scheduler
+    behind to hold the scheduler's lock and enqueue jobs for a worker that is gone. Linux
+    only (elsewhere nothing changes); programs started with ``subprocess`` are not forks of
+    this kind and are left alone."""
+    if sys.platform != "linux" or _lifeline_tied[0]:
+        return
+    libc = ctypes.CDLL(None, use_errno=True)
+    os.register_at_fork(before=lambda: _forking_parent.__setitem__(0, os.getpid()),
+                        after_in_child=lambda: _tie_to_parent(libc))
+    _lifeline_tied[0] = True
+
+
+def _tie_to_parent(libc: Any) -> None:
+    libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+    if os.getppid() != _forking_parent[0]:  # the parent died before the tie was made
+        os.kill(os.getpid(), signal.SIGTERM)

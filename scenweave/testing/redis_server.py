@@ -1,4 +1,6 @@
-"""A throwaway ``redis-server`` on loopback: free port, own temp dir, no persistence."""
+"""A throwaway ``redis-server`` on loopback: free port, own temp dir, no persistence unless
+asked (``appendonly``); ``kill()`` and ``start()`` again restart it on the same port and
+folder, as a crashed and restarted Redis."""
 
 from __future__ import annotations
 
@@ -19,8 +21,9 @@ def free_port() -> int:
 class RedisServer:
     """Start with ``start()``, stop with ``stop()``; ``url`` is its redis:// URL."""
 
-    def __init__(self, workdir: Path):
+    def __init__(self, workdir: Path, appendonly: bool = False):
         self.workdir = Path(workdir)
+        self.appendonly = appendonly
         self.port = free_port()
         self.url = f"redis://127.0.0.1:{self.port}/0"
         self.process: subprocess.Popen | None = None
@@ -33,7 +36,8 @@ class RedisServer:
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.process = subprocess.Popen(
             [binary, "--port", str(self.port), "--bind", "127.0.0.1", "--save", "",
-             "--appendonly", "no", "--dir", str(self.workdir), "--protected-mode", "yes"],
+             "--appendonly", "yes" if self.appendonly else "no", "--appendfsync", "always",
+             "--dir", str(self.workdir), "--protected-mode", "yes"],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
@@ -46,6 +50,12 @@ class RedisServer:
                 time.sleep(0.05)
         self.stop()
         raise RuntimeError(f"redis-server did not answer on port {self.port}")
+
+    def kill(self) -> None:
+        """SIGKILL, as a crash: nothing is flushed beyond what the append-only file holds."""
+        if self.process and self.process.poll() is None:
+            self.process.kill()
+            self.process.wait()
 
     def stop(self) -> None:
         if self.process and self.process.poll() is None:

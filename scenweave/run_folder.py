@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -17,7 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.files.atomic import write_json_atomic
-from scenweave.schemas.scenario_folder import STAGING_DIR, STATUS_NAME, Outcome, read_outcome
+from scenweave.schemas.scenario_folder import (
+    STAGING_DIR,
+    STATUS_NAME,
+    Outcome,
+    folder_damage,
+    read_outcome,
+)
 
 
 def new_run_id() -> str:
@@ -91,6 +98,18 @@ class RunFolder:
     def outcome(self, scenario_id: str) -> Outcome | None:
         """The stored outcome of a finished scenario, or None."""
         return read_outcome(self.scenario_dir(scenario_id))
+
+    def trusted_outcome(self, scenario_id: str) -> Outcome | None:
+        """The stored outcome, or None when the folder lacks a file it names (or one cannot
+        be read): then the scenario is made again, and one line on stderr says which and why
+        (a resume after a kill, a full disk or a hand that deleted a file)."""
+        outcome = self.outcome(scenario_id)
+        why = folder_damage(self.scenario_dir(scenario_id), outcome) if outcome else None
+        if why:
+            print(f"run {self.run_id}: {scenario_id} is made again: {why}", file=sys.stderr,
+                  flush=True)
+            return None
+        return outcome
 
     def staging(self, scenario_id: str) -> Path:
         """A fresh, empty staging folder for one scenario's files."""

@@ -126,7 +126,7 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
               jobs: int) -> RunResult:
     todo = []
     for index, params in round_robin(loaded.params):
-        done = folder.outcome(params["scenario_id"])
+        done = folder.trusted_outcome(params["scenario_id"])
         if not done or (retry_failed and done.get("status") == "failed"):
             todo.append((index, params))
     skipped = len(loaded.params) - len(todo)

@@ -233,3 +233,41 @@ def read_verdict(folder: Path) -> ReplayVerdict | None:
     judge wrote verdicts)."""
     data = read_json_object(Path(folder) / VERDICT_NAME)
     return cast(ReplayVerdict, data) if isinstance(data.get("findings"), list) else None
+
+
+#: the files a delivered (not failed) scenario's folder holds whatever else it did: a resume
+#: trusts ``status.json`` only when they are there and readable (a replay cut off, with no
+#: ``replay.json``, is played again later rather than made again)
+DELIVERED_FILES = (XOSC_NAME, PARAMS_NAME)
+
+
+def folder_damage(folder: Path, outcome: Outcome) -> str | None:
+    """Why the finished scenario in ``folder`` cannot be trusted as ``outcome`` says (a file
+    it names missing or unreadable), or None when it is whole. A failed outcome names none."""
+    if outcome.get("status") == "failed":
+        return None
+    for name in DELIVERED_FILES:
+        why = _unreadable(Path(folder) / name)
+        if why:
+            return f"its status.json says {outcome.get('status')} but {name} {why}"
+    return None
+
+
+def _unreadable(path: Path) -> str | None:
+    """Why ``path`` cannot be read as its kind (JSON object, XML), or None."""
+    import xml.etree.ElementTree as ElementTree
+
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return "is missing"
+    except (OSError, ValueError) as err:
+        return f"cannot be read ({err})"
+    try:
+        if path.suffix == ".json" and not isinstance(json.loads(text), dict):
+            return "holds no JSON object"
+        if path.suffix == ".xosc":
+            ElementTree.fromstring(text)
+    except (ValueError, ElementTree.ParseError) as err:
+        return f"is damaged ({err})"
+    return None

@@ -119,7 +119,7 @@ def _submit_one(queue: Any, folder: RunFolder, spec: dict, retry_failed: bool,
 
     scenario_id = spec["params"]["scenario_id"]
     keys = RunKeys(folder.run_id)
-    done = folder.outcome(scenario_id)
+    done = folder.trusted_outcome(scenario_id)
     redo = retry_failed and done is not None and done.get("status") == "failed"
     waiting = queue.connection.hexists(keys.parcels, scenario_id)
     if (done and not redo) or (waiting and done is None):

@@ -18,27 +18,18 @@ script that replays every recorded vehicle (``scenweave.exports.in_situ``).
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
 import click
 
 from scenweave.commands.replay import scenario_files
+from scenweave.exports.esmini_play import RECORDING_NAME, record_play
 from scenweave.schemas.scenario_folder import CODE_NAME, PARAMS_NAME, XOSC_NAME
 
 MAPS_DIR = "maps"
-RECORDING_NAME = "replay.dat"
 README_NAME = "README.md"
 #: the step esmini plays the exported copy with (the replay's own)
 TIME_STEP_S = 0.05
-#: seconds one esmini run may take before it is stopped
-WALL_TIME_S = 120
-#: esmini's log line when the storyboard has run to its stop trigger
-STORY_COMPLETE = "storyBoard runningState -> stopTransition -> completeState"
-#: what esmini 3.6 logs as [error] while reading CARLA's OpenDRIVE maps, harmless for playing
-#: (the geo reference's proj string, CARLA's object types, signal references)
-MAP_LOAD_NOTES = ("Unsupported geo reference attr", "Unsupported object type",
-                  'signal element "signalReference" not supported')
 
 
 @click.command("export")
@@ -163,38 +154,7 @@ def _export_esmini(xosc: Path, out_dir: Path, name: str, esmini: Path) -> str | 
     scenario = folder / XOSC_NAME
     scenario.write_bytes(translated.xml)
     scenario.chmod(0o644)
-    return _record(esmini, scenario)
-
-
-def _record(esmini: Path, scenario: Path) -> str | None:
-    """Play ``scenario`` once with esmini's command-line player, recording ``replay.dat``."""
-    log = scenario.with_name("esmini.log")
-    command = [str(esmini), "--headless", "--osc", scenario.name, "--fixed_timestep",
-               str(TIME_STEP_S), "--record", RECORDING_NAME, "--logfile_path", log.name]
-    try:
-        done = subprocess.run(command, cwd=scenario.parent, capture_output=True, text=True,
-                              timeout=WALL_TIME_S, check=False)
-    except subprocess.TimeoutExpired:
-        return f"{scenario}: esmini did not finish within {WALL_TIME_S} s"
-    lines = _read_lines(log)
-    errors = [line for line in lines if "[error]" in line
-              and not any(note in line for note in MAP_LOAD_NOTES)]
-    recording = scenario.with_name(RECORDING_NAME)
-    if recording.is_file():
-        recording.chmod(0o644)
-    if done.returncode != 0 or errors or not recording.is_file() \
-            or not any(STORY_COMPLETE in line for line in lines):
-        detail = "; ".join(errors[:3]) or done.stderr.strip()[-300:] or \
-            f"exit {done.returncode}, the storyboard did not complete"
-        return f"{scenario}: esmini failed: {detail}"
-    return None
-
-
-def _read_lines(path: Path) -> list[str]:
-    try:
-        return path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError:
-        return []
+    return record_play(esmini, scenario, TIME_STEP_S)
 
 
 def _map_of(xosc: Path) -> Path | None:

@@ -24,10 +24,10 @@ from __future__ import annotations
 import json
 import shutil
 import string
-import subprocess
 from pathlib import Path
 from typing import Any
 
+from scenweave.exports.esmini_play import RECORDING_NAME, record_play
 from scenweave.files import write_text_atomic
 from scenweave.judge.in_situ_doc import (
     InSituDoc,
@@ -47,15 +47,7 @@ TEMPLATE = Path(__file__).with_name(f"{SCRIPT_NAME}.txt")
 TRAJECTORIES_NAME = "trajectories.json"
 #: the CARLA lint's findings on the scenario, for a scenario_runner user
 LINT_NAME = "carla_lint.txt"
-RECORDING_NAME = "replay.dat"
 README_NAME = "README.md"
-#: seconds one esmini run may take before it is stopped
-WALL_TIME_S = 120
-#: esmini's log line when the storyboard has run to its stop trigger
-STORY_COMPLETE = "storyBoard runningState -> stopTransition -> completeState"
-#: what esmini 3.6 logs as [error] while reading a converted road, harmless for playing: a
-#: road without a <type> record (esmini then takes its junctions for intersections in OSI)
-MAP_LOAD_NOTES = ("Type of roads are missing",)
 #: decimals of the trajectories handed to CARLA: millimetres, 1e-5 rad, milliseconds
 DIGITS = {"x": 3, "y": 3, "heading": 5, "t": 3}
 
@@ -86,33 +78,8 @@ def export_esmini(folder: Path, out: Path, esmini: Path) -> str | None:
     doc = _copy_scene(folder, out)
     if doc.road_file != ROAD_NAME:
         return f"{doc.xosc}: its LogicFile names {doc.road_file!r}, not the {ROAD_NAME} beside it"
-    step = _step_s(folder, doc)
-    command = [str(esmini), "--headless", "--osc", XOSC_NAME, "--fixed_timestep", f"{step:g}",
-               "--traj_filter", "0", "--record", RECORDING_NAME, "--logfile_path", "esmini.log"]
-    try:
-        done = subprocess.run(command, cwd=out, capture_output=True, text=True,
-                              timeout=WALL_TIME_S, check=False)
-    except subprocess.TimeoutExpired:
-        return f"{out / XOSC_NAME}: esmini did not finish within {WALL_TIME_S} s"
-    log = _read_lines(out / "esmini.log")
-    errors = [line for line in log if "[error]" in line
-              and not any(note in line for note in MAP_LOAD_NOTES)]
-    recording = out / RECORDING_NAME
-    if recording.is_file():
-        recording.chmod(0o644)
-    if done.returncode != 0 or errors or not recording.is_file() \
-            or not any(STORY_COMPLETE in line for line in log):
-        detail = "; ".join(errors[:3]) or done.stderr.strip()[-300:] or \
-            f"exit {done.returncode}, the storyboard did not complete"
-        return f"{out / XOSC_NAME}: esmini failed: {detail}"
-    return None
-
-
-def _read_lines(path: Path) -> list[str]:
-    try:
-        return path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError:
-        return []
+    return record_play(esmini, out / XOSC_NAME, _step_s(folder, doc),
+                       extra_args=("--traj_filter", "0"))
 
 
 def _step_s(folder: Path, doc: InSituDoc) -> float:

@@ -26,12 +26,12 @@ import select
 import signal
 import struct
 import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 from typing import IO, Any, TypedDict
 
+from scenweave.player.child import bare_child_command
 from scenweave.player.locate import find_esmini
 from scenweave.player.playback import Playback, StoryboardChange
 from scenweave.player.scratch import scratch_folder
@@ -48,16 +48,6 @@ TIMEOUT_MESSAGE = "esmini did not finish within"
 SERVER_GRACE_S = 20.0
 #: how long the server may take to start (import the engine, load the library) (s)
 SERVER_START_S = 60.0
-#: the server's program: the engine and the modules it imports (plain Python), without the
-#: package's __init__ (which imports the whole player, numpy and lxml: 0.2 s more per start)
-SERVER_PROGRAM = """
-import sys, types
-package = types.ModuleType("player")
-package.__path__ = [sys.argv[1]]
-sys.modules["player"] = package
-from scenweave.player.engine import serve
-serve()
-"""
 
 
 class ObjectState(ctypes.Structure):
@@ -226,8 +216,8 @@ def _silence_stdio() -> None:
 # --- the server: forks a child per scenario, enforces the wall-clock limit -------------------
 def serve() -> None:
     """The player server's loop: one request (a pickled dict) in on stdin, one reply out on
-    the original stdout, until stdin closes (``SERVER_PROGRAM`` runs it); esmini's own output
-    goes to /dev/null."""
+    the original stdout, until stdin closes (``bare_child_command("engine", "serve")`` runs
+    it); esmini's own output goes to /dev/null."""
     requests = os.fdopen(os.dup(0), "rb", buffering=0)
     replies = os.fdopen(os.dup(1), "wb", buffering=0)
     devnull = os.open(os.devnull, os.O_RDWR)
@@ -348,7 +338,7 @@ class _Server:
         self.stderr = scratch_folder("esmini") / f"server-{os.getpid()}.log"
         with open(self.stderr, "wb") as errors:
             self.process = subprocess.Popen(
-                [sys.executable, "-c", SERVER_PROGRAM, str(Path(__file__).resolve().parent)],
+                bare_child_command("engine", "serve"),
                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors, bufsize=0,
                 close_fds=True, start_new_session=True)
         return self.process

@@ -16,12 +16,12 @@ from __future__ import annotations
 import ctypes
 import json
 import subprocess
-import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from scenweave.player.child import bare_child_command
 from scenweave.player.locate import find_esmini
 
 LIBRARY = "libesminiRMLib.so"
@@ -33,15 +33,6 @@ ANY_DRIVING = 1966594
 CENTRE_STEP_M = 0.25
 #: how long loading a map and probing its points may take (s)
 PROBE_TIMEOUT_S = 120.0
-#: the child's program: this module alone, without the player package's __init__
-CHILD_PROGRAM = """
-import sys, types
-package = types.ModuleType("player")
-package.__path__ = [sys.argv[1]]
-sys.modules["player"] = package
-from scenweave.player.road_manager import child_main
-child_main(sys.argv[2], sys.argv[3])
-"""
 
 
 class PositionData(ctypes.Structure):
@@ -126,10 +117,9 @@ def probe_map(xodr: Path, groups: list[PointGroup], library: Path | None = None,
             "log": str(Path(scratch) / "esmini.log"),
             "groups": [[g.road_id, g.lane_id, g.points, g.lead_in] for g in groups]}),
             encoding="utf-8")
-        package = Path(__file__).resolve().parent
         try:
-            done = subprocess.run([sys.executable, "-c", CHILD_PROGRAM, str(package),
-                                   str(request), str(reply)],
+            done = subprocess.run(bare_child_command("road_manager", "child_main", str(request),
+                                                     str(reply)),
                                   capture_output=True, timeout=timeout_s, check=False)
         except subprocess.TimeoutExpired:
             return MapProbe(False, f"esmini's RoadManager did not finish within {timeout_s} s")

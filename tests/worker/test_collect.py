@@ -29,6 +29,7 @@ def _made(folder: Path, scenario_id: str, big_bytes: int = 0) -> dict:
     """A scenario folder as a worker leaves it, and its outcome."""
     folder.mkdir(parents=True)
     (folder / "scenario.xosc").write_text(f"<OpenSCENARIO id='{scenario_id}'/>")
+    (folder / "params.json").write_text(json.dumps(_params(scenario_id)))
     (folder / "variants" / "v01").mkdir(parents=True)
     (folder / "variants" / "v01" / "variant.json").write_text("{}")
     if big_bytes:
@@ -68,11 +69,12 @@ def test_each_parcel_is_committed_once_and_a_large_artefact_stays_behind_said_so
     assert json.loads((run.root / "summary.json").read_text())["total"] == 1
     assert not (run.root / "report.html").exists()  # 1 of 2 scenarios: not finished yet
 
-    (committed / "scenario.xosc").write_text("kept")  # a retried job hands A back again
+    kept = "<OpenSCENARIO kept='yes'/>"
+    (committed / "scenario.xosc").write_text(kept)  # a retried job hands A back again
     hand_back(connection, _spec("A"), tmp_path / "w" / "a", outcome)
     again = collect(run.root, connection)
     assert again.committed == [] and again.duplicates == 1
-    assert (committed / "scenario.xosc").read_text() == "kept"
+    assert (committed / "scenario.xosc").read_text() == kept
     assert not connection.hexists(RunKeys(RUN_ID).parcels, "A")
 
 
@@ -126,6 +128,7 @@ def test_pack_and_unpack_round_trip_a_folder(tmp_path):
     unpacked = tmp_path / "back"
     unpacked.mkdir()
     names = unpack(parcel.data, unpacked)
-    assert sorted(names) == ["scenario.xosc", "status.json", "variants/v01/variant.json"]
+    assert sorted(names) == ["params.json", "scenario.xosc", "status.json",
+                             "variants/v01/variant.json"]
     expected = f"<OpenSCENARIO id='{outcome['scenario_id']}'/>"
     assert (unpacked / "scenario.xosc").read_text() == expected

@@ -8,7 +8,8 @@ off its lane's centre. So a mined lane change is two actions (docs/scenario-conv
 - ``<entity>_lane_change``: from ``maneuver_start_s``, where the car starts across its lane
   (``<actor>_lane_offset_m``), linearly toward the new lane's centre, as fast as makes it
   reach the line at ``lane_change_cross_s``;
-- ``<entity>_lane_settle``: :data:`SETTLE_AFTER_CROSSING_S` after the crossing, from where it is
+- ``<entity>_lane_settle``: :data:`SETTLE_AFTER_CROSSING_S` after the crossing (or once
+  :data:`SETTLE_PAST_LINE_M` past the line, for a slow move), from where it is
   to the centre of the lane it is now in, by the end of ``duration_s`` (it replaces the first,
   which runs on the same lateral domain).
 
@@ -33,6 +34,7 @@ from scenweave.scenario_lib.phases import profile_of
 #: the settling part starts this long after the car crossed the line (s): by then it is in
 #: its new lane, which "this lane" (RelativeTargetLane 0) then names
 SETTLE_AFTER_CROSSING_S = 0.2
+SETTLE_PAST_LINE_M = 0.25
 #: a car must start at least this far before the line (m) and cross at least this long after
 #: the manoeuvre starts (s) for the crossing to be timed; else the single change plays
 MIN_TO_LINE_M = 0.05
@@ -74,11 +76,16 @@ def recorded_lane_change(params: Mapping[str, Any], prefix: str) -> RecordedLane
     to_line = width / 2 - toward
     if to_line < MIN_TO_LINE_M or cross < MIN_CROSS_S:
         return None
-    first = cross * (width - toward) / to_line  # linear: reaches the line after ``cross``
-    settle_from = cross + SETTLE_AFTER_CROSSING_S
-    settle = duration - settle_from
+    # linear in the distance driven (the dynamics' dimension): the line is reached after
+    # the metres driven until ``cross``, so the crossing keeps its time whatever the speed
     driven = profile_of(params, prefix).distance
-    first_m = _length(driven(start + first) - driven(start))
+    first_m = _length((driven(start + cross) - driven(start)) * (width - toward) / to_line)
+    first = cross * (width - toward) / to_line  # the same, in time at a steady speed
+    # settling starts once the car is clearly in its new lane ("this lane" must be the new
+    # one): SETTLE_AFTER_CROSSING_S, or longer for a slow move, SETTLE_PAST_LINE_M across
+    past_line_s = SETTLE_PAST_LINE_M * first / (width - toward)
+    settle_from = cross + max(SETTLE_AFTER_CROSSING_S, past_line_s)
+    settle = duration - settle_from
     if settle < MIN_SETTLE_S:
         return RecordedLaneChange(start, _ms(first), start + cross, None, None, toward, first_m)
     settle_m = _length(driven(start + duration) - driven(start + settle_from))

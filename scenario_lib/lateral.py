@@ -11,7 +11,7 @@ off its lane's centre. So a mined lane change is two actions (docs/scenario-conv
 - ``<entity>_lane_settle``: :data:`SETTLE_AFTER_CROSSING_S` after the crossing (or once
   :data:`SETTLE_PAST_LINE_M` past the line, for a slow move), from where it is
   to the centre of the lane it is now in, by the end of ``duration_s`` (it replaces the first,
-  which runs on the same lateral domain).
+  which runs on the same lateral domain; at least :data:`MIN_SETTLE_S`).
 
 Both are given as the distance the car drives meanwhile (dynamics ``distance``: scenario_runner
 ignores ``time`` for a LaneChangeAction; docs/scenario-conventions.md), from its speed profile.
@@ -39,8 +39,10 @@ SETTLE_PAST_LINE_M = 0.25
 #: the manoeuvre starts (s) for the crossing to be timed; else the single change plays
 MIN_TO_LINE_M = 0.05
 MIN_CROSS_S = 0.05
-#: a settling part shorter than this (s) is left out: the first part ends about there
+#: a settling part lasts at least this long (s) and this far (m; the first part's floor,
+#: 5 m, would slow a short one down)
 MIN_SETTLE_S = 0.2
+MIN_SETTLE_M = 1.0
 
 
 @dataclass(frozen=True)
@@ -52,7 +54,7 @@ class RecordedLaneChange:
     first_s: float
     #: the car crosses the line then
     cross_s: float
-    #: the settling part starts then and lasts this long (None: no settling part)
+    #: the settling part starts then and lasts this long
     settle_start_s: float | None
     settle_s: float | None
     #: where the car starts across its lane, toward the new lane (m)
@@ -85,10 +87,10 @@ def recorded_lane_change(params: Mapping[str, Any], prefix: str) -> RecordedLane
     # one): SETTLE_AFTER_CROSSING_S, or longer for a slow move, SETTLE_PAST_LINE_M across
     past_line_s = SETTLE_PAST_LINE_M * first / (width - toward)
     settle_from = cross + max(SETTLE_AFTER_CROSSING_S, past_line_s)
-    settle = duration - settle_from
-    if settle < MIN_SETTLE_S:
-        return RecordedLaneChange(start, _ms(first), start + cross, None, None, toward, first_m)
-    settle_m = _length(driven(start + duration) - driven(start + settle_from))
+    # as long as recorded, but not shorter than MIN_SETTLE_S: a quicker one ends a little late
+    settle = max(duration - settle_from, MIN_SETTLE_S)
+    settle_m = max(round(driven(start + settle_from + settle) - driven(start + settle_from), 3),
+                   MIN_SETTLE_M)
     return RecordedLaneChange(start, _ms(first), start + cross, _ms(start + settle_from),
                               _ms(settle), toward, first_m, settle_m)
 

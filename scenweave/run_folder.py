@@ -85,8 +85,18 @@ class RunFolder:
             if isinstance(err, KeyboardInterrupt) and not isinstance(err, RunInterrupted) \
                     and self.root.exists():
                 raise RunInterrupted(self.run_id, progress.committed) from err
+            if isinstance(err, Exception) and self.root.exists():
+                self._say_how_to_resume(err, progress)
             raise
         _remove_tree(self.root / STAGING_DIR)
+
+    def _say_how_to_resume(self, err: Exception, progress: Started) -> None:
+        """One line on stderr when a run stops on an error (a full disk, an LLM gone) with its
+        folder kept: which run, where, and the one step that resumes it."""
+        kept = len(self.outcomes())
+        print(f"run {self.run_id} stopped ({type(err).__name__}) after {progress.committed} "
+              f"new scenarios, {kept} in {self.root}; they are kept: run the same command "
+              f"with --run-id {self.run_id} to resume", file=sys.stderr, flush=True)
 
     @property
     def run_id(self) -> str:

@@ -1,13 +1,19 @@
 """A resume trusts a scenario folder only when it holds what its status.json names: a
 truncated status.json, a deleted scenario.xosc and a damaged params.json are each made again,
-with one line naming the scenario and why; whole folders are left as they are."""
+with one line naming the scenario and why; whole folders are left as they are. A run stopped
+by an error (a full disk) says which run it was and the one step that resumes it."""
 
 from __future__ import annotations
 
+import errno
 import json
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
+
+from scenweave.run_folder import RunFolder
 
 CLI = [sys.executable, "-m", "scenweave.cli"]
 
@@ -45,3 +51,16 @@ def test_damaged_folders_are_made_again_and_named(sample_raw, tmp_path):
     assert summary["total"] == 6
     assert sorted(o["scenario_id"] for o in summary["scenarios"]) == sorted(
         json.loads((f / "status.json").read_text())["scenario_id"] for f in folders)
+
+
+def test_a_run_stopped_by_an_error_names_itself_and_how_to_resume(tmp_path, capsys):
+    folder = RunFolder.open(tmp_path, "full")
+    with pytest.raises(OSError), folder.started() as started:
+        (folder.root / "A").mkdir()
+        (folder.root / "A" / "status.json").write_text('{"scenario_id": "A", "status": "ok"}')
+        started.committed += 1
+        raise OSError(errno.ENOSPC, "No space left on device")
+    line = capsys.readouterr().err.strip()
+    assert line == (f"run full stopped (OSError) after 1 new scenarios, 1 in {folder.root}; "
+                    "they are kept: run the same command with --run-id full to resume")
+    assert (folder.root / "A" / "status.json").is_file()

@@ -53,6 +53,42 @@ class WorkerOptions:
     warm_up: bool = True
 
 
+class RidesOutRedis:
+    """The steps of RQ's work loop that would end a worker when Redis goes away (the loop
+    quits on any error outside its dequeue), each waiting for Redis and carrying on instead;
+    mixed in before RQ's worker class, whose methods it wraps."""
+
+    connection: Any
+
+    def execute_beating(self, job: Any, queue: Any) -> None:
+        raise NotImplementedError  # the worker's: run the job, heartbeat and all
+
+    def riding_out_job(self, job: Any, queue: Any) -> None:
+        """Run the job; when RQ's own bookkeeping of it meets a Redis outage, wait. The job's
+        hand-back, if made, is in Redis already (run_job waits it out); the job, left
+        started, is found abandoned and retried, and its retry sees it handed back."""
+        from redis.exceptions import ConnectionError as RedisConnectionError
+        from redis.exceptions import TimeoutError as RedisTimeoutError
+
+        try:
+            self.execute_beating(job, queue)
+        except (RedisConnectionError, RedisTimeoutError) as err:
+            wait_for_queue(self.connection, err)
+
+    def run_maintenance_tasks(self) -> None:
+        riding_out(super().run_maintenance_tasks, self.connection)  # type: ignore[misc]
+
+    def check_for_suspension(self, burst: bool) -> None:
+        riding_out(partial(super().check_for_suspension, burst),  # type: ignore[misc]
+                   self.connection)
+
+    def heartbeat(self, timeout: int | None = None, pipeline: Any = None) -> Any:
+        if pipeline is not None:  # queued in the caller's pipeline: no call to Redis yet
+            return super().heartbeat(timeout, pipeline)  # type: ignore[misc]
+        return riding_out(partial(super().heartbeat, timeout),  # type: ignore[misc]
+                          self.connection)
+
+
 def make_worker(connection: Any, options: WorkerOptions) -> Any:
     """An RQ worker on the ScenWeave queue that runs each job in its own process, warm, and
     whose abandoned jobs are found quickly.
@@ -67,39 +103,20 @@ def make_worker(connection: Any, options: WorkerOptions) -> Any:
     every step of RQ's work loop that would otherwise end the worker; RQ's own dequeue already
     retries with a backoff.
     """
-    from redis.exceptions import ConnectionError as RedisConnectionError
-    from redis.exceptions import TimeoutError as RedisTimeoutError
     from rq import SimpleWorker
     from rq.worker import WorkerStatus
 
-    class ScenWeaveWorker(SimpleWorker):
+    class ScenWeaveWorker(RidesOutRedis, SimpleWorker):
         _beating: tuple[threading.Event, threading.Thread] | None = None
 
         def get_heartbeat_ttl(self, job: Any, working_time: float = 0.0) -> int:
             return 2 * self.job_monitoring_interval + 10
 
         def execute_job(self, job: Any, queue: Any) -> None:
-            try:
-                self._execute_beating(job, queue)
-            except (RedisConnectionError, RedisTimeoutError) as err:
-                # RQ's own bookkeeping of the job met a Redis outage. The job's hand-back,
-                # if made, is in Redis already (run_job waits it out); the job, left started,
-                # is found abandoned and retried, and its retry sees it handed back
-                wait_for_queue(self.connection, err)
+            self.riding_out_job(job, queue)
             self.set_state(WorkerStatus.IDLE)
 
-        def run_maintenance_tasks(self) -> None:
-            riding_out(super().run_maintenance_tasks, self.connection)
-
-        def check_for_suspension(self, burst: bool) -> None:
-            riding_out(partial(super().check_for_suspension, burst), self.connection)
-
-        def heartbeat(self, timeout: int | None = None, pipeline: Any = None) -> Any:
-            if pipeline is not None:  # queued in the caller's pipeline: no call to Redis yet
-                return super().heartbeat(timeout, pipeline)
-            return riding_out(partial(super().heartbeat, timeout), self.connection)
-
-        def _execute_beating(self, job: Any, queue: Any) -> None:
+        def execute_beating(self, job: Any, queue: Any) -> None:
             execution = self.prepare_execution(job)
             stop = threading.Event()
             beat = threading.Thread(target=self._beat, args=(job, execution, stop),

@@ -69,6 +69,17 @@ class PositionsSpeed:
         """The speed with the noise left out (NaN): what phases follow."""
         return np.where(self.noise, np.nan, self.speed)
 
+    @property
+    def filled(self) -> Floats:
+        """The speed with each noise sample taken from the nearest sample that is not: a
+        record's fields, so that an event starting in noise starts at its series' first
+        speed (all noise: as measured)."""
+        clean = np.flatnonzero(~self.noise)
+        if not len(clean) or not self.noise.any():
+            return self.speed
+        nearest = clean[np.abs(np.arange(len(self.speed))[:, None] - clean[None, :]).argmin(1)]
+        return self.speed[nearest]
+
 
 def positions_speed(t: Floats, s: Floats, recorded: Floats) -> PositionsSpeed:
     """The speed from the change of ``s`` (position along the road, or along an urban path;

@@ -84,11 +84,8 @@ class Scene:
 
     def speed_at_step(self, i: int, step: int) -> float:
         """Track ``i``'s speed from its positions at ``step`` (what the record's series
-        gives); the detectors' smoothed speed where that sample is tracking noise."""
-        measured = self.positions[i]
-        if measured.noise[step]:
-            return float(self.motion[i].speed[step])
-        return float(measured.speed[step])
+        gives; at tracking noise, the nearest sample's that is not: ``PositionsSpeed.filled``)."""
+        return float(self.positions[i].filled[step])
 
     def gap(self, ego: int, npc: int, t: float) -> float | None:
         """Signed bumper gap from ``ego`` to ``npc`` along the road (+: npc ahead)."""

@@ -128,10 +128,9 @@ class UrbanScene:
         return positions_speed(track.t, self.paths[i], track.speed)
 
     def record_speeds(self, i: int) -> Floats:
-        """The speeds a record gives: from the positions, the detectors' where that is
-        tracking noise."""
-        measured = self.measured(i)
-        return np.where(measured.noise, self.speeds[i], measured.speed)
+        """The speeds a record gives: from the positions, at tracking noise the nearest
+        sample's that is not (``PositionsSpeed.filled``)."""
+        return self.measured(i).filled
 
     def front(self, i: int) -> tuple[Floats, Floats]:
         track = self.scene.tracks[i]

@@ -239,7 +239,8 @@ def test_the_shared_lankershim_crossings(ngsim_snippets):
     assert {"230", "234", "237", "238", "2106", "2146", "2150", "276", "2127", "2131",
             "284"} == crossings
     assert {e.ego for e in events if e.code == "U4_4"} == {"275"}
-    speeds = [v for e in events if e.adscene for v in e.series["ego_speed_ms"]]
+    # null where the record names tracking noise (issue 31): no car drove those samples
+    speeds = [v for e in events if e.adscene for v in e.series["ego_speed_ms"] if v is not None]
     assert max(speeds) < 22.0
     assert math.isfinite(sum(speeds))
 

@@ -48,7 +48,7 @@ def test_lane_changes_are_seen(us101):
 
 def test_lankershim_lights_have_phases_and_stop_lines(ngsim_snippets):
     recordings = list(read_recordings(ngsim_snippets / "lankershim"))
-    assert len(recordings) == 2
+    assert len(recordings) >= 2  # the shared folder grows: every snippet it holds must pass
     for recording in recordings:
         lit = [light for light in recording.lights if light.phases]
         assert len(lit) >= 4

@@ -218,7 +218,7 @@ def test_lateral_motion_is_measured_across_the_lane_and_turning_in_is_no_lane_ch
     along = np.tile([[1.0, 0.0]], (5, 1))
     change = np.array([[0, 0], [10, 0.5], [20, 1.75], [30, 3.0], [40, 3.5]], float)
     assert lane_lateral(change, along).tolist() == pytest.approx([0, 0.5, 1.75, 3.0, 3.5])
-    heading = np.radians([0.0, 5.0, 15.0, 25.0, -40.0])
+    heading = np.radians([0.0, 5.0, 15.0, 26.0, -40.0])  # 25 deg is the limit itself
     assert across_lane(heading, along).tolist() == [False, False, False, True, True]
 
 

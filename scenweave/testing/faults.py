@@ -22,6 +22,7 @@ from pathlib import Path
 
 from scenweave.queue.connection import OUTAGE_ENV
 from scenweave.schemas.scenario_folder import RUN_FILE, STATUS_NAME
+from scenweave.testing.processes import stop_processes
 from scenweave.testing.redis_server import RedisServer
 
 CLI = [sys.executable, "-m", "scenweave.cli"]
@@ -91,15 +92,7 @@ class FaultBench:
 
     def stop(self) -> None:
         """SIGTERM every process still running (RQ: warm shutdown), SIGKILL the stubborn."""
-        for process in self.processes:
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-        for process in self.processes:
-            try:
-                process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop_processes(self.processes)
 
 
 def delivery(fault: str, run: Path) -> Delivery:

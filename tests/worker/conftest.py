@@ -4,13 +4,13 @@ processes started as ``scenweave worker`` subprocesses."""
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from scenweave.testing.processes import stop_processes
 from scenweave.testing.redis_server import RedisServer
 from tests.worker.gates import GATES_ENV
 from tests.worker.records import ingest_with_poisoned_record
@@ -66,15 +66,7 @@ class Workers:
         return process
 
     def stop(self) -> None:
-        for process in self.processes:
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-        for process in self.processes:
-            try:
-                process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop_processes(self.processes)
 
 
 @pytest.fixture

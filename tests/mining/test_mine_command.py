@@ -57,8 +57,9 @@ def test_a_crawling_car_is_a_record_unless_the_thresholds_skip_stop_and_go(tmp_p
 
 
 @pytest.mark.slow
-def test_the_us101_snippets_are_mined_faster_than_real_time(ngsim_snippets, tmp_path):
+def test_the_us101_snippets_give_following_and_braking_records(ngsim_snippets, tmp_path):
+    # the rate (vehicle-hours per second) is benchmarks/mine.py's to measure, not a test's
     report = mine_recordings(read_recordings(ngsim_snippets / "us101"), tmp_path,
                              load_thresholds())
-    assert report.vehicle_hours * 3600 / report.seconds > 100
+    assert report.vehicle_hours > 0 and report.seconds > 0
     assert report.written["FLF"] > 10 and report.written["BR_BK"] > 0

@@ -97,10 +97,19 @@ class Fit:
     #: farthest of them from its recorded position (m): named, not counted in the worst
     held_samples: int = 0
     worst_held_m: float = 0.0
+    #: of those, how many the hold keeps more than the position tolerance off the record
+    held_off: int = 0
 
     @property
     def position_share(self) -> float:
         return self.position_within / self.samples if self.samples else 1.0
+
+    @property
+    def followed_share(self) -> float:
+        """The share within tolerance of the samples the scenario follows: held standstill
+        noise is named (``IN_SITU_HELD``), not counted against the replay."""
+        followed = self.samples - self.held_off
+        return (self.position_within / followed) if followed > 0 else 1.0
 
     @property
     def heading_share(self) -> float:
@@ -119,6 +128,7 @@ class Fit:
         self.speed_within += other.speed_within
         self.backward_samples += other.backward_samples
         self.held_samples += other.held_samples
+        self.held_off += other.held_off
         self.worst_held_m = max(self.worst_held_m, other.worst_held_m)
         if other.worst_position_m >= self.worst_position_m:
             self.worst_position_m = other.worst_position_m
@@ -141,7 +151,9 @@ class Fit:
                              "worst_at_s": rounded(self.worst_position_at_s, 3),
                              **({"worst_of": self.worst_position_of}
                                 if self.worst_position_of else {}),
+                             "followed_share": rounded(self.followed_share, 5),
                              "held_samples": self.held_samples,
+                             "held_off": self.held_off,
                              "worst_held_m": rounded(self.worst_held_m)},
                 "heading": {"share": rounded(self.heading_share, 5),
                             "worst_rad": rounded(self.worst_heading_rad),
@@ -230,6 +242,7 @@ def vehicle_fit(playback: Playback, path: RecordedPath) -> Fit:
     fit.held_samples = int(held.sum())
     if held.any():
         fit.worst_held_m = float(off[held].max())
+        fit.held_off = int((off[held] > POSITION_TOL_M).sum())
     if (~held).any():
         followed = np.where(held, -1.0, off)
         worst = int(np.argmax(followed))
@@ -287,7 +300,7 @@ def _fit_findings(verdict: InSituVerdict) -> list[Finding]:
         return [Finding("IN_SITU_EMPTY", "no recorded sample to compare")]
     worst_of = overall.worst_position_of or "?"
     if overall.position_within < overall.samples:
-        bad = overall.worst_position_m > POSITION_FAR_M or overall.position_share < MIN_SHARE
+        bad = overall.worst_position_m > POSITION_FAR_M or overall.followed_share < MIN_SHARE
         found.append(Finding(
             "IN_SITU_POSITION",
             f"{overall.position_share:.2%} of {overall.samples} recorded positions played within "

@@ -424,26 +424,34 @@ class InSituBatch:
         return {"written": [entry(r) for r in self.written], "refused": self.refused}
 
 
+def recording_with_road(source: str, cache_dir: Path) -> tuple[Recording, RecordedRoad]:
+    """The recording a mined record names (``provenance.file``) and its road; refused
+    (:class:`InSituRefused`, naming the file) when there is no track to play or no road."""
+    from scenweave.mining.readers import read_file
+
+    if not source:
+        raise InSituRefused("?: no recording to play in situ (no provenance file)")
+    recording = read_file(Path(source))
+    if not recording.tracks:
+        why = "; ".join(recording.warnings) or "no track"
+        raise InSituRefused(f"{source}: no recording to play in situ ({why})")
+    return recording, road_of(source, cache_dir)
+
+
 def write_in_situ_records(records: Iterable[Mapping[str, Any]], out_dir: Path, cache_dir: Path,
                           settings: InSituSettings | None = None) -> InSituBatch:
     """The in-situ scenario of every mined record, each in ``<out_dir>/<scenario_id>/``, with
     ``in_situ_report.json`` beside them. Each recording is read again and its road converted
     once (cached in ``cache_dir``); a record that cannot be played in situ is one refused line
     naming its scenario, the file and the track or lanelet, and the batch goes on."""
-    from scenweave.mining.readers import read_file
-
     batch = InSituBatch()
     by_file: dict[str, list[Mapping[str, Any]]] = {}
     for record in records:
         source = str((record.get("provenance") or {}).get("file", ""))
         by_file.setdefault(source, []).append(record)
     for source, mined in by_file.items():
-        recording = read_file(Path(source)) if source else None
         try:
-            if recording is None or not recording.tracks:
-                why = "; ".join(recording.warnings) if recording else "no provenance file"
-                raise InSituRefused(f"{source or '?'}: no recording to play in situ ({why})")
-            road = road_of(source, cache_dir)
+            recording, road = recording_with_road(source, cache_dir)
         except InSituRefused as err:
             batch.refused += [f"{r.get('scenario_id', '?')}: {err}" for r in mined]
             continue

@@ -49,15 +49,10 @@ class InSituWriter:
     def _source(self, file: str) -> tuple[Recording, RecordedRoad] | str:
         """The recording and its road, or the line saying why there are none."""
         if file not in self._recordings:
-            from scenweave.mining.in_situ import InSituRefused, road_of
-            from scenweave.mining.readers import read_file
+            from scenweave.mining.in_situ import InSituRefused, recording_with_road
 
-            recording = read_file(Path(file))
             try:
-                if not recording.tracks:
-                    raise InSituRefused(f"{file}: no recording to play in situ ("
-                                        f"{'; '.join(recording.warnings) or 'no track'})")
-                self._recordings[file] = (recording, road_of(file, self.cache_dir))
+                self._recordings[file] = recording_with_road(file, self.cache_dir)
             except InSituRefused as err:
                 self._recordings[file] = str(err)
         return self._recordings[file]

@@ -78,6 +78,22 @@ class InSituRefused(InputError):
     line naming the file and the track or lanelet."""
 
 
+#: what a record the checks let through can still raise deep in the making of its in-situ
+#: scenario (a window outside its recording, a NaN, an empty series, a missing key): refused
+#: like :class:`InSituRefused`, one line, and the batch goes on (``refusal``)
+REFUSED_ERRORS: tuple[type[Exception], ...] = (InputError, ValueError, ArithmeticError,
+                                               LookupError)
+
+
+def refusal(err: Exception, source: str) -> str:
+    """The one line an in-situ scenario refused for ``err`` is reported with, by ``mine
+    --in-situ`` and by ``run`` alike: an InputError's own message (it names the file and the
+    track), else the file and the error."""
+    if isinstance(err, InputError):
+        return str(err)
+    return f"{source}: the in-situ scenario could not be made: {err!r}"
+
+
 @dataclass(frozen=True)
 class InSituSettings:
     """How in-situ scenarios are made (``scenweave mine --in-situ``)."""
@@ -452,15 +468,16 @@ def write_in_situ_records(records: Iterable[Mapping[str, Any]], out_dir: Path, c
     for source, mined in by_file.items():
         try:
             recording, road = recording_with_road(source, cache_dir)
-        except InSituRefused as err:
-            batch.refused += [f"{r.get('scenario_id', '?')}: {err}" for r in mined]
+        except REFUSED_ERRORS as err:
+            batch.refused += [f"{r.get('scenario_id', '?')}: {refusal(err, source)}"
+                              for r in mined]
             continue
         for record in mined:
             scenario_id = str(record.get("scenario_id", "record"))
             try:
                 batch.written.append(write_in_situ(recording, record, out_dir, road, settings,
                                                    name=scenario_id))
-            except InSituRefused as err:
-                batch.refused.append(f"{scenario_id}: {err}")
+            except REFUSED_ERRORS as err:
+                batch.refused.append(f"{scenario_id}: {refusal(err, source)}")
     write_json_atomic(Path(out_dir) / IN_SITU_REPORT_NAME, batch.to_dict())
     return batch

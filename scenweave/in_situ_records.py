@@ -59,8 +59,7 @@ class InSituWriter:
 
     def write(self, record: Mapping[str, Any], out_dir: Path) -> dict[str, Any]:
         """``out_dir/in_situ/`` for ``record``; what became of it (for ``status.json``)."""
-        from scenweave.errors import InputError
-        from scenweave.mining.in_situ import write_in_situ
+        from scenweave.mining.in_situ import REFUSED_ERRORS, refusal, write_in_situ
 
         file = str(record["provenance"]["file"])
         try:
@@ -68,10 +67,8 @@ class InSituWriter:
             if isinstance(source, str):
                 return {"refused": source}
             result = write_in_situ(source[0], record, out_dir, source[1], self.settings)
-        except InputError as err:  # InSituRefused: one line naming the file and the track
-            return {"refused": str(err)}
-        except (ValueError, ArithmeticError, LookupError) as err:  # the batch goes on
-            return {"refused": f"{file}: the in-situ scenario could not be made: {err!r}"}
+        except REFUSED_ERRORS as err:  # one line naming the file (and the track); goes on
+            return {"refused": refusal(err, file)}
         written: dict[str, Any] = {"vehicles": len(result.choice.vehicles),
                                    "timings_s": result.timings_s}
         if result.verdict is not None:

@@ -6,7 +6,7 @@ scenarios) hold the same vehicles at the same moments: :class:`Clock` finds how 
 two recordings' time axes are from the vehicles they share (same id, the same recorded
 speeds step by step, standing as far apart), and
 :class:`SeenEvents` drops an event whose class and vehicles match one already kept at an
-overlapping absolute time.
+overlapping absolute time, naming the repeat's file in the kept record's provenance.
 """
 
 from __future__ import annotations
@@ -46,29 +46,61 @@ class _Seen:
     vehicles: dict[str, tuple[Frames, Floats, Floats]]
 
 
+class Road:
+    """One shared clock of recordings that overlap, directly or through others: a road found
+    later to be the same as an earlier one is joined to it (:meth:`join`), its clock read on
+    the earlier one's by a shift."""
+
+    def __init__(self) -> None:
+        self._parent: Road | None = None
+        #: how much later the parent's clock reads at the same moment (s)
+        self._shift_s = 0.0
+
+    def root(self) -> tuple[Road, float]:
+        """The road this one is part of, and how much later its clock reads than this one's."""
+        road, shift = self, 0.0
+        while road._parent is not None:
+            road, shift = road._parent, shift + road._shift_s
+        return road, shift
+
+    def join(self, other: Road, shift_s: float) -> None:
+        """``other`` is the same road: at the same moment this road's clock reads ``shift_s``
+        later than ``other``'s."""
+        mine, my_shift = self.root()
+        theirs, their_shift = other.root()
+        if theirs is not mine:
+            theirs._parent, theirs._shift_s = mine, shift_s + my_shift - their_shift
+
+
 @dataclass
 class Clock:
-    """Absolute time across recordings: each recording's road (the first recording it shares
-    vehicles with) and the offset of its time axis on that road's. Files cut from one
-    recording may each have their own origin and orientation (CommonRoad puts each
-    planning problem's start at 0, 0), so vehicles are matched by what no frame changes:
-    their recorded speeds step by step, and the distance between two of them."""
+    """Absolute time across recordings: each recording's road (the recordings it shares
+    vehicles with, whichever of those it is, joined into one) and the offset of its time axis
+    on that road's. Files cut from one recording may each have their own origin and
+    orientation (CommonRoad puts each planning problem's start at 0, 0), so vehicles are
+    matched by what no frame changes: their recorded speeds step by step, and the distance
+    between two of them. A recording overlapping two that share nothing (B between A and C)
+    joins their roads, so an event of C seen again in B is known as one."""
 
-    _seen: list[tuple[int, float, _Seen]] = field(default_factory=list)
+    _seen: list[tuple[Road, float, _Seen]] = field(default_factory=list)
 
-    def place(self, recording: Recording) -> tuple[int, float]:
-        """``(road, offset_s)`` of ``recording``; a recording sharing nothing opens a road."""
+    def place(self, recording: Recording) -> tuple[Road, float]:
+        """``(road, offset_s)`` of ``recording``: a time ``t`` of it is ``t + offset_s`` on
+        ``road``'s clock; a recording sharing nothing opens a road."""
         dt = recording.dt or 0.1
         mine = _Seen(dt, {t.id: (np.round(t.t / dt).astype(int), np.asarray(t.speed, float),
                                  np.column_stack([t.x, t.y])) for t in recording.tracks})
-        placed = None
+        placed: tuple[Road, float] | None = None
         for road, offset, theirs in self._seen:
             shift = _shift(mine, theirs)
-            if shift is not None:
+            if shift is None:
+                continue
+            if placed is None:
                 placed = (road, offset + shift)
-                break
+            else:  # a second overlapping recording: its road is the same
+                placed[0].join(road, placed[1] - offset - shift)
         if placed is None:
-            placed = (len(self._seen), 0.0)
+            placed = (Road(), 0.0)
         self._seen.append((placed[0], placed[1], mine))
         return placed
 
@@ -126,19 +158,54 @@ def _same_spacing(mine: _Seen, theirs: _Seen, vehicles: list[str], steps: int) -
 
 
 @dataclass
+class _Kept:
+    """An event kept: its window on its road's clock, its file, and its record once made."""
+
+    road: Road
+    start_s: float
+    end_s: float
+    source: str
+    record: dict | None = None
+
+    def window(self) -> tuple[Road, float, float]:
+        """The window on the clock of the road this one is now part of."""
+        root, shift = self.road.root()
+        return root, self.start_s + shift, self.end_s + shift
+
+
+@dataclass
 class SeenEvents:
-    """Events kept so far, by road, class and vehicles, with their absolute windows."""
+    """Events kept so far, by class and vehicles, with their windows on their road's clock;
+    a repeat is named in the kept record's provenance (``also_in``: file and window)."""
 
-    #: (road, class, ego, npc) -> (start, end, file) of each event kept
-    _kept: dict[tuple[int, str, str, str | None], list[tuple[float, float, str]]] = field(
-        default_factory=dict)
+    _kept: dict[tuple[str, str, str | None], list[_Kept]] = field(default_factory=dict)
 
-    def duplicate_of(self, event: Event, road: int, offset_s: float, source: str) -> str | None:
-        """The file of the kept event ``event`` repeats, else None (and ``event`` is kept)."""
-        key = (road, event.code, event.ego, event.npc)
-        start, end = event.start_s + offset_s, event.end_s + offset_s
-        for first, last, where in self._kept.get(key, []):
-            if min(end, last) - max(start, first) > OVERLAP_S:  # consecutive pieces only touch
-                return where
-        self._kept.setdefault(key, []).append((start, end, source))
+    def duplicate_of(self, event: Event, road: Road, offset_s: float,
+                     source: str) -> str | None:
+        """The file of the kept event ``event`` repeats (its record, when made, then names
+        ``source`` too), else None (and ``event`` is kept)."""
+        key = (event.code, event.ego, event.npc)
+        here, shift = road.root()
+        start, end = event.start_s + offset_s + shift, event.end_s + offset_s + shift
+        for kept in self._kept.get(key, []):
+            root, first, last = kept.window()
+            if root is here and min(end, last) - max(start, first) > OVERLAP_S:
+                _also_in(kept, source, event)  # consecutive pieces only touch
+                return kept.source
+        self._kept.setdefault(key, []).append(
+            _Kept(road, event.start_s + offset_s, event.end_s + offset_s, source))
         return None
+
+    def written(self, event: Event, record: dict) -> None:
+        """``record`` is the kept ``event``'s: later repeats are named in its provenance."""
+        for kept in reversed(self._kept.get((event.code, event.ego, event.npc), [])):
+            if kept.record is None:
+                kept.record = record
+                return
+
+
+def _also_in(kept: _Kept, source: str, event: Event) -> None:
+    """Name the repeat's file and window in the kept record's provenance."""
+    if kept.record is not None:
+        kept.record.setdefault("provenance", {}).setdefault("also_in", []).append(
+            {"file": source, "start_s": event.start_s, "end_s": event.end_s})

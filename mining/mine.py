@@ -77,6 +77,7 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
                 continue
             record = _checked_record(event, recording, number, report, thresholds)
             if record is not None:
+                seen.written(event, record)  # a repeat in a later file is named in it
                 found.setdefault(event.code, []).append(record)
         if on_recording:
             on_recording(recording)

@@ -21,6 +21,7 @@ from scenweave.mining.detect import Event, detect
 from scenweave.mining.duplicates import Clock, SeenEvents
 from scenweave.mining.records import record_of
 from scenweave.mining.tracks import Recording
+from scenweave.mining.where import Where
 from scenweave.schemas.scenario_folder import MINING_REPORT_NAME
 
 
@@ -36,6 +37,12 @@ class MiningReport:
     duplicates: list[dict] = field(default_factory=list)
     #: class -> field -> the written records' values (the report draws histograms of them)
     values: dict[str, dict[str, list[float]]] = field(default_factory=dict)
+    #: every written record's criticality, with which record it is (``mining.criticality``)
+    criticality: list[dict] = field(default_factory=list)
+    #: the ``--where`` expression the records were chosen by, and per class how many of the
+    #: playable records it left out
+    where: str | None = None
+    not_matching: Counter = field(default_factory=Counter)
     seconds: float = 0.0
 
     @property
@@ -51,6 +58,10 @@ class MiningReport:
             "duplicates": self.duplicates,
             "warnings": self.warnings,
             "values": self.values,
+            "criticality": self.criticality,
+            **({"where": self.where, "records_matching": sum(self.written.values()),
+                "records_not_matching": dict(sorted(self.not_matching.items()))}
+               if self.where is not None else {}),
             "vehicle_hours": round(self.vehicle_hours, 4),
             "seconds": round(self.seconds, 3),
         }
@@ -59,9 +70,11 @@ class MiningReport:
 def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
                     thresholds: dict[str, dict[str, float]],
                     classes: tuple[str, ...] = (),
-                    on_recording: Callable[[Recording], None] | None = None) -> MiningReport:
-    """Detect, check and write every event of ``recordings``; return the report."""
-    report = MiningReport()
+                    on_recording: Callable[[Recording], None] | None = None,
+                    where: Where | None = None) -> MiningReport:
+    """Detect, check and write every event of ``recordings`` (of those ``where`` matches,
+    when given); return the report."""
+    report = MiningReport(where=where.text if where is not None else None)
     started = time.perf_counter()
     found: dict[str, list[dict]] = {}
     clock, seen = Clock(), SeenEvents()
@@ -78,6 +91,10 @@ def mine_recordings(recordings: Iterable[Recording], out_dir: Path,
             record = _checked_record(event, recording, number, report, thresholds)
             if record is not None:
                 seen.written(event, record)  # a repeat in a later file is named in it
+            if record is not None and where is not None and not where(record):
+                report.not_matching[event.code] += 1
+            elif record is not None:
+                _note(report, event, record)
                 found.setdefault(event.code, []).append(record)
         if on_recording:
             on_recording(recording)
@@ -104,11 +121,19 @@ def _checked_record(event: Event, recording: Recording, number: int, report: Min
                                "scenario_id": f"{event.code} event {number}",
                                "field": issue.field, "reason": issue.message})
         return None
+    return record
+
+
+def _note(report: MiningReport, event: Event, record: dict) -> None:
+    """A written record's values (histograms) and criticality in the report."""
+    critical = record.get("criticality") or {}
     values = report.values.setdefault(event.code, {})
-    for name, value in _reported_values(event, record).items():
+    for name, value in (_reported_values(event, record) | critical).items():
         if isinstance(value, int | float):
             values.setdefault(name, []).append(value)
-    return record
+    report.criticality.append({"scenario_id": record.get("scenario_id"), "class": event.code,
+                               "file": record["provenance"]["file"], "ego": event.ego,
+                               "npc": event.npc, "start_s": event.start_s, **critical})
 
 
 def _where(event: Event, recording: Recording) -> dict:

@@ -1,5 +1,6 @@
 """A mined :class:`Event` -> the canonical record of its class, as ingest would write it from
-a MOOVE file, plus where it was found (``provenance``) and what was recorded (``series``)."""
+a MOOVE file, plus where it was found (``provenance``), what was recorded (``series``) and how
+critical it was (``criticality``: ``mining.criticality``)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 from scenweave import maneuvers
 from scenweave.ingest.layouts import default_layouts
 from scenweave.ingest.urban import canonicalize_scene
+from scenweave.mining.criticality import criticality
 from scenweave.mining.scene import Event
 
 BINNING = "mined"
@@ -40,6 +42,7 @@ def highway_record(event: Event, source: Path, reader: str, number: int) -> dict
         "params": dict(event.fields),
         "conventions": conventions,
         "provenance": _provenance(event, source, reader),
+        "criticality": criticality(event.series),
         "series": event.series,
     }
 
@@ -59,6 +62,7 @@ def urban_record(event: Event, source: Path, reader: str, number: int) -> dict:
     name = f"{event.code}/{_slug(source.stem)}-row{number:06d}.json"
     record = canonicalize_scene(event.adscene, name, notes=[])
     record["provenance"] = _provenance(event, source, reader)
+    record["criticality"] = criticality(event.series)
     record["series"] = event.series
     return record
 

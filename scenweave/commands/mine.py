@@ -10,6 +10,7 @@ import click
 
 from scenweave import exit_codes
 from scenweave.commands.agent_options import class_codes, json_option
+from scenweave.commands.where_option import nothing_matched, where_option
 from scenweave.console import counted_lines
 from scenweave.progress import progress
 from scenweave.schemas.scenario_folder import IN_SITU_DIR, IN_SITU_REPORT_NAME, MINING_REPORT_NAME
@@ -27,12 +28,14 @@ from scenweave.schemas.scenario_folder import IN_SITU_DIR, IN_SITU_REPORT_NAME, 
                    "recorded vehicle, played in esmini and judged) into OUT/in_situ/.")
 @click.option("--context-s", type=click.FloatRange(min=0.0), default=3.0, show_default=True,
               help="With --in-situ: seconds of recording kept before and after each event.")
+@where_option()
 @json_option("the mining report")
 def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str, ...],
-         in_situ: bool, context_s: float, as_json: bool) -> None:
+         in_situ: bool, context_s: float, where: Any, as_json: bool) -> None:
     """Read CommonRoad XML, NGSIM CSV or highD files (a file or a folder), find the
-    manoeuvres of the MOOVE classes in them and write each as a canonical record. Exit status
-    1 when an event found was refused or no record was written."""
+    manoeuvres of the MOOVE classes in them and write each as a canonical record (with
+    --where, only those it matches). Exit status 1 when an event found was refused or no
+    record was written (a --where that matches none included)."""
     from scenweave.mining.mine import mine_recordings
     from scenweave.mining.readers import read_recordings
     from scenweave.mining.thresholds import ThresholdsError, load_thresholds
@@ -44,7 +47,7 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str,
     except ThresholdsError as err:
         raise click.BadParameter(str(err), param_hint="--thresholds") from err
     report = mine_recordings(progress(read_recordings(data), desc="mining"), out_dir, limits,
-                             classes)
+                             classes, where=where)
     report.warnings[:0] = warnings
     html = write_mining_report(out_dir / MINING_REPORT_NAME)
     batch = _in_situ(out_dir, context_s) if in_situ and any(report.written.values()) else None
@@ -53,6 +56,8 @@ def mine(data: Path, out_dir: Path, thresholds: Path | None, classes: tuple[str,
                               indent=1))
     else:
         _tell(report, out_dir, html)
+        if where is not None:
+            _tell_where(report, where)
         if batch is not None:
             _tell_in_situ(batch, out_dir)
     # an event found but refused counts as a problem, as does an input nothing was read from
@@ -80,6 +85,16 @@ def _tell_in_situ(batch: Any, out_dir: Path) -> None:
         for line in counted_lines(f"refused in situ: {len(batch.refused)}", batch.refused,
                                   str(out_dir / IN_SITU_DIR / IN_SITU_REPORT_NAME)):
             click.echo(line, err=True)
+
+
+def _tell_where(report: Any, where: Any) -> None:
+    """How many playable records the filter kept, or that it kept none."""
+    left_out = sum(report.not_matching.values())
+    kept = sum(report.written.values())
+    if not kept:
+        click.echo(nothing_matched(where, left_out), err=True)
+    else:
+        click.echo(f"--where {where.text!r}: {kept} of {kept + left_out} records match")
 
 
 def _tell(report: Any, out_dir: Path, html: Path) -> None:

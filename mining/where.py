@@ -50,6 +50,15 @@ class WhereError(InputError, ValueError):
     """A ``--where`` expression that cannot be read: its one line names the column."""
 
 
+class NothingMatched(InputError, LookupError):
+    """``--where`` matched none of the records: nothing is made (exit 1, not a usage error:
+    the expression was fine, the data holds no such event)."""
+
+    def __init__(self, text: str, looked_at: int) -> None:
+        super().__init__(f"--where {text!r} matched none of the {looked_at} records: nothing "
+                         "written")
+
+
 @dataclass(frozen=True)
 class Token:
     kind: str  # number, word, string, op, punct, keyword, end

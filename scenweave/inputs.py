@@ -18,6 +18,7 @@ from scenweave.ingest import (
     load_records,
 )
 from scenweave.ingest.issues import IngestError, RecordIssue
+from scenweave.mining.where import NothingMatched, parse_where
 from scenweave.schemas.params import Params
 
 
@@ -31,6 +32,8 @@ class InputSelection:
     variants: int = 0
     seed: int = 0
     layout: Path | None = None
+    #: ``--where``: only the records this expression matches (``mining.where``), as typed
+    where: str | None = None
 
 
 @dataclass
@@ -64,10 +67,17 @@ def load_input(data: Path, selection: InputSelection) -> LoadedInput:
     """Read ``data`` and return the selected params (variants included) and input issues."""
     loaded = LoadedInput(kind="raw" if is_raw(data) else "canonical")
     counts: dict[str | None, int] = {}
+    wanted = parse_where(selection.where) if selection.where is not None else None
+    looked_at = matched = 0
     for record, file in _records(data, loaded, selection):
         code = record.get("maneuver_class")
         if selection.classes and code not in selection.classes:
             continue
+        if wanted is not None:
+            looked_at += 1
+            if not wanted(record):
+                continue
+            matched += 1
         if selection.per_class is not None and counts.get(code, 0) >= selection.per_class:
             continue
         try:
@@ -85,6 +95,8 @@ def load_input(data: Path, selection: InputSelection) -> LoadedInput:
         if selection.limit is not None and len(loaded.params) >= selection.limit:
             del loaded.params[selection.limit:]
             break
+    if selection.where is not None and not matched:
+        raise NothingMatched(selection.where, looked_at)
     return loaded
 
 

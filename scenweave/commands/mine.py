@@ -10,7 +10,7 @@ import click
 
 from scenweave import exit_codes
 from scenweave.commands.agent_options import class_codes, json_option
-from scenweave.commands.where_option import nothing_matched, where_option
+from scenweave.commands.where_option import where_option
 from scenweave.console import counted_lines
 from scenweave.progress import progress
 from scenweave.schemas.scenario_folder import IN_SITU_DIR, IN_SITU_REPORT_NAME, MINING_REPORT_NAME
@@ -92,7 +92,9 @@ def _tell_where(report: Any, where: Any) -> None:
     left_out = sum(report.not_matching.values())
     kept = sum(report.written.values())
     if not kept:
-        click.echo(nothing_matched(where, left_out), err=True)
+        from scenweave.mining.where import NothingMatched
+
+        click.echo(str(NothingMatched(where.text, left_out)), err=True)
     else:
         click.echo(f"--where {where.text!r}: {kept} of {kept + left_out} records match")
 

@@ -28,9 +28,3 @@ def parsed_where(ctx: click.Context, param: click.Parameter, value: str | None) 
 def where_option() -> Callable[[Any], Any]:
     """The ``--where`` option, its value a :class:`Where` (or None)."""
     return click.option("--where", "where", callback=parsed_where, metavar="EXPR", help=HELP)
-
-
-def nothing_matched(where: Where, looked_at: int) -> str:
-    """What a filter that matches no record says."""
-    return (f"--where {where.text!r} matched none of the {looked_at} records: nothing written "
-            "(exit 1)")

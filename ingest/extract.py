@@ -165,7 +165,7 @@ def _extract_urban(record: dict) -> Params:
         "has_npc": lead is not None,
         "npc_position": "front" if lead else None,
         "lead_present": lead is not None,
-        "lead_distance_m": lead["pos_x_m"] if lead else 0.0,
+        "lead_distance_m": _lead_reference_gap(lead),
         "lead_speed_ms": lead["speed_ms"] if lead else 0.0,
         "lead_vehicle_type": lead["classification"].lower() if lead else None,
         "oncoming_present": oncoming is not None,
@@ -184,6 +184,16 @@ def _extract_urban(record: dict) -> Params:
                                      if isinstance(v, list)}
     params.update(dict.fromkeys(SPAWN_KEYS))
     return finish(params)
+
+
+def _lead_reference_gap(lead: Mapping[str, Any] | None) -> float:
+    """The lead's reference-point distance ahead of the ego: ADScene's ``pos_x`` is the free
+    space a sensor measures to the lead's rear bumper (mined records write the bumper gap,
+    ``mining.lights.frame_of``); placed as a reference-point distance, a lead 2.5 m ahead in
+    a queue stood on the ego's bonnet (issue 36: 7 collisions at 0.00 s)."""
+    if lead is None:
+        return 0.0
+    return reference_gap_m(lead["pos_x_m"], lead["classification"].lower())
 
 
 def _whole(count: float | None) -> int | None:

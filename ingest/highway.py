@@ -7,6 +7,7 @@ row and field, and the rest of the file goes on.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -172,7 +173,7 @@ def _npc_presence(layout: ClassLayout, params: dict) -> tuple[bool, str | None]:
         return False, None
     distance = params.get("npc_distance_m")
     if isinstance(distance, float | int):
-        return True, "front" if distance >= 0 else "behind"
+        return True, "front" if math.copysign(1.0, distance) > 0 else "behind"
     return True, layout.npc_position
 
 

@@ -32,6 +32,8 @@ ROUNDING_M = 1e-6
 
 def check_playable(params: Mapping[str, Any]) -> None:
     """Raise ``RecordIssue`` (naming the file's field) when no replay can show ``params``."""
+    if params.get("domain") == "urban":
+        _urban_lead_apart(params)
     if params.get("domain") != "highway":
         return
     maneuver = maneuvers.get(params["maneuver_class"])
@@ -71,6 +73,20 @@ def _end_gap_reachable(params: Mapping[str, Any]) -> None:
             f"speeds go {params['npc_speed_ms']:.1f} -> {params['npc_end_speed_ms']:.1f} m/s "
             f"(NPC) and {params['ego_speed_ms']:.1f} -> {params['ego_end_speed_ms']:.1f} m/s "
             f"(ego): no speed profile fits, {err}", field="npc_distance_end_m") from err
+
+
+def _urban_lead_apart(params: Mapping[str, Any]) -> None:
+    """The urban lead stands ahead of the ego in its lane with their bumpers apart: a queue
+    closer than that cannot be placed on any map without the two overlapping at t = 0."""
+    if not params.get("lead_present"):
+        return
+    kind = params.get("lead_vehicle_type")
+    gap, room = params["lead_distance_m"], _clearance(kind, ahead=True)
+    if gap < room - ROUNDING_M:
+        raise RecordIssue(
+            f"the {kind or 'car'} ahead stands {gap:.2f} m from the ego (reference points; its "
+            f"rear bumper {MIN_BUMPER_GAP_M:g} m from the ego's front is {room:.2f} m): in one "
+            "lane the two would overlap at the start", field="lead_distance_m")
 
 
 def _gained_m(params: Mapping[str, Any]) -> float:

@@ -4,6 +4,7 @@ critical it was (``criticality``: ``mining.criticality``)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from scenweave import maneuvers
@@ -82,7 +83,7 @@ def _npc(maneuver: maneuvers.Maneuver, event: Event) -> tuple[bool, str | None]:
         return False, None
     distance = event.fields.get("npc_distance_m")
     if isinstance(distance, float | int):
-        return True, "front" if distance >= 0 else "behind"
+        return True, "front" if math.copysign(1.0, distance) > 0 else "behind"
     return True, maneuver.npc_position
 
 

@@ -8,6 +8,7 @@ half a second) to ask how long a truck is.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from scenweave.scenario_lib.kinematics import SAFETY_GAP_M
@@ -50,9 +51,11 @@ VEHICLE_MODELS: dict[str, VehicleModel] = {
 def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
     """The distance between the ego's and another vehicle's reference points when the free
     space between their facing bumpers is ``bumper_gap_m`` (positive: the other ahead, its rear
-    facing the ego's front; negative: behind, its front facing the ego's rear)."""
+    facing the ego's front; negative: behind, its front facing the ego's rear). A gap of 0 is
+    side by side, and its sign says which: a record of a car about to drop back writes -0.0
+    (issue 36: a CINB taken for a car ahead cut in on the ego's flank)."""
     ego, other = VEHICLE_MODELS["ego"].length_m, VEHICLE_MODELS[known_type(other_type)].length_m
-    if bumper_gap_m >= 0:
+    if math.copysign(1.0, bumper_gap_m) > 0:
         return bumper_gap_m + _front_of(ego) + _rear_of(other)
     return bumper_gap_m - _rear_of(ego) - _front_of(other)
 

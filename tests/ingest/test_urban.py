@@ -9,6 +9,9 @@ from scenweave.ingest.urban import canonicalize_scene
 from tests.ingest.builders import obstacle, scene
 
 REGULAR = [100.0, 101.0, 102.0, 103.0, 104.0]
+#: a car's pos_x is its bumper gap: the ego's front overhang (0.8 x 4.8 m) and the car's
+#: rear one (0.2 x 3.7 m) make it the reference points' distance params hold
+CAR_OVERHANGS_M = 0.8 * 4.8 + 0.2 * 3.7
 
 
 def _params(data: dict) -> dict:
@@ -97,7 +100,8 @@ def test_in_lane_driving_roles_ttc_and_weather():
     p = extract_params(record)
     assert p["tfl_ds_m"] is None and p["yellow_delay_s"] is None and p["tfl_state"] is None
     assert p["lead_present"] is True
-    assert p["lead_distance_m"] == pytest.approx(25.0)
+    # pos_x is the bumper gap; params hold the reference points' distance
+    assert p["lead_distance_m"] == pytest.approx(25.0 + CAR_OVERHANGS_M)
     assert p["lead_speed_ms"] == pytest.approx(9.0)
     assert p["oncoming_present"] is True and p["pedestrian_present"] is False
     assert p["weather_key"] == "Night_Rain"
@@ -175,8 +179,9 @@ def test_right_turn_at_night_behind_a_lead_car_with_a_near_light():
         turn="right", tfl_state="green", tfl_ds_m=8.0, yellow_delay_s=1.0, brake_time_s=2.5,
         drive_distance_m=22.9, duration_s=2.5, timeout_s=6.25, ego_speed_ms=12.0,
         init_speed_ms=12.0, ego_end_speed_ms=5.0, final_speed_ms=5.0, weather_key="Night_Clear",
-        lead_present=True, lead_distance_m=18.0, lead_speed_ms=11.0, lead_vehicle_type="car",
-        has_npc=True, npc_position="front", gap_ahead_m=18.0, gap_behind_m=0.0,
+        lead_present=True, lead_distance_m=18.0 + CAR_OVERHANGS_M, lead_speed_ms=11.0,
+        lead_vehicle_type="car", has_npc=True, npc_position="front",
+        gap_ahead_m=18.0 + CAR_OVERHANGS_M, gap_behind_m=0.0,
         min_ttc_s=4.5, max_speed_ms=12.0, oncoming_present=False, pedestrian_present=False))
 
 

@@ -1,0 +1,100 @@
+"""Issue 36, item 1: cars recorded close together in town are placed without overlap, or the
+record is refused with the geometric reason before any scenario is written.
+
+A town record's lead is measured bumper to bumper (ADScene ``pos_x``; mined records write the
+bumper gap); a scenario places vehicles by their reference points (the rear axle). Placed as
+a reference-point distance, a lead 2.4 m ahead in a queue stood on the ego's bonnet: the
+replay's collision at 0.00 s (Lankershim U1_1 and U4_3 rows). The fixtures below are ADScene
+objects in the shape of those rows; the last test reads the shared Lankershim snippet itself.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from scenweave import corpus
+from scenweave.ingest import admit
+from scenweave.ingest.issues import RecordIssue
+from scenweave.ingest.playable import MIN_BUMPER_GAP_M
+from scenweave.ingest.urban import canonicalize_scene
+from scenweave.scenario_lib.vehicles import bumper_gap_m, reference_gap_m
+from tests.ingest.builders import obstacle, scene
+
+LANKERSHIM = Path("/work/shared/data/ngsim/lankershim/USA_Lanker-2_10_T-1.xml")
+#: the ADScene code of a green light (RT_TrafficSignType)
+GREEN = 167
+
+
+def queue_on_green(lead_bumper_gap_m: float) -> dict:
+    """A U4_3 record in the shape of Lankershim 2-10 row 13: the ego stands in a queue behind
+    a standing car ``lead_bumper_gap_m`` ahead, the light turns green and both drive off."""
+    speeds = [0.0, 2.0, 4.0, 6.0, 8.0]
+    frames = [[obstacle(7, lead_bumper_gap_m, v, v)] for v in speeds]
+    return scene("U4_3", [v * 3.6 for v in speeds], [0.0, 1.0, 2.0, 3.0, 4.0],
+                 [0.0, 1.0, 4.0, 9.0, 16.0], light=(30.0, GREEN), obstacles=frames)
+
+
+def test_a_queued_lead_is_placed_by_its_bumper_gap():
+    params = admit(canonicalize_scene(queue_on_green(2.4), "U4_3/queue.json"))
+    assert params["lead_present"] is True and params["ego_speed_ms"] == 0.0
+    # the reference points stand further apart than the bumpers, by the two overhangs
+    assert params["lead_distance_m"] == pytest.approx(reference_gap_m(2.4, "car"))
+    assert bumper_gap_m(params["lead_distance_m"], "car") == pytest.approx(2.4)
+
+
+def test_a_lead_closer_than_the_least_bumper_gap_is_refused_with_the_reason():
+    with pytest.raises(RecordIssue) as refused:
+        admit(canonicalize_scene(queue_on_green(MIN_BUMPER_GAP_M / 2), "U4_3/touching.json"))
+    assert refused.value.field == "lead_distance_m"
+    assert "overlap at the start" in str(refused.value)
+
+
+def test_side_by_side_takes_the_sign_of_its_zero():
+    """A cut-in behind whose car starts level with the ego writes a bumper gap of -0.0: it is
+    behind, not ahead (Peachtree 2 CINB row 0 was placed ahead and cut in on the ego)."""
+    assert reference_gap_m(-0.0, "car") < -1.0
+    assert reference_gap_m(0.0, "car") > 1.0
+
+
+@pytest.mark.slow
+@pytest.mark.usefixtures("esmini")
+def test_the_queue_plays_without_a_collision(tmp_path):
+    """Spawned on Town04 and played in esmini, the queue's two cars never touch."""
+    from scenweave.judge import validate_xosc
+    from scenweave.player import ReplaySettings
+    from scenweave.spawn_db import SpawnMatcher
+
+    params = SpawnMatcher().assign(admit(canonicalize_scene(queue_on_green(2.4), "q.json")), 0)
+    path = corpus.generate(dict(params), tmp_path / "queue.xosc")
+    result = validate_xosc(path, params, replay=ReplaySettings())
+    codes = {f.code for f in result.errors}
+    assert "REPLAY_COLLISION" not in codes, [f.message for f in result.errors]
+    assert result.valid, [f"{f.code}: {f.message}" for f in result.errors]
+
+
+@pytest.mark.skipif(not LANKERSHIM.is_file(), reason="shared NGSIM data absent")
+def test_every_mined_town_lead_stands_clear_of_the_ego(tmp_path):
+    """Every urban event mined from Lankershim 2-10 (its queues at the junctions included)
+    places its lead with the bumpers apart, or is refused naming ``lead_distance_m``."""
+    from scenweave.mining.mine import mine_recordings
+    from scenweave.mining.readers import read_recordings
+    from scenweave.mining.thresholds import load_thresholds
+
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / LANKERSHIM.name).symlink_to(LANKERSHIM)
+    report = mine_recordings(read_recordings(tmp_path / "in"), tmp_path / "out",
+                             load_thresholds())
+    assert all(s.get("field") != "lead_distance_m" or "overlap" in s["reason"]
+               for s in report.to_dict()["skipped"])
+    leads = 0
+    for path in sorted((tmp_path / "out" / "urban").glob("*.json")):
+        for record in json.loads(path.read_text()):
+            params = admit(record)
+            if params["lead_present"]:
+                leads += 1
+                gap = bumper_gap_m(params["lead_distance_m"], params["lead_vehicle_type"])
+                assert gap is not None and gap >= MIN_BUMPER_GAP_M, params["scenario_id"]
+    assert leads >= 5

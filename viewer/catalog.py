@@ -17,11 +17,13 @@ from pathlib import Path
 from typing import Any
 
 from scenweave.errors import InputError
+from scenweave.mining.criticality import criticality
 from scenweave.schemas.scenario_folder import (
     IN_SITU_DIR,
     IN_SITU_REPORT_NAME,
     MINING_REPORT_PAGE,
     PARAMS_NAME,
+    RECORDED_NAME,
     REPLAY_NAME,
     REPORT_FILE,
     RUN_FILE,
@@ -165,7 +167,17 @@ def scenario_row(run: Run, name: str) -> dict:
             "worst": _worst_errors(folder),
             "variants": len(_variant_dirs(folder)),
             "watchable": (folder / REPLAY_NAME).is_file(),
-            "in_situ": _in_situ_entry(folder, f"{run.run_id}/{name}")}
+            "in_situ": _in_situ_entry(folder, f"{run.run_id}/{name}"),
+            "criticality": _criticality(folder)}
+
+
+def _criticality(folder: Path) -> dict | None:
+    """How critical the recorded event was (``mining.criticality``: least time to collision
+    and headway, hardest 1 s of braking, peak lateral acceleration), measured on the series a
+    mined record left beside its scenario (``recorded.json``); None for other scenarios."""
+    series = read_json_object(folder / RECORDED_NAME) if (folder / RECORDED_NAME).is_file() \
+        else {}
+    return criticality(series) if series.get("t") else None
 
 
 def _in_situ_entry(folder: Path, key: str) -> dict | None:

@@ -46,17 +46,51 @@ async function showRuns() {
   const verdictFilter = el("select", { id: "verdict-filter" }, el("option", { value: "" }, "every replay verdict"),
     ["passed", "failed", "played", "not played"].map((s) => el("option", { value: s }, s)));
   const list = el("div", { id: "runs" });
+  const critical = criticalityFilters(runs);
+  const sort = { field: null, dir: 1 };
   const render = () => {
     const words = search.value.toLowerCase().split(/\s+/).filter(Boolean);
     list.replaceChildren(...runs.map((run) => runCard(run, (s) =>
       (!classFilter.value || s.maneuver_class === classFilter.value)
       && (!statusFilter.value || s.status === statusFilter.value)
       && (!verdictFilter.value || s.verdict === verdictFilter.value)
-      && words.every((w) => [s.id, s.maneuver_class, s.status, s.verdict, ...s.codes].join(" ").toLowerCase().includes(w)))));
+      && critical.keep(s)
+      && words.every((w) => [s.id, s.maneuver_class, s.status, s.verdict, ...s.codes].join(" ").toLowerCase().includes(w)),
+    sort, (field) => { sort.dir = sort.field === field ? -sort.dir : 1; sort.field = field; render(); })));
   };
-  for (const input of [search, classFilter, statusFilter, verdictFilter]) input.addEventListener("input", render);
-  main.replaceChildren(...[notPlayedBanner(runs), runs.length ? el("div", { class: "filters" }, search, classFilter, statusFilter, verdictFilter) : el("p", { class: "note" }, "No run found in the folders given."), list].filter(Boolean));
+  for (const input of [search, classFilter, statusFilter, verdictFilter, ...critical.inputs]) input.addEventListener("input", render);
+  main.replaceChildren(...[notPlayedBanner(runs), runs.length ? el("div", { class: "filters" }, search, classFilter, statusFilter, verdictFilter, ...critical.labels) : el("p", { class: "note" }, "No run found in the folders given."), list].filter(Boolean));
   render();
+}
+
+// How critical a mined record's event was (scenario_row's criticality): the list's columns,
+// each sortable, and a bound per number ("TTC ≤ 2"); a bound drops scenarios without the number.
+const CRITICALITY = [
+  { field: "ttc_min_s", head: "TTC s", bound: "≤", title: "least time to collision (s)" },
+  { field: "thw_min_s", head: "THW s", bound: "≤", title: "least time headway (s)" },
+  { field: "brake_1s_max_ms2", head: "brake m/s²", bound: "≥", title: "hardest 1 s of braking (m/s²)" },
+  { field: "lat_acc_peak_ms2", head: "lat m/s²", bound: "≥", title: "peak lateral acceleration (m/s²)" },
+];
+
+function criticalityFilters(runs) {
+  if (!runs.some((r) => r.scenarios.some((s) => s.criticality))) return { inputs: [], labels: [], keep: () => true };
+  const inputs = CRITICALITY.map((c) => el("input", { id: `crit-${c.field}`, class: "bound", type: "number", step: "any", min: "0",
+    placeholder: "any", title: `${c.title}: keep ${c.bound} this` }));
+  const labels = CRITICALITY.map((c, i) => el("label", { class: "bound" }, `${c.head.split(" ")[0]} ${c.bound} `, inputs[i]));
+  const keep = (s) => CRITICALITY.every((c, i) => {
+    if (inputs[i].value === "") return true;
+    const value = s.criticality && s.criticality[c.field];
+    const bound = Number(inputs[i].value);
+    return typeof value === "number" && (c.bound === "≤" ? value <= bound : value >= bound);
+  });
+  return { inputs, labels, keep };
+}
+
+// scenarios in the order the clicked criticality column says (no value last, either way)
+function sortedBy(scenarios, sort) {
+  if (!sort || !sort.field) return scenarios;
+  const value = (s) => (s.criticality && typeof s.criticality[sort.field] === "number" ? s.criticality[sort.field] : null);
+  return [...scenarios].sort((a, b) => (value(a) === null) - (value(b) === null) || sort.dir * (value(a) - value(b)));
 }
 
 // One banner over the runs when scenarios were delivered without being played in esmini
@@ -72,8 +106,9 @@ function notPlayedBanner(runs) {
     el("div", {}, "scenweave doctor says how to get the player; scenweave replay RUN_DIR then plays them."));
 }
 
-function runCard(run, keep) {
-  const shown = run.scenarios.filter(keep);
+function runCard(run, keep, sort, onSort) {
+  const shown = sortedBy(run.scenarios.filter(keep), sort);
+  const critical = run.scenarios.some((s) => s.criticality);
   const counts = run.counts ? Object.entries(run.counts).map(([k, v]) => `${v} ${k}`).join(", ") : "";
   const replay = !run.replay ? "" : run.replay.not_played && !run.replay.played ? "replay: not run"
     : `replay: ${run.replay.passed}/${run.replay.played} played as recorded`
@@ -88,11 +123,15 @@ function runCard(run, keep) {
     el("td", {}, s.attempts == null ? "" : s.attempts),
     el("td", {}, badge(s.verdict, s.verdict), " ", s.codes.join(", ")),
     el("td", {}, s.worst.map((w) => `${w.quantity}: max ${fmt(w.max)}${w.rms != null ? `, rms ${fmt(w.rms)}` : ""}`).join("; ")),
-    el("td", {}, s.variants || "")));
+    el("td", {}, s.variants || ""),
+    critical ? CRITICALITY.map((c) => el("td", { class: "num", dataset: { field: c.field } }, s.criticality ? fmt(s.criticality[c.field]) : "")) : null));
+  const heads = ["scenario", "class", "status", "attempts", "replay", "worst series errors", "variants"].map((h) => el("th", {}, h));
+  if (critical) heads.push(...CRITICALITY.map((c) => el("th", { class: "sortable", title: `${c.title}; click to sort`, dataset: { sort: c.field },
+    onclick: () => onSort(c.field) }, c.head, sort && sort.field === c.field ? (sort.dir > 0 ? " ▲" : " ▼") : "")));
   return el("section", { class: "run", dataset: { run: run.run } },
     el("h2", {}, run.run),
     el("div", { class: "facts" }, [run.mode, run.map, counts, replay].filter(Boolean).join(" · "), " ", ...links.flatMap((a) => [a, " "])),
-    el("table", {}, el("thead", {}, el("tr", {}, ["scenario", "class", "status", "attempts", "replay", "worst series errors", "variants"].map((h) => el("th", {}, h)))),
+    el("table", {}, el("thead", {}, el("tr", {}, heads)),
       el("tbody", {}, rows)),
     shown.length ? null : el("p", { class: "note" }, "no scenario matches"));
 }

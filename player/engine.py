@@ -34,6 +34,7 @@ from typing import IO, Any, TypedDict
 from scenweave.player.child import bare_child_command
 from scenweave.player.locate import find_esmini
 from scenweave.player.playback import Playback, StoryboardChange
+from scenweave.player.recorder import INITIAL_STEPS, MAX_INITIAL_STEPS, StateRecorder
 from scenweave.player.scratch import scratch_folder
 
 #: esmini's StoryBoardElement::ElementType and ::State (esminiLib.hpp's public enum values)
@@ -120,7 +121,7 @@ class _Answer(TypedDict, total=False):
     """The server's answer to a ``_Request``: the child's reply (a ``Playback.to_dict`` with
     the child's ``marks``, or ``engine_error``), or why there is none."""
 
-    reply: dict[str, Any] | None
+    reply_bytes: bytes | None
     exitcode: int
     timed_out: bool
     server_error: str
@@ -133,7 +134,8 @@ def _load(library_path: str) -> ctypes.CDLL:
         lib.SE_InitWithArgs.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_char_p)]
         lib.SE_StepDT.argtypes = [ctypes.c_double]
         lib.SE_GetSimulationTime.restype = ctypes.c_double
-        lib.SE_GetObjectState.argtypes = [ctypes.c_int, ctypes.POINTER(ObjectState)]
+        # the state's address: the recorder fills the slots of one array (player.recorder)
+        lib.SE_GetObjectState.argtypes = [ctypes.c_int, ctypes.c_void_p]
         lib.SE_GetObjectName.restype = ctypes.c_char_p
         lib.SE_CollisionDetection.argtypes = [ctypes.c_bool]
         lib.SE_RegisterStoryBoardElementStateChangeCallback.argtypes = [STATE_CALLBACK]
@@ -177,32 +179,24 @@ def _step_scenario(library_path: str, xosc_path: str, time_step_s: float, until_
     lib.SE_RegisterStoryBoardElementStateChangeCallback(callback)
     ids = [lib.SE_GetId(i) for i in range(lib.SE_GetNumberOfObjects())]
     names = {i: lib.SE_GetObjectName(i).decode() for i in ids}
-    playback = Playback.empty(names.values())
-    state = ObjectState()
-
-    def record() -> None:
-        playback.times.append(round(lib.SE_GetSimulationTime(), 4))
-        for object_id, name in names.items():
-            lib.SE_GetObjectState(object_id, ctypes.byref(state))
-            playback.add_state(name, state)
-            for k in range(lib.SE_GetObjectNumberOfCollisions(object_id)):
-                other = names.get(lib.SE_GetObjectCollision(object_id, k))
-                if other is not None:
-                    playback.add_collision(playback.times[-1], name, other)
-
-    record()
+    steps = min(int(until_s / time_step_s) + 2, MAX_INITIAL_STEPS) if until_s > 0 else INITIAL_STEPS
+    recorder = StateRecorder(lib, ObjectState, ids, names, steps)
+    recorder.record()
     while lib.SE_GetQuitFlag() == 0 and lib.SE_GetSimulationTime() < until_s - 1e-9:
         lib.SE_StepDT(time_step_s)
-        record()
+        recorder.record()
     stepped = time.perf_counter()
     quit_flag = lib.SE_GetQuitFlag()
     lib.SE_Close()  # flushes esmini's log, which the caller reads
+    closed = time.perf_counter()
+    playback = recorder.playback()
     playback.storyboard = changes
     playback.quit_by_engine = bool(quit_flag) and playback.times[-1] < until_s - time_step_s
     playback.timings_s = {"load": round(loaded - started, 4),
                           "step": round(stepped - loaded, 4)}
     reply = playback.to_dict()
-    reply["marks"] = {"started": started, "loaded": loaded, "stepped": stepped}
+    reply["marks"] = {"started": started, "loaded": loaded, "stepped": stepped,
+                      "closed": closed}
     return reply
 
 
@@ -217,7 +211,10 @@ def _silence_stdio() -> None:
 def serve() -> None:
     """The player server's loop: one request (a pickled dict) in on stdin, one reply out on
     the original stdout, until stdin closes (``bare_child_command("engine", "serve")`` runs
-    it); esmini's own output goes to /dev/null."""
+    it); esmini's own output goes to /dev/null.
+
+    A child is forked ahead, before its request arrives (``_Standby``): the fork and the
+    child's setup happen while the caller makes the next scenario, not while it waits."""
     requests = os.fdopen(os.dup(0), "rb", buffering=0)
     replies = os.fdopen(os.dup(1), "wb", buffering=0)
     devnull = os.open(os.devnull, os.O_RDWR)
@@ -232,61 +229,117 @@ def serve() -> None:
     else:
         broken = ""
     _write_frame(replies, {"ready": not broken, "problem": broken})
+    private = (requests.fileno(), replies.fileno())
+    standby = None if broken else _Standby.fork(private)
     while (request := _read_frame(requests)) is not None:
-        _write_frame(replies, _run_child(request) if not broken else {"server_error": broken})
+        if standby is None:
+            _write_frame(replies, {"server_error": broken})
+            continue
+        answer = standby.play(request)
+        _write_frame(replies, answer)
+        standby.reap()
+        standby = _Standby.fork(private)  # the next one, while the caller reads the answer
+    if standby is not None:
+        standby.dismiss()
 
 
-def _run_child(request: _Request) -> _Answer:
-    """Fork a child playing ``request``; its reply, or why there is none."""
-    reading, writing = os.pipe()
-    forked = time.perf_counter()
-    pid = os.fork()
-    if pid == 0:  # the child
-        os.close(reading)
-        code = 0
-        try:
-            _silence_stdio()
-            reply: dict[str, Any]
-            try:
-                reply = _step_scenario(request["library"], request["xosc"],
-                                       request["time_step_s"], request["until_s"],
-                                       request["log"])
-            except Exception as err:  # noqa: BLE001 - reported as the engine's error
-                reply = {"engine_error": f"{type(err).__name__}: {err}"}
-            reply.setdefault("marks", {})["forked"] = forked
-            data = pickle.dumps(reply, pickle.HIGHEST_PROTOCOL)
-            with os.fdopen(writing, "wb") as out:
-                out.write(data)
-        except BaseException:  # noqa: BLE001 - the exit code says it
-            code = 70
-        finally:
-            os._exit(code)
-    os.close(writing)
+class _Standby:
+    """A child forked ahead of its scenario, waiting for its request on a pipe of its own.
+
+    It plays one scenario and exits: every scenario still gets a fresh process (esmini's
+    global state, a crash or an abort stay with it). It exits on its own when the server
+    goes (its request pipe closes), so it never outlives the server.
+    """
+
+    def __init__(self, pid: int, orders: int, results: int) -> None:
+        self.pid, self.orders, self.results = pid, orders, results
+
+    @classmethod
+    def fork(cls, private: tuple[int, ...]) -> _Standby:
+        """Fork the child; ``private`` are the server's descriptors it must not hold."""
+        order_r, order_w = os.pipe()
+        result_r, result_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            for fd in (order_w, result_r, *private):
+                os.close(fd)
+            _standby_child(order_r, result_w)  # never returns
+        os.close(order_r)
+        os.close(result_w)
+        return cls(pid, order_w, result_r)
+
+    def play(self, request: _Request) -> _Answer:
+        """Hand the child ``request``; its pickled reply, or why there is none (killed at
+        the wall-clock limit)."""
+        asked = time.perf_counter()
+        with os.fdopen(self.orders, "wb") as orders:
+            orders.write(pickle.dumps({**request, "asked": asked}, pickle.HIGHEST_PROTOCOL))
+        chunks, timed_out = _read_until(self.results, self.pid,
+                                        asked + request["wall_time_s"])
+        if chunks and not timed_out:
+            # a whole reply is written before the child exits; the exit (freeing esmini's
+            # road network) is waited for after the caller has its answer (``reap``)
+            return {"reply_bytes": b"".join(chunks)}
+        return {"reply_bytes": None, "exitcode": self.reap(), "timed_out": timed_out}
+
+    def reap(self) -> int:
+        """Wait for the child to end; its exit code (negative: the signal that ended it)."""
+        if self.pid == 0:
+            return 0
+        _, status = os.waitpid(self.pid, 0)
+        self.pid = 0
+        return os.waitstatus_to_exitcode(status)
+
+    def dismiss(self) -> None:
+        """End the waiting child (it reads the end of its request pipe and exits)."""
+        os.close(self.orders)
+        os.close(self.results)
+        self.reap()
+
+
+def _read_until(fd: int, pid: int, deadline: float) -> tuple[list[bytes], bool]:
+    """Everything ``fd`` gives until it closes; killing ``pid`` at ``deadline`` (then
+    ``True``)."""
     chunks: list[bytes] = []
-    timed_out = False
-    deadline = forked + request["wall_time_s"]
-    with os.fdopen(reading, "rb", buffering=0) as pipe:
+    with os.fdopen(fd, "rb", buffering=0) as pipe:
         while True:
             remaining = deadline - time.perf_counter()
             if remaining <= 0:
-                timed_out = True
                 os.kill(pid, signal.SIGKILL)
-                break
+                return chunks, True
             if not select.select([pipe], [], [], remaining)[0]:
                 continue
             chunk = pipe.read(1 << 20)
             if not chunk:
-                break
+                return chunks, False
             chunks.append(chunk)
-    _, status = os.waitpid(pid, 0)
-    exitcode = os.waitstatus_to_exitcode(status)
-    played: dict[str, Any] | None = None
-    if not timed_out and exitcode == 0:
+
+
+def _standby_child(orders: int, results: int) -> None:
+    """The forked child: wait for the request, play it, send the pickled reply, exit."""
+    code = 0
+    try:
+        _silence_stdio()
+        with os.fdopen(orders, "rb") as pipe:
+            data = pipe.read()
+        if not data:  # the server went, or dismissed this child
+            os._exit(0)
+        request = pickle.loads(data)
+        reply: dict[str, Any]
         try:
-            played = pickle.loads(b"".join(chunks))
-        except Exception:  # noqa: BLE001 - a torn reply is no reply
-            played = None
-    return {"reply": played, "exitcode": exitcode, "timed_out": timed_out}
+            reply = _step_scenario(request["library"], request["xosc"],
+                                   request["time_step_s"], request["until_s"], request["log"])
+        except Exception as err:  # noqa: BLE001 - reported as the engine's error
+            reply = {"engine_error": f"{type(err).__name__}: {err}"}
+        marks = reply.setdefault("marks", {})
+        marks["asked"] = request["asked"]
+        marks["packed"] = time.perf_counter()
+        with os.fdopen(results, "wb") as out:
+            out.write(pickle.dumps(reply, pickle.HIGHEST_PROTOCOL))
+    except BaseException:  # noqa: BLE001 - the exit code says it
+        code = 70
+    finally:
+        os._exit(code)
 
 
 def _write_frame(stream: IO[bytes], obj: object) -> None:
@@ -451,7 +504,7 @@ def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
 
     The child is killed after ``wall_time_s``; what esmini logged is kept in the playback.
     ``timings_s``: ``start`` (until the child runs), ``load``, ``step``, ``collect`` (the
-    playback back here), ``total``.
+    playback back here: ``close``, ``pack``, ``transfer``), ``total``.
     """
     library = str(find_esmini().library)
     log_path = scratch_folder("esmini") / f"{os.getpid()}-{next(_counter)}.log"
@@ -460,7 +513,7 @@ def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
                           "time_step_s": time_step_s, "until_s": until_s,
                           "log": str(log_path), "wall_time_s": wall_time_s},
                          wall_time_s + SERVER_GRACE_S)
-    reply = answer.get("reply")
+    reply = _unpickled(answer.get("reply_bytes"))
     log = _log_lines(log_path)
     log_path.unlink(missing_ok=True)
     if reply is None:
@@ -468,19 +521,57 @@ def play_file(xosc_path: Path, until_s: float, time_step_s: float = 0.05,
             why = answer["server_error"]
         elif answer.get("timed_out"):
             why = f"{TIMEOUT_MESSAGE} {wall_time_s:g} s (ReplaySettings.wall_time_s)"
+        elif answer.get("reply_bytes"):
+            why = "the player's child sent a torn reply"
         else:
-            why = f"esmini ended the process (exit code {answer.get('exitcode')})"
+            why = _ended_why(answer.get("exitcode"))
         reply = {"engine_error": why}
     marks = reply.pop("marks", {})
     playback = Playback.from_dict(reply)
     playback.log = log
     done = time.perf_counter()
-    if "started" in marks:
-        playback.timings_s["start"] = round(marks["started"] - started, 4)
-    if "stepped" in marks:
-        playback.timings_s["collect"] = round(done - marks["stepped"], 4)
-    playback.timings_s["total"] = round(done - started, 4)
+    playback.timings_s.update(_split(marks, started, done))
     return playback
+
+
+def _unpickled(data: bytes | None) -> dict[str, Any] | None:
+    """The child's reply, or ``None`` for none or a torn one."""
+    if not data:
+        return None
+    try:
+        reply = pickle.loads(data)
+    except Exception:  # noqa: BLE001 - a torn reply is no reply
+        return None
+    return reply if isinstance(reply, dict) else None
+
+
+def _split(marks: dict[str, float], started: float, done: float) -> dict[str, float]:
+    """Where a replay's time went outside esmini's ``load`` and ``step`` (the child's clock
+    marks are this machine's monotonic clock): ``start`` (request to the child running),
+    ``close`` (esmini's ``SE_Close``), ``pack`` (the tracks cut out of the recorded states and
+    pickled), ``transfer`` (the reply back here), ``collect`` (all three), ``total``."""
+    split = {"total": round(done - started, 4)}
+    if "started" in marks:
+        split["start"] = round(marks["started"] - started, 4)
+    if "stepped" in marks:
+        split["collect"] = round(done - marks["stepped"], 4)
+    if {"stepped", "closed", "packed"} <= marks.keys():
+        split["close"] = round(marks["closed"] - marks["stepped"], 4)
+        split["pack"] = round(marks["packed"] - marks["closed"], 4)
+        split["transfer"] = round(done - marks["packed"], 4)
+    return split
+
+
+def _ended_why(exitcode: int | None) -> str:
+    """How the child playing a scenario ended without a reply: killed by a signal (a crash of
+    esmini, SIGSEGV or SIGABRT, or a kill from outside) or an exit code of its own."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            name = signal.Signals(-exitcode).name
+        except ValueError:
+            name = f"signal {-exitcode}"
+        return f"esmini crashed ({name}, exit code {exitcode})"
+    return f"esmini ended the process (exit code {exitcode})"
 
 
 def _log_lines(path: Path) -> list[str]:

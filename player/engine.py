@@ -22,6 +22,7 @@ import ctypes
 import itertools
 import os
 import pickle
+import resource
 import select
 import signal
 import struct
@@ -333,6 +334,7 @@ def _standby_child(orders: int, results: int) -> None:
             reply = {"engine_error": f"{type(err).__name__}: {err}"}
         marks = reply.setdefault("marks", {})
         marks["asked"] = request["asked"]
+        marks["peak_rss_kb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
         marks["packed"] = time.perf_counter()
         with os.fdopen(results, "wb") as out:
             out.write(pickle.dumps(reply, pickle.HIGHEST_PROTOCOL))
@@ -549,8 +551,11 @@ def _split(marks: dict[str, float], started: float, done: float) -> dict[str, fl
     """Where a replay's time went outside esmini's ``load`` and ``step`` (the child's clock
     marks are this machine's monotonic clock): ``start`` (request to the child running),
     ``close`` (esmini's ``SE_Close``), ``pack`` (the tracks cut out of the recorded states and
-    pickled), ``transfer`` (the reply back here), ``collect`` (all three), ``total``."""
+    pickled), ``transfer`` (the reply back here), ``collect`` (all three), ``total``; and
+    ``child_peak_rss_mb``, the peak memory of the child that played."""
     split = {"total": round(done - started, 4)}
+    if "peak_rss_kb" in marks:  # the child's peak memory: esmini with the map loaded
+        split["child_peak_rss_mb"] = round(marks["peak_rss_kb"] / 1024, 1)
     if "started" in marks:
         split["start"] = round(marks["started"] - started, 4)
     if "stepped" in marks:

@@ -81,8 +81,10 @@ def main(argv: list[str] | None = None) -> None:
     except Exception as err:  # noqa: BLE001 - the one place that turns crashes into a line
         if verbose:
             raise
-        click.echo(f"error: {type(err).__name__}: {err} (run with --verbose for the traceback)",
-                   err=True)
+        # a note says what became of the work (a stopped run: which, where, how to resume)
+        notes = "".join(f"; {note}" for note in getattr(err, "__notes__", ()))
+        click.echo(f"error: {type(err).__name__}: {err} (run with --verbose for the traceback)"
+                   f"{notes}", err=True)
         sys.exit(exit_codes.PROBLEMS)
 
 

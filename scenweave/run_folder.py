@@ -6,6 +6,7 @@ so a scenario folder is either complete or absent; a rerun skips finished scenar
 
 from __future__ import annotations
 
+import errno
 import re
 import shutil
 import subprocess
@@ -86,17 +87,31 @@ class RunFolder:
                     and self.root.exists():
                 raise RunInterrupted(self.run_id, progress.committed) from err
             if isinstance(err, Exception) and self.root.exists():
-                self._say_how_to_resume(err, progress)
+                err.add_note(self.how_to_resume(err, progress))
             raise
         _remove_tree(self.root / STAGING_DIR)
 
-    def _say_how_to_resume(self, err: Exception, progress: Started) -> None:
-        """One line on stderr when a run stops on an error (a full disk, an LLM gone) with its
-        folder kept: which run, where, and the one step that resumes it."""
+    def announce(self) -> None:
+        """One line on stderr as the run starts (also when it is not on a terminal, e.g. a
+        log): which run, where, and the step that resumes it after a kill, which says
+        nothing at all."""
+        begun = "started" if self.created else "resumed"
+        print(f"run {self.run_id}: {begun} in {self.root}; if it stops, the same command with "
+              f"--run-id {self.run_id} resumes it", file=sys.stderr, flush=True)
+
+    def how_to_resume(self, err: Exception, progress: Started) -> str:
+        """What a run stopped by an error (a full disk, an LLM gone) with its folder kept adds
+        to the error's one line (a note the command line prints with it): which run, where,
+        how many scenarios are kept, and the one step that resumes it; a full disk names
+        itself and says to free space first."""
         kept = len(self.outcomes())
-        print(f"run {self.run_id} stopped ({type(err).__name__}) after {progress.committed} "
-              f"new scenarios, {kept} in {self.root}; they are kept: run the same command "
-              f"with --run-id {self.run_id} to resume", file=sys.stderr, flush=True)
+        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT):
+            return (f"run {self.run_id} stopped: the disk holding {self.root} is full; "
+                    f"{kept} scenarios are kept there ({progress.committed} new): free some "
+                    f"space, then run the same command with --run-id {self.run_id} to resume")
+        return (f"run {self.run_id} stopped ({type(err).__name__}) after {progress.committed} "
+                f"new scenarios, {kept} in {self.root}; they are kept: run the same command "
+                f"with --run-id {self.run_id} to resume")
 
     @property
     def run_id(self) -> str:

@@ -114,6 +114,7 @@ def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: P
     loaded = load_input(Path(data), selection)
     matcher = matcher or default_matcher(settings.map)
     folder = RunFolder.open(out_root, run_id)
+    folder.announce()
     if settings.agent is not None:  # the LLM calls are logged under the run
         settings = replace(settings, agent=replace(settings.agent, run_id=folder.run_id))
     with folder.started() as started:
@@ -313,11 +314,42 @@ def run_description(data: Path, loaded: LoadedInput, selection: InputSelection,
         "run_id": folder.run_id,
         "started_at": datetime.now(UTC).isoformat(timespec="seconds"),
         "input": str(data), "input_kind": loaded.kind, "scenarios": len(loaded.params),
-        "selection": {k: (str(v) if isinstance(v, Path) else v)
-                      for k, v in asdict(selection).items()},
+        "selection": described_selection(selection),
         "mode": "no-llm" if settings.no_llm else "agent",
         "map": settings.map or "Town04",
         "top_n": settings.top_n,
         "agent": agent_settings.to_dict() if hasattr(agent_settings, "to_dict") else None,
         RUN_KEY: settings.replay_not_run,
     }
+
+
+def described_selection(selection: InputSelection) -> dict[str, Any]:
+    """The selection as ``run.json`` keeps it (paths as text, tuples as lists)."""
+    return json.loads(json.dumps({k: (str(v) if isinstance(v, Path) else v)
+                                  for k, v in asdict(selection).items()}))
+
+
+def latest_run_of(data: Path, out_root: Path, selection: InputSelection) -> str | None:
+    """The id of the run in ``out_root`` last started on ``data`` with the same selection
+    (``run --resume``), as each run's ``run.json`` describes it; None when there is none. A
+    run killed before its first scenario has its ``run.json`` already, so it counts."""
+    wanted = _inputs_of(str(data), described_selection(selection))
+    found: list[tuple[str, float, str]] = []
+    for path in Path(out_root).glob(f"*/{RUN_FILE}"):
+        try:
+            described = json.loads(path.read_text(encoding="utf-8"))
+            seen = path.stat().st_mtime
+        except (OSError, ValueError):
+            continue  # a damaged run.json is no run of these inputs
+        if isinstance(described, dict) and _inputs_of(
+                described.get("input"), described.get("selection")) == wanted:
+            found.append((str(described.get("started_at") or ""), seen, path.parent.name))
+    return max(found)[2] if found else None
+
+
+def _inputs_of(data: object, selection: object) -> tuple[str, str] | None:
+    """What makes two runs runs of the same inputs: the input's absolute path (a relative
+    one is taken from here, as a rerun of the same command does) and the selection."""
+    if not isinstance(data, str) or not isinstance(selection, dict):
+        return None
+    return str(Path(data).resolve()), json.dumps(selection, sort_keys=True)

@@ -77,25 +77,38 @@ def redacted(url: str) -> str:
     return urlunsplit(parts._replace(netloc=netloc))
 
 
-def connect(url: str | None = None) -> Any:
+def connect(url: str | None = None, wait: bool = False) -> Any:
     """A checked connection to the Redis of ``url`` (``redis://`` or TLS ``rediss://``, a
-    password as ``redis://:PASSWORD@host``); QueueError names the setting to change."""
+    password as ``redis://:PASSWORD@host``); QueueError names the setting to change. With
+    ``wait`` (a worker, which may well start before its Redis) a Redis that does not answer
+    is waited for as an outage is (``wait_for_queue``: bounded, said once)."""
     from redis import Redis
+    from redis.exceptions import ConnectionError as RedisConnectionError
     from redis.exceptions import RedisError
+    from redis.exceptions import TimeoutError as RedisTimeoutError
 
     url = queue_url(url)
     try:
         connection = Redis.from_url(url)
         connection.ping()
+    except (RedisConnectionError, RedisTimeoutError) as err:
+        if not wait or _is_refused_login(err):
+            raise _unreachable(url, err) from err
+        wait_for_queue(connection, err)
     except (RedisError, ValueError) as err:
-        if _is_refused_login(err):
-            raise QueueError(f"the job queue at {redacted(url)} refused the login ({err}): it "
-                             "needs its password in the URL, redis://:PASSWORD@host:6379/0 "
-                             f"(--queue / {QUEUE_ENV})") from err
-        raise QueueError(f"cannot reach the job queue at {redacted(url)}: {err}; start "
-                         f"redis-server there or pass --queue / set {QUEUE_ENV} (a password "
-                         "goes in the URL: redis://:PASSWORD@host:6379/0)") from err
+        raise _unreachable(url, err) from err
     return connection
+
+
+def _unreachable(url: str, err: Exception) -> QueueError:
+    """The one line saying why the queue at ``url`` cannot be used and what to change."""
+    if _is_refused_login(err):
+        return QueueError(f"the job queue at {redacted(url)} refused the login ({err}): it "
+                          "needs its password in the URL, redis://:PASSWORD@host:6379/0 "
+                          f"(--queue / {QUEUE_ENV})")
+    return QueueError(f"cannot reach the job queue at {redacted(url)}: {err}; start "
+                      f"redis-server there or pass --queue / set {QUEUE_ENV} (a password "
+                      "goes in the URL: redis://:PASSWORD@host:6379/0)")
 
 
 def _is_refused_login(err: Exception) -> bool:

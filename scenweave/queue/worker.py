@@ -193,8 +193,9 @@ def warm_up(options: WorkerOptions) -> None:
 
 
 def work(url: str | None, options: WorkerOptions) -> bool:
-    """Run one worker in this process until stopped (or the queue is empty with ``burst``)."""
-    connection = connect(url)
+    """Run one worker in this process until stopped (or the queue is empty with ``burst``);
+    a Redis not up yet is waited for (bounded, said once), as an outage is."""
+    connection = connect(url, wait=True)
     preload(options)
     children_die_with_this_process()
     return make_worker(connection, options).work(burst=options.burst, with_scheduler=True)
@@ -202,7 +203,7 @@ def work(url: str | None, options: WorkerOptions) -> bool:
 
 def work_in_processes(url: str | None, options: WorkerOptions, count: int) -> int:
     """Run ``count`` workers, each in its own process; return how many exited cleanly."""
-    connect(url)  # fail here, once, with the clear message
+    connect(url, wait=True)  # wait (or fail) here, once, with the clear message
     preload(options)
     children_die_with_this_process()
     context = multiprocessing.get_context("fork")

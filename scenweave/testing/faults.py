@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from scenweave.queue.connection import OUTAGE_ENV
-from scenweave.schemas.scenario_folder import RUN_FILE, STATUS_NAME
+from scenweave.schemas.scenario_folder import RUN_FILE, STATUS_NAME, folder_damage
 from scenweave.testing.processes import stop_processes
 from scenweave.testing.redis_server import RedisServer
 
@@ -40,6 +40,8 @@ class Delivery:
     lost: int = 0
     doubled: int = 0
     not_ok: list[str] = field(default_factory=list)
+    #: scenario folders not whole: a file their status.json names missing or unreadable
+    damaged: list[str] = field(default_factory=list)
     exit_codes: list[int] = field(default_factory=list)
     recover_s: float = 0.0
     output: str = ""
@@ -47,7 +49,8 @@ class Delivery:
     def line(self) -> str:
         """One line of ``benchmarks/faults.py``."""
         return (f"{self.fault:<40} delivered once {self.once:>2}/{self.expected:<2} lost "
-                f"{self.lost}  doubled {self.doubled}  not ok {len(self.not_ok)}  exit "
+                f"{self.lost}  doubled {self.doubled}  half-written {len(self.damaged)}  "
+                f"not ok {len(self.not_ok)}  exit "
                 f"{','.join(map(str, self.exit_codes))}  recovered in {self.recover_s:.1f} s")
 
 
@@ -97,13 +100,17 @@ class FaultBench:
 
 def delivery(fault: str, run: Path) -> Delivery:
     """Count the run folder's scenarios: once, doubled (two folders of one scenario), lost
-    (fewer distinct scenarios than ``run.json`` expects), and those not ok."""
+    (fewer distinct scenarios than ``run.json`` expects), those not ok and those not whole
+    (``folder_damage``: a file the outcome names missing or unreadable)."""
     expected = int(json.loads((run / RUN_FILE).read_text())["scenarios"])
-    outcomes = [json.loads(p.read_text()) for p in sorted(run.glob(f"*/{STATUS_NAME}"))]
+    folders = {p.parent: json.loads(p.read_text()) for p in sorted(run.glob(f"*/{STATUS_NAME}"))}
+    outcomes = list(folders.values())
     seen = Counter(o["scenario_id"] for o in outcomes)
     return Delivery(fault, expected, once=sum(n == 1 for n in seen.values()),
                     lost=max(expected - len(seen), 0), doubled=sum(n > 1 for n in seen.values()),
-                    not_ok=sorted(o["scenario_id"] for o in outcomes if o["status"] != "ok"))
+                    not_ok=sorted(o["scenario_id"] for o in outcomes if o["status"] != "ok"),
+                    damaged=sorted(o["scenario_id"] for folder, o in folders.items()
+                                   if folder_damage(folder, o)))
 
 
 def wait_for(condition: Callable[[], object], timeout_s: float, what: str) -> None:

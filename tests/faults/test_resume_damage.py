@@ -53,14 +53,20 @@ def test_damaged_folders_are_made_again_and_named(sample_raw, tmp_path):
         json.loads((f / "status.json").read_text())["scenario_id"] for f in folders)
 
 
-def test_a_run_stopped_by_an_error_names_itself_and_how_to_resume(tmp_path, capsys):
+def test_a_run_stopped_by_an_error_names_itself_and_how_to_resume(tmp_path):
     folder = RunFolder.open(tmp_path, "full")
-    with pytest.raises(OSError), folder.started() as started:
+    with pytest.raises(OSError) as stopped, folder.started() as started:
         (folder.root / "A").mkdir()
         (folder.root / "A" / "status.json").write_text('{"scenario_id": "A", "status": "ok"}')
         started.committed += 1
         raise OSError(errno.ENOSPC, "No space left on device")
-    line = capsys.readouterr().err.strip()
-    assert line == (f"run full stopped (OSError) after 1 new scenarios, 1 in {folder.root}; "
-                    "they are kept: run the same command with --run-id full to resume")
+    # a note the command line prints on the error's one line
+    assert stopped.value.__notes__ == [
+        f"run full stopped: the disk holding {folder.root} is full; 1 scenarios are kept "
+        "there (1 new): free some space, then run the same command with --run-id full to resume"]
     assert (folder.root / "A" / "status.json").is_file()
+    with pytest.raises(RuntimeError) as other, folder.started():
+        raise RuntimeError("the LLM server is gone")
+    assert other.value.__notes__ == [
+        f"run full stopped (RuntimeError) after 0 new scenarios, 1 in {folder.root}; they are "
+        "kept: run the same command with --run-id full to resume"]

@@ -73,8 +73,9 @@ def tokenize(text: str) -> list[Token]:
     while at < len(text):
         match = _TOKEN.match(text, at)
         if match is None:
+            hint = " (equality is ==)" if text[at] == "=" else ""
             raise WhereError(f"column {at + 1}: unexpected character {text[at]!r} (expected a "
-                             "field, a value, an operator, a parenthesis or a comma)")
+                             f"field, a value, an operator, a parenthesis or a comma){hint}")
         kind = match.lastgroup or ""
         if kind != "space":
             word = match.group()

@@ -6,7 +6,8 @@
   then the step the error line names, once there is more space;
 - esmini itself crashing (SIGSEGV) mid-replay: the player server's children are signalled
   from outside, no hook in the player;
-- a ``scenweave worker`` started while its Redis is down, which must wait for it.
+- a ``scenweave worker`` started while its Redis is down, which must wait for it;
+- a finished run's folders damaged, then the same command again.
 
 Each ends in a ``Delivery`` (once / lost / doubled / half-written, exit codes, seconds to
 recover).
@@ -24,7 +25,7 @@ import threading
 import time
 from pathlib import Path
 
-from scenweave.schemas.scenario_folder import STAGING_DIR, STATUS_NAME
+from scenweave.schemas.scenario_folder import PARAMS_NAME, STAGING_DIR, STATUS_NAME, XOSC_NAME
 from scenweave.testing.faults import (
     CLASSES,
     CLI,
@@ -236,3 +237,24 @@ def worker_before_redis(bench: FaultBench, down_s: float = 3.0) -> Delivery:
     finally:
         bench.stop()
         server.stop()
+
+
+def damaged_on_resume(bench: FaultBench) -> tuple[Delivery, list[str]]:
+    """A finished run, then three of its folders damaged (status.json truncated,
+    scenario.xosc deleted, params.json not JSON), then the same command again: the damaged
+    ones, named on the console, are made again and the whole ones left alone. Also the
+    damaged scenarios' folder names."""
+    out = bench.root / "runs-damaged"
+    first, said = finish_run(run_command(bench, out, "--run-id", "damaged"))
+    run = out / "damaged"
+    folders = sorted(p.parent for p in run.glob(f"*/{STATUS_NAME}"))
+    truncated, unscenario, unparams = folders[:3]
+    (truncated / STATUS_NAME).write_text('{"scenario_id": ', encoding="utf-8")
+    (unscenario / XOSC_NAME).unlink()
+    (unparams / PARAMS_NAME).write_text("[1, 2", encoding="utf-8")
+    damaged_at = time.monotonic()
+    again, output = finish_run(run_command(bench, out, "--run-id", "damaged"))
+    result = delivery("damaged folders on resume", run)
+    result.exit_codes, result.recover_s = [first, again], time.monotonic() - damaged_at
+    result.output = said + output
+    return result, [p.name for p in (truncated, unscenario, unparams)]

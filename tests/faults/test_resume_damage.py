@@ -7,50 +7,32 @@ from __future__ import annotations
 
 import errno
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
 from scenweave.run_folder import RunFolder
-
-CLI = [sys.executable, "-m", "scenweave.cli"]
-
-
-def run(records: Path, out: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([*CLI, "run", str(records), "--no-llm", "--out", str(out), "--run-id",
-                           "r", "--classes", "BRAKE,LCF"], capture_output=True, text=True,
-                          timeout=300)
+from scenweave.testing.faults import FaultBench
+from scenweave.testing.run_faults import damaged_on_resume
 
 
-def test_damaged_folders_are_made_again_and_named(sample_raw, tmp_path):
-    first = run(sample_raw, tmp_path)
-    assert first.returncode == 0, first.stdout + first.stderr
-    folders = sorted(p.parent for p in (tmp_path / "r").glob("*/status.json"))
-    assert len(folders) == 6
-    truncated, unxosc, unparams, whole = folders[0], folders[1], folders[2], folders[3]
-    (truncated / "status.json").write_text('{"scenario_id": ')
-    (unxosc / "scenario.xosc").unlink()
-    (unparams / "params.json").write_text("[1, 2")
-    untouched = (whole / "status.json").stat().st_mtime_ns
-
-    again = run(sample_raw, tmp_path)
-    assert again.returncode == 0, again.stdout + again.stderr
-    assert f"{unxosc.name} is made again: its status.json says ok but scenario.xosc is " \
-           "missing" in again.stderr
-    assert f"{unparams.name} is made again" in again.stderr and "params.json is damaged" \
-        in again.stderr
-    assert "(3 already done" in again.stdout, again.stdout
-    for folder in folders:
-        assert json.loads((folder / "status.json").read_text())["status"] == "ok"
-        assert (folder / "scenario.xosc").is_file()
-        assert isinstance(json.loads((folder / "params.json").read_text()), dict)
-    assert (whole / "status.json").stat().st_mtime_ns == untouched
-    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
-    assert summary["total"] == 6
+def test_damaged_folders_are_made_again_and_named(tmp_path):
+    bench = FaultBench.make(tmp_path, per_class=2)
+    redone, (truncated, unxosc, unparams) = damaged_on_resume(bench)
+    assert redone.exit_codes == [0, 0], redone.output
+    assert (redone.expected, redone.once, redone.lost, redone.doubled) == (8, 8, 0, 0)
+    assert redone.damaged == [] and redone.not_ok == [], redone.output
+    assert f"{unxosc} is made again: its status.json says ok but scenario.xosc is " \
+           "missing" in redone.output
+    assert f"{unparams} is made again" in redone.output and "params.json is damaged" \
+        in redone.output
+    assert "(5 already done" in redone.output, redone.output
+    run = tmp_path / "runs-damaged" / "damaged"
+    for name in (truncated, unxosc, unparams):
+        assert json.loads((run / name / "status.json").read_text())["status"] == "ok"
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["total"] == 8
     assert sorted(o["scenario_id"] for o in summary["scenarios"]) == sorted(
-        json.loads((f / "status.json").read_text())["scenario_id"] for f in folders)
+        json.loads(p.read_text())["scenario_id"] for p in run.glob("*/status.json"))
 
 
 def test_a_run_stopped_by_an_error_names_itself_and_how_to_resume(tmp_path):

@@ -82,3 +82,19 @@ def test_a_record_mined_before_criticality_is_measured_from_its_series():
         "t": [0.0, 0.5, 1.0], "ego_speed_raw_ms": [20.0] * 3, "npc_speed_raw_ms": [10.0] * 3,
         "npc_gap_m": [30.0, 25.0, 20.0], "ego_lane": [1.0] * 3, "npc_lane": [1.0] * 3}}
     assert parse_where("ttc_min_s == 2")(old)
+
+
+def test_the_parser_never_evaluates_python():
+    """The module reads user text with its own tokenizer: no eval, exec, compile or
+    literal_eval is called anywhere in it."""
+    import ast
+    from pathlib import Path
+
+    from scenweave.mining import where
+
+    tree = ast.parse(Path(where.__file__).read_text(encoding="utf-8"))
+    called = {node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+              for node in ast.walk(tree) if isinstance(node, ast.Call)}
+    assert called.isdisjoint({"eval", "exec", "compile", "ast.literal_eval", "__import__"})
+    assert {name for name in called if name.endswith("compile")} == {"re.compile"}
+    assert "tokenize" in called  # the check looks at real calls

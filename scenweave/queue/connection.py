@@ -92,7 +92,7 @@ def connect(url: str | None = None, wait: bool = False) -> Any:
         connection = Redis.from_url(url)
         connection.ping()
     except (RedisConnectionError, RedisTimeoutError) as err:
-        if not wait or _is_refused_login(err):
+        if not wait or not _may_come_back(err):
             raise _unreachable(url, err) from err
         wait_for_queue(connection, err)
     except (RedisError, ValueError) as err:
@@ -109,6 +109,14 @@ def _unreachable(url: str, err: Exception) -> QueueError:
     return QueueError(f"cannot reach the job queue at {redacted(url)}: {err}; start "
                       f"redis-server there or pass --queue / set {QUEUE_ENV} (a password "
                       "goes in the URL: redis://:PASSWORD@host:6379/0)")
+
+
+def _may_come_back(err: Exception) -> bool:
+    """Whether waiting can help: a Redis not up (yet), not one refusing the login or the
+    certificate (waiting would not change either)."""
+    import ssl
+
+    return not _is_refused_login(err) and not isinstance(err.__context__, ssl.SSLError)
 
 
 def _is_refused_login(err: Exception) -> bool:

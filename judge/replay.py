@@ -21,6 +21,7 @@ from scenweave.judge.scenario_doc import ScenarioDoc
 from scenweave.scenario_lib.kinematics import GAP_TOL_M, STOP_LINE_MARGIN_M
 from scenweave.scenario_lib.lateral import RecordedLaneChange, recorded_lane_change
 from scenweave.scenario_lib.phases import hardest_second
+from scenweave.scenario_lib.vehicles import BOX_CENTRE_AHEAD
 from scenweave.schemas.params import Params, actor_value, all_finite, finite
 from scenweave.schemas.scenario_folder import ReplayVerdict, Tolerances, VerdictMark
 
@@ -353,7 +354,7 @@ def _lights(judge: _Judge) -> None:
     stop_line = finite(params.get("spawn_stop_line_distance_m"))
     if not judge.playback.lights or stop_line is None:
         return
-    reached = _time_travelled(judge.playback, "hero", stop_line)
+    reached = crosses_stop_line_s(judge.playback, stop_line, judge.doc.vehicle_length("hero"))
     if class_of(params).stops_at_line:
         stopped = _first_time(judge.playback, "hero", 0.0, lambda v: v < STOPPED_MS)
         colour = light_state(judge.playback, stopped if stopped is not None else
@@ -394,10 +395,23 @@ def _stop_or_pass(judge: _Judge) -> None:
         elif driven < stop_line - STOP_LINE_MARGIN_M - 5.0:
             judge.fail("REPLAY_STOP_PAST_LINE", f"the ego stops {stop_line - driven:.1f} m before "
                        "the stop line; the record stops at it", stopped)
-    elif _time_travelled(judge.playback, "hero", stop_line) is None:
+    elif crosses_stop_line_s(judge.playback, stop_line,
+                             judge.doc.vehicle_length("hero")) is None:
         driven = travelled(judge.playback, "hero", judge.playback.duration_s)
-        judge.fail("REPLAY_NO_PASS", f"the ego never crosses the stop line {stop_line:.1f} m "
-                   f"ahead (drove {driven:.1f} m); the record passes")
+        judge.fail("REPLAY_NO_PASS", f"the ego's front never crosses the stop line "
+                   f"{stop_line:.1f} m ahead of its spawn (its rear axle drove {driven:.1f} m); "
+                   "the record passes")
+
+
+def crosses_stop_line_s(playback: Playback, stop_line_m: float,
+                        length_m: float | None) -> float | None:
+    """When the ego passes the stop line ``stop_line_m`` ahead of its spawn: when its front
+    bumper crosses it (``length_m``: its box; the spawn is its reference point, the rear
+    axle), as mining reads a pass. A car that passes on orange and then nearly stops just
+    past the line (0.3 m/s, its rear axle still short of it) has passed (issue 36); ``None``
+    when the front never gets there."""
+    front = 0.0 if length_m is None else length_m * (BOX_CENTRE_AHEAD + 0.5)
+    return _time_travelled(playback, "hero", max(stop_line_m - front, 0.0))
 
 
 def _right_turn(judge: _Judge) -> None:

@@ -120,12 +120,13 @@ def run_list(runs: dict[str, Run]) -> list[dict]:
 
 def run_row(run: Run) -> dict:
     info, summary = read_json_object(run.root / RUN_FILE), read_json_object(run.root / SUMMARY_FILE)
+    mined = _mined_criticality(run.root)
     row = {"run": run.run_id, "path": str(run.root), "mode": info.get("mode"),
            "map": info.get("map"), "started_at": info.get("started_at"),
            "counts": summary.get("counts"), "replay": _replay_counts(summary),
            "report": (run.root / REPORT_FILE).is_file(),
            "mining_report": _mining_report(info, run.root),
-           "scenarios": [scenario_row(run, name) for name in run.scenario_dirs]}
+           "scenarios": [scenario_row(run, name, mined) for name in run.scenario_dirs]}
     return row
 
 
@@ -148,7 +149,9 @@ def _mining_report(info: dict, root: Path) -> str | None:
     return None
 
 
-def scenario_row(run: Run, name: str) -> dict:
+def scenario_row(run: Run, name: str, mined: dict[str, dict] | None = None) -> dict:
+    """What the list says of one scenario; ``mined``: the criticality of the records an
+    in-situ batch was made from, by scenario id (``_mined_criticality``)."""
     folder = run.scenario_dirs[name]
     status, params = read_json_object(folder / STATUS_NAME), read_json_object(folder / PARAMS_NAME)
     replay = status.get("replay") if isinstance(status.get("replay"), dict) else None
@@ -168,7 +171,7 @@ def scenario_row(run: Run, name: str) -> dict:
             "variants": len(_variant_dirs(folder)),
             "watchable": (folder / REPLAY_NAME).is_file(),
             "in_situ": _in_situ_entry(folder, f"{run.run_id}/{name}"),
-            "criticality": _criticality(folder)}
+            "criticality": _criticality(folder) or (mined or {}).get(name)}
 
 
 def _criticality(folder: Path) -> dict | None:
@@ -178,6 +181,27 @@ def _criticality(folder: Path) -> dict | None:
     series = read_json_object(folder / RECORDED_NAME) if (folder / RECORDED_NAME).is_file() \
         else {}
     return criticality(series) if series.get("t") else None
+
+
+def _mined_criticality(root: Path) -> dict[str, dict]:
+    """For the in-situ batch ``scenweave mine --in-situ`` writes (``OUT/in_situ/``, one folder
+    per record, named by its scenario id): each record's criticality, read from the records
+    beside it (``OUT/highway/*.json``, ``OUT/urban/*.json``); empty for any other run."""
+    if not (root / IN_SITU_REPORT_NAME).is_file():
+        return {}
+    found: dict[str, dict] = {}
+    for path in sorted(root.parent.glob("*/*.json")):
+        if path.parent.name not in ("highway", "urban"):
+            continue
+        try:
+            records = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue  # not a records file: nothing to say of it
+        for record in records if isinstance(records, list) else []:
+            numbers = record.get("criticality") if isinstance(record, dict) else None
+            if isinstance(numbers, dict):
+                found[str(record.get("scenario_id"))] = numbers
+    return found
 
 
 def _in_situ_entry(folder: Path, key: str) -> dict | None:

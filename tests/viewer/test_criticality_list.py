@@ -82,3 +82,20 @@ def test_the_list_shows_sorts_and_filters_by_criticality(page, mined_run, tmp_pa
     assert len(kept) == sum(1 for v in ascending if v <= bound)
     page.fill("#crit-brake_1s_max_ms2", "1000")
     assert page.locator("tr.scenario").count() == 0
+
+
+def test_the_in_situ_batch_of_mine_lists_its_records_criticality(esmini, tmp_path, monkeypatch):
+    """``mine --in-situ`` writes one in-situ folder per record (no recorded.json beside it):
+    the list reads each one's criticality from the records it was made from."""
+    pytest.importorskip("scenweave.mining.recorded_road")
+    monkeypatch.setenv("SCENWEAVE_HOME", str(tmp_path / "home"))
+    out = tmp_path / "out"
+    made = CliRunner().invoke(cli, ["mine", str(DATA / "commonroad_small.xml"), "--out",
+                                    str(out), "--in-situ", "--context-s", "1"])
+    assert (out / "in_situ").is_dir(), made.output
+    records = {r["scenario_id"]: r["criticality"] for path in out.glob("*/*.json")
+               if path.parent.name != "in_situ" for r in json.loads(path.read_text())}
+    rows = catalog.run_list(catalog.find_runs([out / "in_situ"]))[0]["scenarios"]
+    assert rows
+    for row in rows:
+        assert row["criticality"] == records[row["id"]]

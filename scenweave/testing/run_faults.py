@@ -179,11 +179,13 @@ def esmini_crashed(bench: FaultBench) -> tuple[Delivery, dict]:
 
 
 def _crash_players(process: subprocess.Popen, run: Path, crashes: list[float]) -> None:
-    """SIGSEGV every esmini child of the run's player server until a scenario is committed
-    (both plays of the first scenario: on the cut map and again on the whole map)."""
+    """SIGSEGV every esmini child of the run's player server that is playing until a
+    scenario is committed (both plays of the first scenario: on the cut map and again on
+    the whole map). A child forked ahead and still waiting for its scenario is left alone:
+    the fault is a crash mid-replay."""
     while process.poll() is None and not (run.is_dir() and committed(run)):
         for player in _players(process.pid):
-            if alive(player):
+            if alive(player) and _playing(player):
                 os.kill(player, signal.SIGSEGV)
                 crashes.append(time.time())
         time.sleep(0.005)
@@ -200,6 +202,14 @@ def _players(run_pid: int) -> list[int]:
         except (OSError, ValueError, IndexError):
             continue
     return [child for server in servers for child in _forks_quietly(server)]
+
+
+def _playing(pid: int) -> bool:
+    """Whether the player child ``pid`` plays a scenario: esmini holds its log open then."""
+    try:
+        return any(os.readlink(fd).endswith(".log") for fd in Path(f"/proc/{pid}/fd").iterdir())
+    except OSError:  # it ended meanwhile
+        return False
 
 
 def _forks_quietly(pid: int) -> list[int]:

@@ -60,6 +60,8 @@ def process_scenario(params: Params, index: int, out_dir: Path, settings: Pipeli
     timings: dict[str, float] = {}
     trace = Trace(out_dir / TRACE_NAME)
     outcome: dict[str, Any] = {**base_outcome(params)}  # the stages add their keys
+    if settings.replay is not None:
+        _start_player()
     try:
         placed = _timed(timings, "spawn",
                         lambda: matcher.assign(params, index, top_n=settings.top_n))
@@ -80,6 +82,15 @@ def process_scenario(params: Params, index: int, out_dir: Path, settings: Pipeli
     timings["total"] = time.perf_counter() - started
     outcome["timings_s"] = {k: round(v, 4) for k, v in timings.items()}
     return outcome
+
+
+def _start_player() -> None:
+    """Start this process's player server now (once; a no-op when it runs), so that it loads
+    esmini's library while the scenario is made and checked, not when the replay needs it:
+    the first scenario of a run or a worker waited for it."""
+    from scenweave.player.engine import warm_up
+
+    warm_up()
 
 
 def is_infrastructure_error(err: BaseException) -> bool:

@@ -6,7 +6,10 @@ matches every mined event to the labels in ``benchmarks/mining_labels/*.json`` o
 event used once) and prints precision, recall and F1 per class, the events skipped as
 unplayable (they count as found: detection is judged here, playability in
 ``benchmarks/fidelity.py``) and the duplicates: identical records (same class, vehicles and
-fields) and events dropped as repeats of an earlier file's.
+fields), events dropped as repeats of an earlier file's, and events written twice across
+overlapping files (two records of one class and vehicles whose ego series show the same
+moments, judged from the records alone). A record seen in several files counts as found in
+each (its provenance's ``also_in``).
 
 A label is ``{"file": stem, "class": CODE, "ego": id, "npc": id|null, "start_s": s,
 "end_s": s, "notes": why}``; every file in the folder is read, so each domain adds its own.
@@ -78,10 +81,13 @@ def mined(data: Path, out: Path, stems: set[str]) -> tuple[list[dict], dict]:
     for path in sorted(out.glob("*/*.json")):
         for record in json.loads(path.read_text(encoding="utf-8")):
             where = record["provenance"]
-            found.append({"file": Path(where["file"]).stem, "class": record["maneuver_class"],
-                          "ego": where["tracks"]["ego"], "npc": where["tracks"].get("npc"),
-                          "start_s": where["start_s"], "end_s": where["end_s"],
-                          "params": record.get("params"), "skipped": False})
+            for seen in [where, *where.get("also_in", [])]:  # one record, every file it is in
+                found.append({"file": Path(seen["file"]).stem,
+                              "class": record["maneuver_class"],
+                              "ego": where["tracks"]["ego"], "npc": where["tracks"].get("npc"),
+                              "start_s": seen["start_s"], "end_s": seen["end_s"],
+                              "params": record.get("params"), "skipped": False,
+                              "written": seen is where, "series": record.get("series", {})})
     for skip in report["skipped"]:
         found.append({**{k: skip.get(k) for k in ("class", "ego", "npc", "start_s", "end_s")},
                       "file": Path(skip["file"]).stem, "params": None, "skipped": True})
@@ -146,13 +152,56 @@ def _describe(item: dict) -> str:
 
 
 def print_duplicates(found: list[dict], report: dict, files: set[str], domain: str) -> None:
+    written = [e for e in found if not e["skipped"] and e["written"]]
     keys = Counter((e["file"], e["class"], e["ego"], e["npc"],
-                    json.dumps(e["params"], sort_keys=True)) for e in found if not e["skipped"])
+                    json.dumps(e["params"], sort_keys=True)) for e in written)
     identical = sum(n - 1 for n in keys.values())
     print(f"identical duplicate records: {identical}")
+    twice = written_twice(written)
+    print(f"events written twice across overlapping files: {len(twice)}")
+    for first, second in twice[:5]:
+        print(f"  twice: {_describe(first)} and {_describe(second)}")
     repeats = [d for d in report.get("duplicates", []) if Path(d["file"]).stem in files
                and _domain(d["class"]) == domain]
     print(f"events dropped as repeats (same vehicles, same absolute time): {len(repeats)}")
+
+
+#: two records show one moment when their ego's recorded speeds agree this well (m/s) ...
+SAME_SPEED_MS = 0.02
+#: ... over this many consecutive samples, varying by at least MIN_RANGE_MS
+SAME_SAMPLES, MIN_RANGE_MS = 10, 0.3
+
+
+def written_twice(written: list[dict]) -> list[tuple[dict, dict]]:
+    """Pairs of written records of different files with the same class and vehicles whose
+    ego series show the same moments (the same speeds sample by sample at some shift):
+    one event written twice. Judged from the records alone, not from the mine's clock."""
+    by_key: dict[tuple, list[dict]] = {}
+    for event in written:
+        by_key.setdefault((event["class"], str(event["ego"]), _id(event["npc"])), []).append(event)
+    pairs = []
+    for events in by_key.values():
+        for i, first in enumerate(events):
+            for second in events[i + 1:]:
+                if first["file"] != second["file"] and _same_moments(first, second):
+                    pairs.append((first, second))
+    return pairs
+
+
+def _same_moments(first: dict, second: dict) -> bool:
+    a = [v for v in first["series"].get("ego_speed_raw_ms", []) if v is not None]
+    b = [v for v in second["series"].get("ego_speed_raw_ms", []) if v is not None]
+    for shift in range(-len(a) + SAME_SAMPLES, len(b) - SAME_SAMPLES + 1):
+        run, values = 0, []
+        for k, va in enumerate(a):
+            j = k + shift
+            if 0 <= j < len(b) and abs(va - b[j]) <= SAME_SPEED_MS:
+                run, values = run + 1, values + [va]
+                if run >= SAME_SAMPLES and max(values[-run:]) - min(values[-run:]) >= MIN_RANGE_MS:
+                    return True
+            else:
+                run, values = 0, []
+    return False
 
 
 if __name__ == "__main__":

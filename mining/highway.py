@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scenweave.mining.lanes import border_between, signed_distance
 from scenweave.mining.motion import best_second_deceleration, runs, trusted_steps
 from scenweave.mining.scene import KMH, Event, Scene, make_event, vehicle
 from scenweave.mining.tracks import Floats, Steps, Track
@@ -35,9 +36,11 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
             if best < limits["deceleration_ms2"] or drop < limits["min_speed_drop_ms"] \
                     or motion.speed[first] < limits["min_start_speed_ms"]:
                 continue
-            follower = scene.traffic.follower(i, first)
-            if follower is None or follower.gap_m > limits["follower_within_m"]:
-                continue
+            follower = scene.follower(i, first)
+            if follower is None or follower.gap_m > limits["follower_within_m"] \
+                    or not moves(scene, follower.track, float(track.t[first]),
+                                 float(track.t[last]), limits["min_ego_speed_ms"]):
+                continue  # nobody behind in its path, or an ego standing all along
             event = _brake_event(scene, i, follower, first, last, limits)
             if event is not None:
                 yield event
@@ -57,6 +60,16 @@ def braking_phases(t: Floats, speed: Floats, onset_ms2: float,
         else:
             phases.append((first, last))
     return phases
+
+
+def moves(scene: Scene, i: int, start: float, end: float, least_ms: float) -> bool:
+    """Track ``i`` drives faster than ``least_ms`` at some step from ``start`` to ``end`` (its
+    speed from its positions): a class whose ego must move never takes one standing all
+    along (issue 36: a standing ego's braking or cut-in plays as nothing)."""
+    track = scene.tracks[i]
+    inside = (track.t >= start - 1e-6) & (track.t <= end + 1e-6)
+    speeds = scene.positions[i].filled[inside]
+    return bool(len(speeds)) and float(np.max(speeds)) >= least_ms
 
 
 def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last: int,
@@ -125,8 +138,76 @@ def lane_changes(scene: Scene) -> Iterator[LaneChange]:
         for before, after in _held_changes(track.t, lanes, limits["min_steady_s"]):
             change = _timed(scene, i, before, after, float(lanes[before]), float(lanes[after]),
                             limits)
-            if change is not None:
+            if change is not None and crosses_line(scene, change, limits):
                 yield change
+
+
+def crosses_line(scene: Scene, change: LaneChange, limits: dict[str, float]) -> bool:
+    """A lane change is a crossing of the line (issue 32): the changer's centre is at least
+    ``cross_margin_m`` on the old lane's side of the line between the two lanes before the
+    change and on the new lane's side after it (within ``max_duration_s``), ending there, and
+    it turns less than ``max_turn_deg`` over the change. The line is the border of the lane
+    map's lanelets where the file gives one (two lanelets that are no neighbours, or one
+    inside a junction, are a renumbering, no change); else midway between the lanes'
+    centres from the lateral positions; with neither, the lanes' change is all there is."""
+    track = scene.tracks[change.track]
+    window = np.flatnonzero(np.abs(track.t - track.t[change.after]) <= limits["max_duration_s"])
+    inside = (track.t >= change.start_s - 1e-6) & (track.t <= change.end_s + 1e-6)
+    if turned_deg(track.heading[inside]) > limits["max_turn_deg"]:
+        return False
+    if scene.strips:
+        across = _past_border(scene, change, window)
+    else:
+        across = _past_middle(scene, change, window)
+    if across is None:
+        return not scene.strips  # no geometry to refuse it by; a map that has no line: no
+    old_side = across[window <= change.before]
+    new_side = across[window >= change.after]
+    margin = limits["cross_margin_m"]
+    return bool(len(old_side) and len(new_side)) and float(np.min(old_side)) <= -margin \
+        and float(np.max(new_side)) >= margin and float(new_side[-1]) > 0
+
+
+def turned_deg(heading: Floats, ends: int = 3) -> float:
+    """How far a heading series turns from its start to its end (deg; each end the mean of
+    ``ends`` samples): a turn keeps its new heading, a lane change's own yaw swings back."""
+    finite = np.unwrap(heading[np.isfinite(heading)])
+    if len(finite) < 2:
+        return 0.0
+    n = min(ends, len(finite) // 2 or 1)
+    return float(np.degrees(abs(np.mean(finite[-n:]) - np.mean(finite[:n]))))
+
+
+def _past_border(scene: Scene, change: LaneChange, window: Steps) -> Floats | None:
+    """How far past the line between its lanelets the changer's centre is at each step of
+    ``window`` (m, + on the new lane's side); None where the lanelets share no line."""
+    track = scene.tracks[change.track]
+    old, new = str(track.lane[change.before]), str(track.lane[change.after])
+    if {old, new} & set(scene.recording.junction_lanes):
+        return None
+    line = border_between(scene.strips, old, new)
+    if line is None:
+        return None
+    border, side = line
+    points = np.column_stack([track.x[window], track.y[window]])
+    return -side * signed_distance(points, border)
+
+
+def _past_middle(scene: Scene, change: LaneChange, window: Steps) -> Floats | None:
+    """How far past the middle between its lanes' centres the changer is (m, + on the new
+    lane's side), from its lateral position; None where the centres are unknown."""
+    track, spacing = scene.tracks[change.track], scene.lane_spacing
+    indexes = np.asarray(track.lane_index, dtype=float)
+    if spacing is None or len(indexes) != len(track.t):
+        return None
+    old, new = float(indexes[change.before]), float(indexes[change.after])
+    if not np.isfinite([old, new]).all() or old == new:
+        return None
+    toward = float(np.sign(spacing * (new - old)))
+    across = (scene.lateral[change.track][window] - spacing * old) * toward
+    if not np.isfinite(across).any():
+        return None
+    return np.where(np.isfinite(across), across, 0.0) - abs(spacing * (new - old)) / 2
 
 
 def _held_changes(t: Floats, lanes: Floats, hold_s: float) -> list[tuple[int, int]]:
@@ -250,13 +331,14 @@ def cuts(scene: Scene) -> Iterator[Event]:
     """A changer seen from the car it cuts in front of / behind (CINF / CINB) or leaves from
     in front of / behind (COUTF / COUTB)."""
     limit = scene.thresholds["cut"]["max_gap_m"]
+    least = scene.thresholds["cut"]["min_ego_speed_ms"]
     for change in lane_changes(scene):
-        traffic = scene.traffic
-        for code, neighbour in (("CINF", traffic.follower(change.track, change.after)),
-                                ("CINB", traffic.leader(change.track, change.after)),
-                                ("COUTF", traffic.follower(change.track, change.before)),
-                                ("COUTB", traffic.leader(change.track, change.before))):
-            if neighbour is None or neighbour.gap_m > limit:
+        for code, neighbour in (("CINF", scene.follower(change.track, change.after)),
+                                ("CINB", scene.lead(change.track, change.after)),
+                                ("COUTF", scene.follower(change.track, change.before)),
+                                ("COUTB", scene.lead(change.track, change.before))):
+            if neighbour is None or neighbour.gap_m > limit \
+                    or not moves(scene, neighbour.track, change.start_s, change.end_s, least):
                 continue
             event = _cut_event(scene, code, change, neighbour.track)
             if event is not None:
@@ -326,7 +408,7 @@ def own_lane_changes(scene: Scene) -> Iterator[Event]:
 def following(scene: Scene) -> Iterator[Event]:
     limits = scene.thresholds["follow"]
     for i, track in enumerate(scene.tracks):
-        for code, find in (("FLF", scene.traffic.leader), ("FLB", scene.traffic.follower)):
+        for code, find in (("FLF", scene.lead), ("FLB", scene.follower)):
             partner = [find(i, k) for k in range(len(track.t))]
             least = limits["min_speed_ms"]
             ids = np.array([-1 if p is None or p.gap_m > limits["max_gap_m"]
@@ -435,7 +517,7 @@ def _free(scene: Scene, i: int, k: int, limits: dict[str, float], seen_to: float
     if scene.motion[i].speed[k] < limits["min_speed_ms"] \
             or track.s[k] + limits["free_gap_m"] > seen_to:
         return False  # too slow, or the road it would see ahead is not recorded
-    lead = scene.traffic.leader(i, k)
+    lead = scene.lead(i, k)
     if lead is not None:
         return lead.gap_m > limits["free_gap_m"]
     return not _removed_ahead(scene, i, k, limits["free_gap_m"])

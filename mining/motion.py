@@ -20,16 +20,19 @@ class Motion:
     acceleration: Floats
 
 
-def smooth_motion(track: Track, window_s: float) -> Motion:
+def smooth_motion(track: Track, window_s: float, noise: Mask | None = None) -> Motion:
     """Savitzky-Golay (order 2) derivatives of ``s`` over a centred window of ``window_s``;
     tracks shorter than a window, and a window under 5 steps (exact speeds, a replay's),
-    keep their recorded speed, differentiated by steps."""
+    keep their recorded speed, differentiated by steps. Where ``noise`` marks tracking noise
+    (:class:`PositionsSpeed`), ``s`` is bridged across it first (linear in time between the
+    clean samples either side): a detector's speed is then neither made of noise nor cut by
+    it (issue 32: a brake out of a box's jump, or split in two by one)."""
     dt = _step(track.t)
     points = int(round(window_s / dt)) | 1 if dt > 0 else 1  # odd
     if len(track.t) < max(points, 5) or dt <= 0 or points < 5:
         speed = np.asarray(track.speed, dtype=float)
         return Motion(speed, np.gradient(speed, track.t) if len(speed) > 1 else speed * 0)
-    s = np.asarray(track.s, dtype=float)
+    s = bridged(track.t, np.asarray(track.s, dtype=float), noise)
     speed = savgol_filter(s, points, 2, deriv=1, delta=dt, mode="interp")
     accel = savgol_filter(s, points, 2, deriv=2, delta=dt, mode="interp")
     return Motion(np.clip(speed, 0.0, None), accel)
@@ -42,6 +45,9 @@ POSITIONS_AVERAGE_S = 0.5
 NOISE_ACCELERATION_MS2 = 10.0
 #: ... when the speed jumps back within this long (s): the tracker's box jumped, not the car
 NOISE_RETURN_S = 2.0
+#: the averaged speed (:data:`POSITIONS_AVERAGE_S`) of no car rises faster than this, or falls
+#: faster than the other, m/s^2 (a hard brake is ~9; a strong start ~4)
+NOISE_RISE_MS2, NOISE_FALL_MS2 = 6.0, 11.0
 #: how a mined series' speeds were measured (``series["smoothing"]``, recorded.json)
 SMOOTHING = {
     "speed_raw_ms": "speed from the recorded positions' change along the road (central "
@@ -49,7 +55,10 @@ SMOOTHING = {
     "speed_ms": "the same series, tracking-noise samples left out (null): what phases are "
                 "fitted to",
     "noise": f"1 where the positions' speed jumps faster than {NOISE_ACCELERATION_MS2:g} m/s^2 "
-             f"and back within {NOISE_RETURN_S:g} s (tracking noise, followed by no fit)",
+             f"and back within {NOISE_RETURN_S:g} s, or its {POSITIONS_AVERAGE_S:g} s average "
+             f"rises faster than {NOISE_RISE_MS2:g} or falls faster than {NOISE_FALL_MS2:g} "
+             f"m/s^2 (with the sag it snaps back from, up to {NOISE_RETURN_S:g} s): tracking "
+             "noise, followed by no fit, bridged in what detectors threshold",
     "detection": "detectors threshold a 1 s Savitzky-Golay speed (mining/thresholds.json)",
 }
 
@@ -97,7 +106,49 @@ def positions_speed(t: Floats, s: Floats, recorded: Floats) -> PositionsSpeed:
     return PositionsSpeed(sums / counts, _noise(t, s, half))
 
 
+def bridged(t: Floats, values: Floats, noise: Mask | None) -> Floats:
+    """``values`` with the samples ``noise`` marks replaced by the line between the clean
+    samples either side (held at the ends); unchanged without noise or without clean
+    samples."""
+    if noise is None or not noise.any() or noise.all():
+        return values
+    clean = ~noise
+    return np.where(noise, np.interp(t, t[clean], values[clean]), values)
+
+
 def _noise(t: Floats, s: Floats, half: int) -> Mask:
+    """Tracking noise in the speed the positions give: :func:`_returning_jumps` (a jump
+    and the jump back) and :func:`_impossible_changes` (a change no car makes)."""
+    noise = _returning_jumps(t, s, half)
+    if len(t) >= 3:
+        noise |= _impossible_changes(t, s, half)
+    return noise
+
+
+def _impossible_changes(t: Floats, s: Floats, half: int) -> Mask:
+    """Steps where the averaged speed rises faster than :data:`NOISE_RISE_MS2` or falls
+    faster than :data:`NOISE_FALL_MS2` over :data:`POSITIONS_AVERAGE_S` (no car does), with
+    the stretch such a change jumps back from: a speed that sagged (or swelled) for up to
+    :data:`NOISE_RETURN_S` and then snaps back to where it was is the tracker's drift and
+    snap, not a brake (18.0 -> 12.8 -> 23.7 m/s on US-101)."""
+    raw = np.clip(np.gradient(s, t), 0.0, None)
+    kernel = np.ones(2 * half + 1)
+    speed = np.convolve(np.pad(raw, half, mode="edge"), kernel, mode="valid") / len(kernel)
+    span = max(int(round(POSITIONS_AVERAGE_S / _step(t))), 1)
+    noise = np.zeros(len(t), bool)
+    for k in range(len(t) - span):
+        change = (speed[k + span] - speed[k]) / (t[k + span] - t[k])
+        if -NOISE_FALL_MS2 <= change <= NOISE_RISE_MS2:
+            continue
+        landed = speed[k + span]
+        earlier = np.flatnonzero((t >= t[k] - NOISE_RETURN_S) & (np.arange(len(t)) <= k))
+        level = speed[earlier] >= landed if change > 0 else speed[earlier] <= landed
+        first = int(earlier[level][-1]) if level.any() else k
+        noise[max(first - half, 0):min(k + span + half, len(t) - 1) + 1] = True
+    return noise
+
+
+def _returning_jumps(t: Floats, s: Floats, half: int) -> Mask:
     """Steps whose speed between positions jumps by more than a car can
     (:data:`NOISE_ACCELERATION_MS2`) and jumps back the other way within
     :data:`NOISE_RETURN_S`: everything from the jump to the return, widened by the moving

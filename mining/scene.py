@@ -4,10 +4,12 @@ queries (:class:`Scene`), and what it returns (:class:`Event`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
+from scenweave.mining.lanes import lane_map, on_path, path_from
 from scenweave.mining.motion import (
     SMOOTHING,
     Motion,
@@ -18,9 +20,16 @@ from scenweave.mining.motion import (
     smooth_motion,
 )
 from scenweave.mining.tracks import Floats, Recording, Steps, Track
-from scenweave.mining.traffic import Traffic
+from scenweave.mining.traffic import Neighbour, Traffic
+from scenweave.roads.recorded_road import LaneStrip
 
 KMH = 3.6
+#: a car is on another's path when its centre is within this of it (m) ...
+ON_PATH_M = 1.6
+#: ... heading its way within this (deg): a car crossing the path is no lead
+ON_PATH_HEADING_DEG = 45.0
+#: cars further apart than this (m, centres) are not looked at for a lead
+LEAD_SEARCH_M = 90.0
 
 
 @dataclass(frozen=True)
@@ -61,15 +70,82 @@ class Scene:
     def __post_init__(self) -> None:
         self.traffic = Traffic(self.recording)
         window = self.thresholds["smoothing"]["window_s"]
-        self.motion = [smooth_motion(track, window) for track in self.recording.tracks]
         self.positions = [positions_speed(track.t, track.s, track.speed)
                           for track in self.recording.tracks]
+        self.motion = [smooth_motion(track, window, measured.noise)
+                       for track, measured in zip(self.recording.tracks, self.positions,
+                                                  strict=True)]
         self.lateral = lateral_offsets(self.recording.tracks)
         self.lane_spacing = lane_spacing(self.recording.tracks, self.lateral)
 
     @property
     def tracks(self) -> list[Track]:
         return self.recording.tracks
+
+    @property
+    def town(self) -> bool:
+        """A town's recording (lights or junctions): lanes bend and end in junctions, so who
+        drives ahead of whom is read from the path each car drives (:meth:`lead`)."""
+        return bool(self.recording.lights or self.recording.junction_lanes)
+
+    @cached_property
+    def strips(self) -> dict[str, LaneStrip]:
+        """The recording's lanelets (borders, neighbours) by the names ``Track.lane`` gives;
+        empty where its file carries no lane map."""
+        return lane_map(self.recording)
+
+    def lead(self, i: int, k: int) -> Neighbour | None:
+        """The car directly ahead of track ``i`` at its step ``k`` and the bumper gap: in
+        town the nearest car on the path ``i`` drives next (junction lanes included), on a
+        highway the next car of its lane."""
+        if not self.town:
+            return self.traffic.leader(i, k)
+        return self._path_leads[i][k]
+
+    def follower(self, i: int, k: int) -> Neighbour | None:
+        """The car directly behind track ``i`` at its step ``k``: the one whose
+        :meth:`lead` it is, nearest (a highway's: the previous car of its lane)."""
+        if not self.town:
+            return self.traffic.follower(i, k)
+        return self._path_followers.get((i, k))
+
+    @cached_property
+    def _path_followers(self) -> dict[tuple[int, int], Neighbour]:
+        """(track, step) -> the nearest car whose :meth:`lead` it is then."""
+        found: dict[tuple[int, int], Neighbour] = {}
+        for j, leads in enumerate(self._path_leads):
+            for m, ahead in enumerate(leads):
+                if ahead is None:
+                    continue
+                key = (ahead.track, ahead.step)
+                if key not in found or ahead.gap_m < found[key].gap_m:
+                    found[key] = Neighbour(j, m, ahead.gap_m)
+        return found
+
+    @cached_property
+    def _path_leads(self) -> list[list[Neighbour | None]]:
+        frames = _Frames(self.tracks, self.recording.dt or 0.1)
+        return [[self._on_my_path(i, k, frames) for k in range(len(track.t))]
+                for i, track in enumerate(self.tracks)]
+
+    def _on_my_path(self, i: int, k: int, frames: _Frames) -> Neighbour | None:
+        """The nearest car ahead on the path track ``i`` drives from step ``k`` (its later
+        positions, then straight on), heading its way, and the bumper gap to it."""
+        me = self.tracks[i]
+        owner, step, xy, heading, length = frames.at(float(me.t[k]))
+        near = (owner != i) & (np.hypot(*(xy - [me.x[k], me.y[k]]).T) <= LEAD_SEARCH_M)
+        if not near.any():
+            return None
+        path = path_from(me.x[k:], me.y[k:], float(me.heading[-1]))
+        along, off, course = on_path(path, xy[near])
+        turn = np.abs(np.angle(np.exp(1j * (heading[near] - course))))
+        gap = along - (me.length_m + length[near]) / 2
+        good = (off <= ON_PATH_M) & (turn <= np.radians(ON_PATH_HEADING_DEG)) & (along > 0.5) \
+            & (gap > -1.0)
+        if not good.any():
+            return None
+        best = int(np.flatnonzero(good)[np.argmin(gap[good])])
+        return Neighbour(int(owner[near][best]), int(step[near][best]), max(float(gap[best]), 0.0))
 
     def step_at(self, i: int, t: float) -> int | None:
         """Track ``i``'s step at time ``t`` (None when it was not seen then)."""
@@ -154,6 +230,34 @@ class Scene:
         picked = np.round(values[np.clip(steps, 0, len(values) - 1)], 3)
         known = (steps >= 0) & (steps < len(values)) & np.isfinite(picked)
         return [v if ok else None for v, ok in zip(picked.tolist(), known.tolist(), strict=True)]
+
+
+class _Frames:
+    """Every track's position per frame of the recording, to find who is where at once."""
+
+    def __init__(self, tracks: list[Track], dt: float):
+        self.dt = dt
+        rows = [(np.round(tr.t / dt).astype(int), np.full(len(tr.t), i), np.arange(len(tr.t)))
+                for i, tr in enumerate(tracks)]
+        frame = np.concatenate([r[0] for r in rows]) if rows else np.empty(0, int)
+        order = np.argsort(frame, kind="stable")
+        self.frame = frame[order]
+        self.owner = np.concatenate([r[1] for r in rows])[order] if rows else frame
+        self.step = np.concatenate([r[2] for r in rows])[order] if rows else frame
+        def joined(name: str) -> Floats:
+            return np.concatenate([np.asarray(getattr(tr, name), float) for tr in tracks])[order]
+
+        self.xy = np.column_stack([joined("x"), joined("y")]) if rows else np.empty((0, 2))
+        self.heading = joined("heading") if rows else np.empty(0)
+        self.length = np.concatenate([np.full(len(tr.t), tr.length_m)
+                                      for tr in tracks])[order] if rows else np.empty(0)
+
+    def at(self, t: float) -> tuple[Steps, Steps, Floats, Floats, Floats]:
+        """Owner, step, position, heading and length of every track seen at time ``t``."""
+        f = int(round(t / self.dt))
+        lo, hi = np.searchsorted(self.frame, f), np.searchsorted(self.frame, f, side="right")
+        return (self.owner[lo:hi], self.step[lo:hi], self.xy[lo:hi], self.heading[lo:hi],
+                self.length[lo:hi])
 
 
 def make_event(scene: Scene, code: str, ego: int, npc: int | None, start: float, end: float,

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from scenweave.scenario_lib.lateral import (
     SETTLE_AFTER_CROSSING_S,
+    along_lane_m,
     recorded_lane_change,
     road_offset,
 )
@@ -18,10 +21,26 @@ def test_from_the_centre_the_first_part_takes_twice_the_time_to_the_line():
     timing = recorded_lane_change(BASE | {"lane_change_cross_s": 1.0}, "npc")
     assert timing is not None
     assert (timing.start_s, timing.first_s, timing.cross_s) == (2.0, 2.0, 3.0)
-    assert timing.first_m == pytest.approx(40.0)  # 2 s at 20 m/s
+    # 2 s at 20 m/s along the slanted path, 3.5 m of it across: the lane's leg
+    assert timing.first_m == pytest.approx(math.sqrt(40.0 ** 2 - 3.5 ** 2), abs=1e-3)
     assert timing.settle_start_s == pytest.approx(3.0 + SETTLE_AFTER_CROSSING_S)
     assert timing.settle_s == pytest.approx(4.0 - 1.0 - SETTLE_AFTER_CROSSING_S)
-    assert timing.settle_m == pytest.approx(20.0 * timing.settle_s)
+    # 0.2 s past the crossing, 1.4 m are left across (3.5 x (1 - 24 / 40))
+    assert timing.settle_m == pytest.approx(
+        math.sqrt((20.0 * timing.settle_s) ** 2 - 1.4 ** 2), abs=1e-3)
+
+
+def test_at_town_speeds_the_change_is_sized_along_the_lane_not_the_path():
+    """Issue 36: a player moves a changing car at its speed along its slanted path; at 2.1 m/s
+    a 3.5 m change crossing 1.91 s in drives 8.1 m of path but 7.3 m of lane (sized by the
+    path, it crossed 0.24 s late in esmini, Peachtree 2 LCF row 2)."""
+    slow = BASE | {"npc_speed_ms": 2.1, "npc_end_speed_ms": 2.1, "lane_change_cross_s": 1.91}
+    timing = recorded_lane_change(slow, "npc")
+    assert timing is not None
+    path = 2 * 2.1 * 1.91
+    assert timing.first_m == pytest.approx(along_lane_m(path, 3.5), abs=1e-3)
+    assert path - timing.first_m > 0.7
+    assert along_lane_m(3.0, 3.5) == 0.0  # steeper than the lane allows: the floor decides
 
 
 def test_a_car_recorded_mid_change_moves_the_rest_of_the_way_at_its_own_rate():

@@ -33,6 +33,18 @@ class MapCutter:
                              for signal in road.iterfind("signals/signal")}
         self._pieces: dict[_Key, bytes] = {}
         self._shells: dict[_Key, tuple[bytes, bytes]] = {}
+        #: road id -> its positions among the children; the positions of every other child:
+        #: a cut walks the roads it keeps and those, not every road of the map
+        self._road_positions: dict[str | None, list[int]] = {}
+        self._other_positions: list[int] = []
+        #: each road's link ends: (tag, kind of element, element id)
+        self._links: dict[int, list[tuple[str, str, str | None]]] = {}
+        for position, child in enumerate(self.children):
+            if child.tag == "road":
+                self._road_positions.setdefault(child.get("id"), []).append(position)
+                self._links[position] = _link_ends(child)
+            else:
+                self._other_positions.append(position)
 
     def cut(self, roads: frozenset[str]) -> bytes:
         """The map with only ``roads``, their junctions (connections between kept roads) and
@@ -41,11 +53,12 @@ class MapCutter:
         signals = {sid for sid, rid in self.signal_roads.items() if rid in roads}
         opening, closing = self._shell(("root",), self.root)
         parts = [b"<?xml version='1.0' encoding='utf-8'?>\n", opening]
-        for position, child in enumerate(self.children):
+        walked = [p for r in roads for p in self._road_positions.get(r, ())]
+        for position in sorted(walked + self._other_positions):
+            child = self.children[position]
             tag = child.tag if isinstance(child.tag, str) else ""
             if tag == "road":
-                if child.get("id") in roads:
-                    parts.append(self._road_bytes(position, child, roads, junctions))
+                parts.append(self._road_bytes(position, child, roads, junctions))
             elif tag == "junction":
                 if child.get("id") in junctions:
                     parts.append(self._filtered_bytes(position, child, "connection", lambda c: (
@@ -93,11 +106,8 @@ class MapCutter:
     def _road_bytes(self, position: int, road: etree._Element, roads: frozenset[str],
                     junctions: set[str | None]) -> bytes:
         """A kept road, without the links to dropped roads or junctions."""
-        link = road.find("link")
-        dropped = tuple(
-            end.tag for end in (link if link is not None else ())
-            if isinstance(end.tag, str) and end.get("elementId") not in (
-                junctions if end.get("elementType", "road") == "junction" else roads))
+        dropped = tuple(tag for tag, kind, ref in self._links[position]
+                        if ref not in (junctions if kind == "junction" else roads))
         if not dropped:
             return self._piece((position,), road)
         key = ("road", position, dropped)
@@ -110,3 +120,10 @@ class MapCutter:
                         trimmed_link.remove(end)
             self._pieces[key] = etree.tostring(trimmed, encoding="utf-8", with_tail=True)
         return self._pieces[key]
+
+
+def _link_ends(road: etree._Element) -> list[tuple[str, str, str | None]]:
+    """A road's ``link`` ends (predecessor, successor): tag, kind of element, element id."""
+    link = road.find("link")
+    return [(end.tag, end.get("elementType", "road"), end.get("elementId"))
+            for end in (link if link is not None else ()) if isinstance(end.tag, str)]

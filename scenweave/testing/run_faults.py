@@ -76,7 +76,8 @@ def announced_run_id(process: subprocess.Popen) -> str:
 
 
 def leftovers(run: Path) -> list[str]:
-    """Files of the run folder that are no scenario's, no run's: a staging folder left."""
+    """What a finished run must not hold any more: its staging folder (half-made scenarios
+    of a killed or stopped process, which the next start of the run removes)."""
     return [p.name for p in run.iterdir() if p.name == STAGING_DIR]
 
 

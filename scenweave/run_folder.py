@@ -93,8 +93,8 @@ class RunFolder:
 
     def announce(self) -> None:
         """One line on stderr as the run starts (also when it is not on a terminal, e.g. a
-        log): which run, where, and the step that resumes it after a kill, which says
-        nothing at all."""
+        log): which run, where, and the step that resumes it, at hand after a SIGKILL or an
+        OOM kill, which leave no last words."""
         begun = "started" if self.created else "resumed"
         print(f"run {self.run_id}: {begun} in {self.root}; if it stops, the same command with "
               f"--run-id {self.run_id} resumes it", file=sys.stderr, flush=True)

@@ -3,7 +3,7 @@
 Per fault, one line: scenarios delivered once / lost / doubled / half-written (a file its
 status.json names missing or unreadable), those not ok, the exit codes of the commands the
 user ran (the first, and the one step it named when it asked for one) and the seconds from
-the fault to the finished run (or, for esmini's crash, to the next scenario in). The faults
+the fault to the finished run (or, for esmini's crash, to the next ok scenario in). The faults
 (``scenweave.testing.faults`` and ``.run_faults``, which ``tests/faults/`` asserts on too):
 
 - redis-aof: Redis SIGKILLed once two scenarios are in, restarted 2 s later on the same

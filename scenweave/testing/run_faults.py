@@ -221,9 +221,11 @@ def _forks_quietly(pid: int) -> list[int]:
 
 
 def _first_commit_after(run: Path, at: float) -> float:
-    """Seconds from ``at`` (wall clock) to the first scenario committed after it."""
+    """Seconds from ``at`` (wall clock) to the first ok scenario committed after it: the
+    batch going on past the crashed one."""
     after = sorted(p.stat().st_mtime for p in run.glob(f"*/{STATUS_NAME}")
-                   if p.stat().st_mtime > at)
+                   if p.stat().st_mtime > at
+                   and json.loads(p.read_text(encoding="utf-8"))["status"] == "ok")
     return after[0] - at if after else 0.0
 
 

@@ -273,8 +273,11 @@ class _Standby:
         """Hand the child ``request``; its pickled reply, or why there is none (killed at
         the wall-clock limit)."""
         asked = time.perf_counter()
-        with os.fdopen(self.orders, "wb") as orders:
-            orders.write(pickle.dumps({**request, "asked": asked}, pickle.HIGHEST_PROTOCOL))
+        try:
+            with os.fdopen(self.orders, "wb") as orders:
+                orders.write(pickle.dumps({**request, "asked": asked}, pickle.HIGHEST_PROTOCOL))
+        except BrokenPipeError:  # it died waiting (killed from outside): its exit code says
+            pass
         chunks, timed_out = _read_until(self.results, self.pid,
                                         asked + request["wall_time_s"])
         if chunks and not timed_out:

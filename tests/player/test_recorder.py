@@ -91,10 +91,29 @@ def test_bulk_recording_is_the_per_step_recording_value_for_value(tmp_path):
 
 
 def _children(pid: int) -> list[int]:
+    """The live (not zombie) children of ``pid``."""
     found = []
     for task in Path(f"/proc/{pid}/task").iterdir():
-        found += [int(c) for c in (task / "children").read_text().split()]
+        for child in (task / "children").read_text().split():
+            try:
+                state = Path(f"/proc/{child}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            except (OSError, IndexError):
+                continue
+            if state != "Z":
+                found.append(int(child))
     return found
+
+
+def _standby_of(server: int) -> int:
+    """The server's child waiting for the next scenario: its one live child, the same on two
+    looks 0.3 s apart (the last scenario's child is reaped before it is forked)."""
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        first = _children(server)
+        time.sleep(0.3)
+        if len(first) == 1 and _children(server) == first:
+            return first[0]
+    raise AssertionError(f"no child waiting under the player server {server}")
 
 
 def test_the_child_forked_ahead_ends_with_a_killed_server(tmp_path):
@@ -103,16 +122,27 @@ def test_the_child_forked_ahead_ends_with_a_killed_server(tmp_path):
     assert replay_file(path, roads.DEFAULT_MAP_PATH, ReplaySettings()).engine_error is None
     server = engine._server.process
     assert server is not None
-    deadline = time.monotonic() + 10
-    while not (standby := _children(server.pid)) and time.monotonic() < deadline:
-        time.sleep(0.05)  # forked once the answer is written
-    assert len(standby) == 1
+    standby = _standby_of(server.pid)
     os.kill(server.pid, signal.SIGKILL)
     server.wait()
     deadline = time.monotonic() + 10
-    while Path(f"/proc/{standby[0]}").exists() and time.monotonic() < deadline:
+    while Path(f"/proc/{standby}").exists() and time.monotonic() < deadline:
         time.sleep(0.05)
-    alive = Path(f"/proc/{standby[0]}/status")
+    alive = Path(f"/proc/{standby}/status")
     assert not alive.exists() or "zombie" in alive.read_text()
     replay_file(path, roads.DEFAULT_MAP_PATH)  # may be the one that finds the server gone
+    assert replay_file(path, roads.DEFAULT_MAP_PATH).engine_error is None
+
+
+def test_a_child_killed_while_it_waits_costs_one_playback(tmp_path):
+    path = tmp_path / "one.xosc"
+    path.write_text(SCENARIO.format(map="Town04", stop=1.0, speed=10.0), encoding="utf-8")
+    assert replay_file(path, roads.DEFAULT_MAP_PATH).engine_error is None
+    server = engine._server.process
+    assert server is not None
+    os.kill(_standby_of(server.pid), signal.SIGKILL)
+    prepared = SCENARIO.format(map=roads.DEFAULT_MAP_PATH, stop=1.0, speed=10.0).encode()
+    lost = engine.play_xml(prepared, 1.0)  # not replay_file, which would play it again
+    assert "SIGKILL" in (lost.engine_error or ""), lost.engine_error
+    assert engine._server.process is server  # the server itself carried on
     assert replay_file(path, roads.DEFAULT_MAP_PATH).engine_error is None

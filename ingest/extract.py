@@ -7,6 +7,7 @@ from them (end speeds, timeout, the spawn footprint), so perturbed variants stay
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -15,9 +16,9 @@ from scenweave.ingest.issues import RecordIssue
 from scenweave.ingest.layouts import default_layouts
 from scenweave.ingest.phases import SPEED_TOL_MS, NoProfile, fit_end_values, fit_series
 from scenweave.maneuvers.free_ride import SLOTS
-from scenweave.maneuvers.maneuver import RecordFieldError
+from scenweave.maneuvers.maneuver import RecordFieldError, SameLane
 from scenweave.scenario_lib.phases import PHASED_ACTORS, is_single_ramp, profile_of
-from scenweave.scenario_lib.vehicles import reference_gap_m
+from scenweave.scenario_lib.vehicles import least_reference_gap_m, reference_gap_m
 from scenweave.schemas.params import Params, ParamsInvalid, checked
 
 HIGHWAY_MANEUVER_START_S = 2.0
@@ -82,8 +83,35 @@ def _extract_highway(record: dict) -> Params:
     if isinstance(series, dict) and isinstance(series.get("t"), list):
         base["recorded_series"] = {k: list(v) for k, v in series.items() if isinstance(v, list)}
         base.update(_recorded_lane_change(raw, base, maneuver.lane_change))
+        base["maneuver_start_s"] = lead_in_s(base, maneuver.same_lane)
     base.update(dict.fromkeys(SPAWN_KEYS))
     return finish(base)
+
+
+def lead_in_s(params: Mapping[str, Any], same_lane: SameLane | None) -> float:
+    """How long a mined record's cars drive at their start speeds before the manoeuvre:
+    ``HIGHWAY_MANEUVER_START_S``, or shorter where a car of the ego's lane would otherwise
+    start with the bumpers closer than ``MIN_BUMPER_GAP_M`` (issue 36: in town a car 7.8 m
+    behind at 2.8 m/s, the ego at 5.1 m/s, stood 4.6 m closer 2 s earlier, on the ego's
+    boot: a collision at 0.00 s). 0 when even the record's start is too close (which
+    ``check_playable`` then says)."""
+    longest = HIGHWAY_MANEUVER_START_S
+    present = same_lane is not None and (
+        same_lane.prefix == "npc" and params.get("has_npc")
+        or params.get(f"{same_lane.prefix}_present"))
+    if same_lane is None or not present:
+        return longest
+    prefix = same_lane.prefix
+    gap, speed = params.get(f"{prefix}_distance_m"), params.get(f"{prefix}_speed_ms")
+    if not all(isinstance(v, float | int) for v in (gap, speed)):
+        return longest
+    ahead = math.copysign(1.0, gap) > 0
+    room = least_reference_gap_m(params.get(f"{prefix}_vehicle_type"), ahead)
+    closing = (speed - params["ego_speed_ms"]) * (1.0 if ahead else -1.0)  # m/s, lead-in
+    spare = abs(gap) - room
+    if closing <= 0 or spare >= closing * longest:
+        return longest
+    return max(0.0, math.floor(10 * spare / closing) / 10)
 
 
 def _recorded_lane_change(raw: Mapping[str, Any], params: Mapping[str, Any],

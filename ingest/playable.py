@@ -21,11 +21,8 @@ from scenweave.ingest.phases import NoProfile
 from scenweave.maneuvers import SameLane
 from scenweave.scenario_lib.kinematics import MAX_PLAYABLE_DECELERATION_MS2, min_gap_m
 from scenweave.scenario_lib.phases import PhasedProfile, phases_of, profile_of
-from scenweave.scenario_lib.vehicles import reference_gap_m
+from scenweave.scenario_lib.vehicles import MIN_BUMPER_GAP_M, least_reference_gap_m
 
-#: the least free space between two cars' facing bumpers in one lane, ahead or behind (m):
-#: less and a played scenario's bounding boxes touch within the replay's tolerances
-MIN_BUMPER_GAP_M = 0.5
 #: arithmetic noise below what any field records (m)
 ROUNDING_M = 1e-6
 
@@ -81,7 +78,7 @@ def _urban_lead_apart(params: Mapping[str, Any]) -> None:
     if not params.get("lead_present"):
         return
     kind = params.get("lead_vehicle_type")
-    gap, room = params["lead_distance_m"], _clearance(kind, ahead=True)
+    gap, room = params["lead_distance_m"], least_reference_gap_m(kind, ahead=True)
     if gap < room - ROUNDING_M:
         raise RecordIssue(
             f"the {kind or 'car'} ahead stands {gap:.2f} m from the ego (reference points; its "
@@ -100,19 +97,13 @@ def _merges_behind(params: Mapping[str, Any]) -> None:
     """A cut-in behind ends with the car behind the ego, bumpers apart."""
     duration, gained = params["duration_s"], _gained_m(params)
     end_gap = params["npc_distance_m"] + gained
-    room = _clearance(params.get("npc_vehicle_type"), ahead=False)
+    room = least_reference_gap_m(params.get("npc_vehicle_type"), ahead=False)
     if end_gap > -room + ROUNDING_M:
         raise RecordIssue(
             f"the car merging behind starts {params['npc_distance_m']:.1f} m behind the ego and "
             f"gains {gained:.1f} m in {duration:g} s: it would end {end_gap:.1f} m from the "
             f"ego's reference point, not behind it (its bumper {MIN_BUMPER_GAP_M:g} m behind "
             f"the ego's is {room:.1f} m)", field="npc_distance_m")
-
-
-def _clearance(kind: str | None, ahead: bool) -> float:
-    """The reference-point distance at which the facing bumpers are ``MIN_BUMPER_GAP_M``
-    apart (the reference point is the rear axle, so it differs ahead and behind)."""
-    return abs(reference_gap_m(MIN_BUMPER_GAP_M if ahead else -MIN_BUMPER_GAP_M, kind))
 
 
 def _present(params: Mapping[str, Any], same_lane: SameLane) -> bool:
@@ -135,7 +126,7 @@ def _cars_in_one_lane_stay_apart(params: Mapping[str, Any], same_lane: SameLane)
     # min_gap_m reads any profile's breakpoints and distances; its annotation names only
     # SpeedProfile until corpus (being edited this round) types it with a Protocol
     closest = min_gap_m(lead, follower, at_zero, until, from_s=start)  # type: ignore[arg-type]
-    room = _clearance(kind, ahead)
+    room = least_reference_gap_m(kind, ahead)
     if closest < room - ROUNDING_M:
         when = "at the start" if until == start or closest >= abs(gap) - 1e-9 else \
             "as both drive their recorded speeds"

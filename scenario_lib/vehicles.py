@@ -48,6 +48,11 @@ VEHICLE_MODELS: dict[str, VehicleModel] = {
 }
 
 
+#: the least free space between two cars' facing bumpers in one lane, ahead or behind (m):
+#: less and a played scenario's bounding boxes touch within the replay's tolerances
+MIN_BUMPER_GAP_M = 0.5
+
+
 def reference_gap_m(bumper_gap_m: float, other_type: str | None) -> float:
     """The distance between the ego's and another vehicle's reference points when the free
     space between their facing bumpers is ``bumper_gap_m`` (positive: the other ahead, its rear
@@ -70,6 +75,13 @@ def bumper_gap_m(reference_m: float, other_type: str | None) -> float | None:
     if reference_m <= -(_rear_of(ego) + _front_of(other)):
         return reference_m + _rear_of(ego) + _front_of(other)
     return None
+
+
+def least_reference_gap_m(other_type: str | None, ahead: bool) -> float:
+    """The reference-point distance at which the facing bumpers of the ego and a vehicle of
+    ``other_type`` are ``MIN_BUMPER_GAP_M`` apart (the reference point is the rear axle, so
+    it differs ahead and behind)."""
+    return abs(reference_gap_m(MIN_BUMPER_GAP_M if ahead else -MIN_BUMPER_GAP_M, other_type))
 
 
 def _front_of(length_m: float) -> float:

@@ -103,7 +103,7 @@ def lead_in_s(params: Mapping[str, Any], same_lane: SameLane | None) -> float:
         return longest
     prefix = same_lane.prefix
     gap, speed = params.get(f"{prefix}_distance_m"), params.get(f"{prefix}_speed_ms")
-    if not all(isinstance(v, float | int) for v in (gap, speed)):
+    if not isinstance(gap, float | int) or not isinstance(speed, float | int):
         return longest
     ahead = math.copysign(1.0, gap) > 0
     room = least_reference_gap_m(params.get(f"{prefix}_vehicle_type"), ahead)

@@ -230,11 +230,15 @@ def _first_commit_after(run: Path, at: float) -> float:
 
 
 def worker_before_redis(bench: FaultBench, down_s: float = 3.0) -> Delivery:
-    """A worker started while its Redis is down waits (saying so once) instead of failing;
-    once Redis is up, ``submit --wait`` is served by it, each scenario once."""
+    """A worker started while its Redis is down waits (saying so once) instead of failing:
+    once it says it waits, Redis stays down ``down_s`` more; then ``submit --wait`` is
+    served by it, each scenario once."""
     server = RedisServer(bench.root / "redis-late")
     try:
         worker = bench.worker(server.url)
+        said = _lines_of(worker)
+        wait_for(lambda: any("does not answer" in line for line in said), 120,
+                 "the worker to say it waits for Redis")
         time.sleep(down_s)
         waited = worker.poll() is None
         server.start()
@@ -243,13 +247,26 @@ def worker_before_redis(bench: FaultBench, down_s: float = 3.0) -> Delivery:
         result = delivery("worker started before Redis", bench.root / "runs" / "late")
         result.exit_codes, result.recover_s = [code], time.monotonic() - up_at
         stop_processes([worker])
-        said = worker.stdout.read() if worker.stdout else ""
-        result.output = (f"worker still waiting after {down_s:g} s: {waited}\n"
-                         f"{said}{output}")
+        result.output = (f"worker still waiting {down_s:g} s after saying so: {waited}\n"
+                         f"{''.join(said)}{output}")
         return result
     finally:
         bench.stop()
         server.stop()
+
+
+def _lines_of(process: subprocess.Popen) -> list[str]:
+    """Every line ``process`` prints, collected as it prints them (by a thread that ends
+    with the process's output)."""
+    lines: list[str] = []
+    stream = process.stdout
+
+    def collect() -> None:
+        for line in stream or ():
+            lines.append(line)
+
+    threading.Thread(target=collect, daemon=True).start()
+    return lines
 
 
 def damaged_on_resume(bench: FaultBench) -> tuple[Delivery, list[str]]:

@@ -73,6 +73,6 @@ def test_a_worker_started_before_its_redis_waits_for_it(bench):
     late = worker_before_redis(bench, down_s=3.0)
     assert_each_once_and_whole(late)
     assert late.exit_codes == [0], late.output
-    assert "worker still waiting after 3 s: True" in late.output
+    assert "worker still waiting 3 s after saying so: True" in late.output
     assert late.output.count("does not answer") == 1, late.output  # said once
     assert "waiting up to 60 s" in late.output and "is back after" in late.output

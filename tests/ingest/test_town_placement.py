@@ -21,7 +21,7 @@ from scenweave import corpus, maneuvers
 from scenweave.ingest import admit
 from scenweave.ingest.extract import lead_in_s
 from scenweave.ingest.issues import RecordIssue
-from scenweave.ingest.playable import MIN_BUMPER_GAP_M
+from scenweave.ingest.playable import MIN_BUMPER_GAP_M, check_playable
 from scenweave.ingest.urban import canonicalize_scene
 from scenweave.scenario_lib.kinematics import start_gap_m
 from scenweave.scenario_lib.vehicles import bumper_gap_m, reference_gap_m
@@ -79,6 +79,21 @@ def test_a_follower_catching_up_gets_a_shorter_lead_in():
         < MIN_BUMPER_GAP_M
     assert lead_in_s(params | {"npc_speed_ms": 4.5}, follow) == 2.0
     assert lead_in_s(params, None) == 2.0  # no car of the ego's lane: nothing to keep
+
+
+def test_side_by_side_only_in_tracking_noise_is_no_overlap():
+    """A car behind whose recorded box jumps level with the ego while the record names its
+    position tracking noise (Lankershim 2-10, FL of cars 2704 and 2713) was never beside it:
+    the record is admitted. Level with it in clean samples, it is refused, naming the time."""
+    series = {"t": [0.0, 0.1, 0.2, 0.3], "npc_gap_m": [-4.0, -0.0, -0.0, -3.9],
+              "npc_lane": [1.0] * 4, "ego_lane": [1.0] * 4,
+              "npc_noise": [0.0, 1.0, 0.0, 0.0], "ego_noise": [0.0, 0.0, 1.0, 0.0]}
+    params = {"domain": "highway", "maneuver_class": "FLB", "has_npc": True,
+              "recorded_series": series}
+    check_playable(params)
+    series["ego_noise"] = [0.0] * 4
+    with pytest.raises(RecordIssue, match="side by side with the ego at 0.20 s"):
+        check_playable(params)
 
 
 @pytest.mark.slow

@@ -15,9 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenweave.mining.lanes import border_between, signed_distance
-from scenweave.mining.motion import best_second_deceleration, runs, trusted_steps
+from scenweave.mining.motion import (
+    NOISE_RETURN_S,
+    best_second_deceleration,
+    runs,
+    trusted_steps,
+)
 from scenweave.mining.scene import KMH, Event, Scene, make_event, vehicle
-from scenweave.mining.tracks import Floats, Steps, Track
+from scenweave.mining.tracks import Floats, Mask, Steps, Track
 from scenweave.mining.traffic import Neighbour
 
 # -- braking leads (BRAKE, BR_BK) ----------------------------------------------------------
@@ -27,12 +32,17 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
     limits = scene.thresholds["brake"]
     window = scene.thresholds["smoothing"]["window_s"]
     for i, track in enumerate(scene.tracks):
-        motion = scene.motion[i]
+        motion, measured = scene.motion[i], scene.positions[i]
         trusted = trusted_steps(track.t, window)
         for first, last in braking_phases(track.t, motion.speed, limits["onset_ms2"],
-                                          limits["merge_within_s"]):
-            drop = float(motion.speed[first] - motion.speed[last])
-            best = best_second_deceleration(track.t, motion.speed, first, last, trusted)
+                                          limits["merge_within_s"], measured.noise):
+            # the smoothing flattens a short brake the record's own speed shows: either counts
+            # here; the record's speed decides (_brake_event)
+            drop = max(float(motion.speed[first] - motion.speed[last]),
+                       scene.speed_at_step(i, first) - scene.speed_at_step(i, last))
+            best = max(best_second_deceleration(track.t, motion.speed, first, last, trusted),
+                       best_second_deceleration(track.t, measured.speed, first, last,
+                                                trusted & ~measured.noise))
             if best < limits["deceleration_ms2"] or drop < limits["min_speed_drop_ms"] \
                     or motion.speed[first] < limits["min_start_speed_ms"]:
                 continue
@@ -46,13 +56,19 @@ def braking_leads(scene: Scene) -> Iterator[Event]:
                 yield event
 
 
-def braking_phases(t: Floats, speed: Floats, onset_ms2: float,
-                   merge_within_s: float) -> list[tuple[int, int]]:
+def braking_phases(t: Floats, speed: Floats, onset_ms2: float, merge_within_s: float,
+                   noise: Mask | None = None) -> list[tuple[int, int]]:
     """``(first, last)`` of each stretch in which the speed keeps falling (faster than
-    ``onset_ms2``); stretches apart by at most ``merge_within_s`` are one braking phase."""
+    ``onset_ms2``); stretches apart by at most ``merge_within_s`` are one braking phase, and
+    so are two that only tracking noise (``noise``, bridged in ``speed``) lies between: the
+    noise neither makes a phase nor cuts one."""
     if len(t) < 2:
         return []
     falling = np.gradient(speed, t) < -onset_ms2
+    if noise is not None and noise.any() and not noise.all():
+        clean = np.flatnonzero(~noise)
+        both_sides = np.interp(np.arange(len(t)), clean, falling[clean].astype(float))
+        falling = np.where(noise, both_sides >= 1.0, falling)
     phases: list[tuple[int, int]] = []
     for first, last in runs(falling):
         if phases and t[first] - t[phases[-1][1]] <= merge_within_s + 1e-6:
@@ -72,6 +88,18 @@ def moves(scene: Scene, i: int, start: float, end: float, least_ms: float) -> bo
     return bool(len(speeds)) and float(np.max(speeds)) >= least_ms
 
 
+def _swell_before(scene: Scene, i: int, first: int) -> float:
+    """How much track ``i``'s speed rose in the :data:`NOISE_RETURN_S` before step
+    ``first`` (m/s, never negative; the record's speed, noise left out): a fall that gives
+    back a rise of at least half ``min_speed_drop_ms`` and ends less than that below where
+    the rise began is a speed that jumped up and back (issue 32), not a brake."""
+    track, speed = scene.tracks[i], scene.positions[i].fitted
+    before = (track.t >= track.t[first] - NOISE_RETURN_S - 1e-6) & (track.t <= track.t[first])
+    lowest = np.nanmin(speed[before]) if np.isfinite(speed[before]).any() else np.nan
+    rise = scene.speed_at_step(i, first) - float(lowest)
+    return max(rise, 0.0) if np.isfinite(rise) else 0.0
+
+
 def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last: int,
                  limits: dict[str, float]) -> Event | None:
     """The braking phase as recorded: from the speed where it starts falling to where it
@@ -84,6 +112,9 @@ def _brake_event(scene: Scene, lead: int, follower: Neighbour, first: int, last:
     best_ms2 = best_second_deceleration(track.t, measured.speed, first, last, ~measured.noise)
     if best_ms2 < limits["deceleration_ms2"] or v0 - v1 < limits["min_speed_drop_ms"]:
         return None  # the smoothing's brake, which the record's own speed does not show
+    rise, half = _swell_before(scene, lead, first), limits["min_speed_drop_ms"] / 2
+    if rise >= half and v0 - rise - v1 < half:
+        return None  # a speed that went up and came back down within seconds: no brake
     start, end = float(track.t[first]), float(track.t[last])
     ego_speed, gap = scene.speed(follower.track, start), scene.gap(follower.track, lead, start)
     if ego_speed is None or gap is None:
@@ -135,25 +166,51 @@ def lane_changes(scene: Scene) -> Iterator[LaneChange]:
     limits = scene.thresholds["lane_change"]
     for i, track in enumerate(scene.tracks):
         lanes = np.array([scene.traffic.lane_of(track, k) for k in range(len(track.t))])
-        for before, after in _held_changes(track.t, lanes, limits["min_steady_s"]):
-            change = _timed(scene, i, before, after, float(lanes[before]), float(lanes[after]),
-                            limits)
+        found: list[LaneChange] = []
+        candidates = [(b, a, float(lanes[b]), float(lanes[a]))
+                      for b, a in _held_changes(track.t, lanes, limits["min_steady_s"])]
+        candidates += _neighbour_flips(scene, i, lanes) if scene.town else []
+        for before, after, old, new in candidates:
+            if any(abs(track.t[after] - track.t[c.after]) < limits["min_steady_s"]
+                   for c in found):
+                continue  # the same crossing, seen by its lanes and by its lanelets
+            change = _timed(scene, i, before, after, old, new, limits)
             if change is not None and crosses_line(scene, change, limits):
-                yield change
+                found.append(change)
+        yield from sorted(found, key=lambda c: c.start_s)
+
+
+def _neighbour_flips(scene: Scene, i: int, lanes: Floats) -> list[tuple[int, int, float, float]]:
+    """In town: each step where track ``i``'s lanelet changes into a same-direction
+    neighbour's (the reader's lane index, held against lanelet seams and junction
+    renumbering, may miss a real change), as ``(before, after, old lane, new lane)`` with
+    the new lane's key one to the side the line says (indexes grow to the right)."""
+    track = scene.tracks[i]
+    names = np.asarray(track.lane).astype(str)
+    flips = []
+    for k in (np.flatnonzero(names[1:] != names[:-1]) + 1).tolist():
+        line = border_between(scene.strips, names[k - 1], names[k])
+        if line is not None:
+            old = float(lanes[k - 1])
+            flips.append((k - 1, k, old, old + line[1]))  # side +1: the new lane is right
+    return flips
 
 
 def crosses_line(scene: Scene, change: LaneChange, limits: dict[str, float]) -> bool:
     """A lane change is a crossing of the line (issue 32): the changer's centre is at least
     ``cross_margin_m`` on the old lane's side of the line between the two lanes before the
-    change and on the new lane's side after it (within ``max_duration_s``), ending there, and
-    it turns less than ``max_turn_deg`` over the change. The line is the border of the lane
+    change and on the new lane's side after it (within half ``max_duration_s`` of the
+    crossing), ending there, by its own sideways motion, and it turns less than
+    ``max_turn_deg`` over the change and over that window. The line is the border of the lane
     map's lanelets where the file gives one (two lanelets that are no neighbours, or one
     inside a junction, are a renumbering, no change); else midway between the lanes'
     centres from the lateral positions; with neither, the lanes' change is all there is."""
     track = scene.tracks[change.track]
-    window = np.flatnonzero(np.abs(track.t - track.t[change.after]) <= limits["max_duration_s"])
+    window = np.flatnonzero(np.abs(track.t - track.t[change.after])
+                            <= limits["max_duration_s"] / 2)
     inside = (track.t >= change.start_s - 1e-6) & (track.t <= change.end_s + 1e-6)
-    if turned_deg(track.heading[inside]) > limits["max_turn_deg"]:
+    if max(turned_deg(track.heading[inside]), turned_deg(track.heading[window])) \
+            > limits["max_turn_deg"]:
         return False
     if scene.strips:
         across = _past_border(scene, change, window)
@@ -164,8 +221,20 @@ def crosses_line(scene: Scene, change: LaneChange, limits: dict[str, float]) -> 
     old_side = across[window <= change.before]
     new_side = across[window >= change.after]
     margin = limits["cross_margin_m"]
-    return bool(len(old_side) and len(new_side)) and float(np.min(old_side)) <= -margin \
-        and float(np.max(new_side)) >= margin and float(new_side[-1]) > 0
+    if not (len(old_side) and len(new_side)) or float(np.min(old_side)) > -margin \
+            or float(np.max(new_side)) < margin or float(new_side[-1]) <= 0:
+        return False
+    return _moved_itself(scene.lateral[change.track][window],
+                         float(np.max(new_side) - np.min(old_side)), margin)
+
+
+def _moved_itself(lateral: Floats, past_line_m: float, margin: float) -> bool:
+    """The car went past the line by its own sideways motion, not by a line that moved
+    under it (lanelets that widen or split): it moved across the road at least as far as
+    it went from one side of the line to the other, within ``2 x margin`` (True where its
+    lateral positions are unknown)."""
+    known = lateral[np.isfinite(lateral)]
+    return len(known) < 2 or past_line_m <= float(np.ptp(known)) + 2 * margin
 
 
 def turned_deg(heading: Floats, ends: int = 3) -> float:
@@ -333,16 +402,28 @@ def cuts(scene: Scene) -> Iterator[Event]:
     limit = scene.thresholds["cut"]["max_gap_m"]
     least = scene.thresholds["cut"]["min_ego_speed_ms"]
     for change in lane_changes(scene):
-        for code, neighbour in (("CINF", scene.follower(change.track, change.after)),
-                                ("CINB", scene.lead(change.track, change.after)),
-                                ("COUTF", scene.follower(change.track, change.before)),
-                                ("COUTB", scene.lead(change.track, change.before))):
+        old, new = _lane_steps(scene, change)
+        for code, neighbour in (("CINF", scene.follower(change.track, new)),
+                                ("CINB", scene.lead(change.track, new)),
+                                ("COUTF", scene.follower(change.track, old)),
+                                ("COUTB", scene.lead(change.track, old))):
             if neighbour is None or neighbour.gap_m > limit \
                     or not moves(scene, neighbour.track, change.start_s, change.end_s, least):
                 continue
             event = _cut_event(scene, code, change, neighbour.track)
             if event is not None:
                 yield event
+
+
+def _lane_steps(scene: Scene, change: LaneChange) -> tuple[int, int]:
+    """The changer's steps at which its old and its new lane's cars are looked at: on a
+    highway its last step in the old lane and first in the new; in town, where that is
+    read from paths and the changer is on the line then, the event's start and end."""
+    if not scene.town:
+        return change.before, change.after
+    first, last = scene.step_at(change.track, change.start_s), \
+        scene.step_at(change.track, change.end_s)
+    return (change.before if first is None else first), (change.after if last is None else last)
 
 
 def _cut_event(scene: Scene, code: str, change: LaneChange, ego: int) -> Event | None:
@@ -406,15 +487,18 @@ def own_lane_changes(scene: Scene) -> Iterator[Event]:
 # -- car following (FLF, FLB) -----------------------------------------------------------------
 
 def following(scene: Scene) -> Iterator[Event]:
+    """FLF/FLB episodes: the same lead (follower) directly ahead of (behind) the ego, both
+    moving, by the speed the record gives (its positions', :meth:`Scene.speed_at_step`), so
+    an episode is never dropped for an end its record would start below the limit."""
     limits = scene.thresholds["follow"]
+    least = limits["min_speed_ms"]
     for i, track in enumerate(scene.tracks):
         for code, find in (("FLF", scene.lead), ("FLB", scene.follower)):
             partner = [find(i, k) for k in range(len(track.t))]
-            least = limits["min_speed_ms"]
             ids = np.array([-1 if p is None or p.gap_m > limits["max_gap_m"]
-                            or scene.motion[p.track].speed[p.step] < least else p.track
+                            or scene.speed_at_step(p.track, p.step) < least else p.track
                             for p in partner])
-            ids[scene.motion[i].speed < least] = -1
+            ids[scene.positions[i].filled < least] = -1
             yield from _episodes(scene, code, i, ids, limits)
 
 
@@ -508,14 +592,18 @@ def free_rides(scene: Scene) -> Iterator[Event]:
         for _, start, end in (c for c in changing if c[0] == i):  # its own lane change
             free &= (track.t < start - 1e-6) | (track.t > end + 1e-6)
         for first, last in runs(free):
-            for a, b in runs_of_values(lanes[first:last + 1]):
+            # in town a lane's key changes at lanelet seams and junctions without the car
+            # changing lane: its own lane changes (crossings of the line) are left out above
+            pieces = [(0, last - first)] if scene.town else runs_of_values(lanes[first:last + 1])
+            for a, b in pieces:
                 yield from _free_pieces(scene, i, first + a, first + b, limits)
 
 
 def _free(scene: Scene, i: int, k: int, limits: dict[str, float], seen_to: float) -> bool:
     track = scene.tracks[i]
-    if scene.motion[i].speed[k] < limits["min_speed_ms"] \
-            or track.s[k] + limits["free_gap_m"] > seen_to:
+    sees = scene.sees_ahead(i, k, limits["free_gap_m"]) if scene.town \
+        else track.s[k] + limits["free_gap_m"] <= seen_to
+    if scene.motion[i].speed[k] < limits["min_speed_ms"] or not sees:
         return False  # too slow, or the road it would see ahead is not recorded
     lead = scene.lead(i, k)
     if lead is not None:
@@ -561,6 +649,8 @@ def free_ride_event(scene: Scene, code: str, ego: int, start: float, end: float,
     lane = scene.traffic.lane_of(track, k0)
     slots = {name: _nearest(scene, ego, start, lane + shift, ahead, limits["slot_range_m"])
              for name, shift in SLOT_LANES}
+    if scene.town:  # lanes bend and are renumbered: the slots from the positions
+        slots = _town_slots(scene, ego, k0, ahead, limits["slot_range_m"])
     if all(j is None for j in slots.values()):
         return None
     v0, v1 = scene.speed_at_step(ego, k0), scene.speed_at_step(ego, k1)
@@ -580,6 +670,39 @@ def free_ride_event(scene: Scene, code: str, ego: int, start: float, end: float,
                  else scene.tracks[slots["center"]].id, round(start, 3), round(end, 3),
                  {k: round(v, 2) if isinstance(v, float) else v for k, v in fields.items()},
                  scene.series(roles, ego, start, end))
+
+
+#: in town, a car beside the ego is this far across from its centre line (m) ...
+BESIDE_M = (1.75, 5.5)
+#: ... heading its way within this (rad)
+BESIDE_HEADING_RAD = 0.8
+
+
+def _town_slots(scene: Scene, ego: int, k: int, ahead: bool,
+                within_m: float) -> dict[str, int | None]:
+    """A town free ride's surrounding cars at the ego's step ``k``: the centre is the car
+    on its path ahead (FRF) or the one behind whose path it is on (FRB); left and right the
+    nearest car ahead (behind) a lane's width to that side, heading its way, within
+    ``within_m`` (bumper gap)."""
+    centre = scene.lead(ego, k) if ahead else scene.follower(ego, k)
+    slots: dict[str, int | None] = {
+        "center": centre.track if centre is not None and centre.gap_m <= within_m else None}
+    me, t = scene.tracks[ego], float(scene.tracks[ego].t[k])
+    h = np.array([np.cos(me.heading[k]), np.sin(me.heading[k])])
+    best: dict[str, tuple[float, int]] = {}
+    for j, other in enumerate(scene.tracks):
+        m = scene.step_at(j, t) if j != ego else None
+        if m is None or abs(np.angle(np.exp(1j * (other.heading[m] - me.heading[k])))) \
+                > BESIDE_HEADING_RAD:
+            continue
+        rel = np.array([other.x[m] - me.x[k], other.y[m] - me.y[k]])
+        along, across = float(rel @ h), float(h[0] * rel[1] - h[1] * rel[0])
+        gap = abs(along) - (me.length_m + other.length_m) / 2
+        side = "left" if across > 0 else "right"
+        if BESIDE_M[0] < abs(across) <= BESIDE_M[1] and (along > 0) == ahead \
+                and gap <= within_m and (side not in best or gap < best[side][0]):
+            best[side] = (gap, j)
+    return slots | {side: best[side][1] if side in best else None for side in ("left", "right")}
 
 
 def _nearest(scene: Scene, ego: int, t: float, lane: float, ahead: bool,

@@ -140,12 +140,20 @@ def _impossible_changes(t: Floats, s: Floats, half: int) -> Mask:
         change = (speed[k + span] - speed[k]) / (t[k + span] - t[k])
         if -NOISE_FALL_MS2 <= change <= NOISE_RISE_MS2:
             continue
-        landed = speed[k + span]
-        earlier = np.flatnonzero((t >= t[k] - NOISE_RETURN_S) & (np.arange(len(t)) <= k))
-        level = speed[earlier] >= landed if change > 0 else speed[earlier] <= landed
-        first = int(earlier[level][-1]) if level.any() else k
+        first = _sag_start(t, speed, k, rising=change > 0)
         noise[max(first - half, 0):min(k + span + half, len(t) - 1) + 1] = True
     return noise
+
+
+def _sag_start(t: Floats, speed: Floats, k: int, rising: bool) -> int:
+    """Where the sag (``rising``: the speed fell toward step ``k``) or swell that a snap at
+    ``k`` jumps back from began: back from ``k`` while the speed kept falling (rising)
+    toward it, at most :data:`NOISE_RETURN_S`."""
+    first = k
+    while first > 0 and t[k] - t[first - 1] <= NOISE_RETURN_S + 1e-6 \
+            and (speed[first - 1] > speed[first] if rising else speed[first - 1] < speed[first]):
+        first -= 1
+    return first
 
 
 def _returning_jumps(t: Floats, s: Floats, half: int) -> Mask:

@@ -8,6 +8,7 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from scenweave.mining.lanes import lane_map, on_path, path_from
 from scenweave.mining.motion import (
@@ -30,6 +31,8 @@ ON_PATH_M = 1.6
 ON_PATH_HEADING_DEG = 45.0
 #: cars further apart than this (m, centres) are not looked at for a lead
 LEAD_SEARCH_M = 90.0
+#: a point of the road is recorded when some car was recorded this close to it (m)
+SEEN_WITHIN_M = 3.0
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,24 @@ class Scene:
         if not self.town:
             return self.traffic.leader(i, k)
         return self._path_leads[i][k]
+
+    def sees_ahead(self, i: int, k: int, distance_m: float) -> bool:
+        """Whether the recording covers the road ``distance_m`` ahead of track ``i``'s front
+        at its step ``k`` along the path it drives: some car was recorded within
+        :data:`SEEN_WITHIN_M` of that point (a car beyond the recorded area could be
+        close)."""
+        me = self.tracks[i]
+        path = path_from(me.x[k:], me.y[k:], float(me.heading[-1]))
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
+        want = distance_m + me.length_m / 2
+        point = [np.interp(want, along, path[:, 0]), np.interp(want, along, path[:, 1])]
+        return bool(self._recorded_area.query_ball_point(point, SEEN_WITHIN_M,
+                                                          return_length=True))
+
+    @cached_property
+    def _recorded_area(self) -> cKDTree:
+        xy = [np.column_stack([tr.x, tr.y]) for tr in self.tracks]
+        return cKDTree(np.concatenate(xy) if xy else np.zeros((0, 2)))
 
     def follower(self, i: int, k: int) -> Neighbour | None:
         """The car directly behind track ``i`` at its step ``k``: the one whose

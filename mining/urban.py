@@ -12,7 +12,8 @@ jumps where lanelets of other directions meet).
   between ``stop_past_line_m`` past and ``stop_before_line_m`` before the line while its
   light is red or yellow; first in line, else refused (``Event.refused``) naming its place |
 | U1_1 | at least ``in_lane_min_s`` on lanes outside junctions and light approaches, moving,
-  turning less than ``in_lane_max_turn_deg``, no lane change |
+  turning less than ``in_lane_max_turn_deg``, no lane change (of its lane index, nor a
+  crossing of the line: ``mining.highway.lane_changes``) |
 
 Thresholds: ``mining/thresholds.json`` section ``urban``. Each event becomes an ADScene object
 (``mining.lights.adscene_of`` documents the fields) that ingest's canonicaliser turns into
@@ -22,11 +23,12 @@ the record.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.signal import savgol_filter
 
+from scenweave.mining.highway import lane_changes
 from scenweave.mining.lights import CODE_OF_STATE, adscene_header, frame_of, state_at
 from scenweave.mining.motion import PositionsSpeed, positions_speed, runs
 from scenweave.mining.scene import Event, Scene
@@ -84,7 +86,8 @@ def urban_events(scene: Scene) -> Iterator[Event]:
     lines = stop_lines(scene)
     paths = [path_length(scene, i) for i in range(len(scene.tracks))]
     speeds = [path_speed(scene, i, paths[i]) for i in range(len(scene.tracks))]
-    urban = UrbanScene(scene, lines, paths, speeds)
+    changing = [(c.track, c.start_s, c.end_s) for c in lane_changes(scene)]
+    urban = UrbanScene(scene, lines, paths, speeds, changing)
     mapped = bool(lines or scene.recording.junction_lanes)  # where junctions are is known
     for i in range(len(scene.tracks)):
         yield from urban.light_events(i)
@@ -116,6 +119,9 @@ class UrbanScene:
     lines: list[StopLine]
     paths: list[Floats]
     speeds: list[Floats]
+    #: (track, start, end) of each lane change (``mining.highway.lane_changes``): no in-lane
+    #: stretch runs across one
+    changing: list[tuple[int, float, float]] = field(default_factory=list)
 
     @property
     def limits(self) -> dict[str, float]:
@@ -260,6 +266,8 @@ class UrbanScene:
         lanes = track.lane.astype(str)
         free = ~np.isin(lanes, [*self.scene.recording.junction_lanes, *lit, ""]) \
             & (speed >= limits["in_lane_min_speed_ms"])
+        for _, start, end in (c for c in self.changing if c[0] == i):
+            free &= (track.t < start - 1e-6) | (track.t > end + 1e-6)
         for first, last in runs(free):
             if track.t[last] - track.t[first] < limits["in_lane_min_s"] - 1e-6:
                 continue

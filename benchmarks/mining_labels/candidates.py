@@ -18,10 +18,14 @@ The labels of ``benchmarks/mining_labels/`` were decided from this list, candida
 candidate, by these rules (the evidence and the reason in each label's ``notes``):
 
 - lane change: the centre goes at least ``CROSS_MARGIN_M`` past the line on both sides
-  within 3 s of the label change, the heading turns less than 20 deg, no junction lanelet;
+  within 3 s of the label change, it moves 1.5 m or more across its lane over those 6 s
+  (and keeps it: a weave there and back is none), the heading turns less than 20 deg, no
+  junction lanelet;
 - free ride: moving faster than 2 m/s, no car in the path ahead within 50 m (junction lanes
-  included), the path 50 m ahead still inside the recorded area, at least 4 s in one lane;
-  FRF/FRB need a car ahead/behind within 80 m in its lane or the ones beside it;
+  included), the point 50 m ahead on its path recorded (a car was within 3 m of it), at
+  least 4 s, no lane change of its own; FRF/FRB need a car ahead/behind within 80 m in its
+  lane or the ones beside it; the NPC is the nearest car on its path ahead (FRF) or the one
+  behind whose path it is on (FRB), within 80 m;
 - following: the same car in the path ahead within 50 m, both faster than 2 m/s, 4 s;
 - braking: a lead in the path within 50 m loses 2 m/s (from 3 m/s or more) and 2 m/s in its
   hardest second, its speed from its positions with tracking noise left out; the follower
@@ -62,6 +66,8 @@ class Car:
     noise: np.ndarray
     lane: np.ndarray
     length: float
+    #: motion across the lane since the first step (m, + left; the reader's)
+    lateral: np.ndarray
 
     def at(self, time: float) -> int | None:
         k = int(np.argmin(np.abs(self.t - time)))
@@ -91,7 +97,9 @@ def cars_of(recording) -> list[Car]:
         xy = np.column_stack([tr.x, tr.y])
         speed, noise = positions_speed(tr.t, xy)
         found.append(Car(tr.id, tr.t, xy, np.asarray(tr.heading, float), speed, noise,
-                         np.asarray(tr.lane).astype(str), tr.length_m))
+                         np.asarray(tr.lane).astype(str), tr.length_m,
+                         np.asarray(tr.lateral if len(tr.lateral) == len(tr.t)
+                                    else np.full(len(tr.t), np.nan), float)))
     return found
 
 
@@ -143,7 +151,7 @@ def lead_of(cars: list[Car], i: int, k: int) -> tuple[int, float] | None:
         m = other.at(float(me.t[k])) if j != i else None
         if m is None:
             continue
-        if np.hypot(*(other.xy[m] - me.xy[k])) > FREE_GAP_M + 30:
+        if np.hypot(*(other.xy[m] - me.xy[k])) > 90:
             continue
         ahead, off, course = along_path(path, other.xy[m])
         turn = abs(np.angle(np.exp(1j * (other.heading[m] - course))))
@@ -173,10 +181,13 @@ def lane_changes(cars: list[Car], strips: dict, junctions: set[str]) -> list[dic
             after = float(-d[near & (np.arange(len(d)) >= k)].min(initial=9))
             window = np.flatnonzero(near)
             turn = float(np.degrees(np.ptp(np.unwrap(car.heading[window]))))
+            sideways = car.lateral[window]
+            held = float(sideways[-1] - sideways[0]) if len(window) else 0.0
             found.append({"car": car.id, "k": int(k), "t": float(car.t[k]), "old": old,
                           "new": new, "old_side_m": round(before, 2),
                           "new_side_m": round(after, 2), "turn_deg": round(turn, 1),
                           "junction": old in junctions or new in junctions,
+                          "sideways_m": round(held, 2),
                           "direction": "Left" if side < 0 else "Right",
                           "speed": round(float(car.speed[k]), 1)})
     return found
@@ -226,8 +237,7 @@ def seen_ahead(cars: list[Car], car: Car, k: int) -> bool:
     lengths = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))])
     want = FREE_GAP_M + car.length / 2
     point = np.array([np.interp(want, lengths, path[:, 0]), np.interp(want, lengths, path[:, 1])])
-    return any(np.min(np.hypot(*(other.xy - point).T)) < 3.0 for other in cars
-               if other is not car)
+    return any(np.min(np.hypot(*(other.xy - point).T)) < 3.0 for other in cars)
 
 
 def free_rides(cars: list[Car], leads: dict, changes: list[dict]) -> list[dict]:
@@ -235,16 +245,23 @@ def free_rides(cars: list[Car], leads: dict, changes: list[dict]) -> list[dict]:
     for i, car in enumerate(cars):
         own = [c["t"] for c in changes if c["car"] == car.id and _real(c)]
         free = np.array([car.speed[k] >= MOVING_MS and (leads[i][k] is None
-                         or leads[i][k][1] > FREE_GAP_M) for k in range(len(car.t))])
+                         or leads[i][k][1] > FREE_GAP_M) and seen_ahead(cars, car, k)
+                         for k in range(len(car.t))])
         for t in own:
             free &= np.abs(car.t - t) > 2.0
         for a, b in runs(free):
             if car.t[b] - car.t[a] < 4.0 - 1e-6:
                 continue
-            seen = [seen_ahead(cars, car, k) for k in (a, b)]
             slots = _slots(cars, i, a)
+            ahead = leads[i][a]
+            behind = [(p[1], cars[j].id) for j, other in enumerate(cars)
+                      if (m := other.at(float(car.t[a]))) is not None
+                      and (p := leads[j][m]) is not None and p[0] == i and p[1] <= 80]
             found.append({"ego": car.id, "start_s": float(car.t[a]), "end_s": float(car.t[b]),
-                          "seen_ahead": seen, "ahead": slots[0], "behind": slots[1],
+                          "centre_ahead": cars[ahead[0]].id if ahead and ahead[1] <= 80
+                          else None,
+                          "centre_behind": min(behind)[1] if behind else None,
+                          "ahead": slots[0], "behind": slots[1],
                           "lane": car.lane[a], "speed": round(float(car.speed[a]), 1)})
     return found
 
@@ -268,7 +285,8 @@ def _slots(cars: list[Car], i: int, k: int) -> tuple[list[str], list[str]]:
 
 def _real(change: dict) -> bool:
     return change["old_side_m"] >= CROSS_MARGIN_M and change["new_side_m"] >= CROSS_MARGIN_M \
-        and change["turn_deg"] < 20 and not change["junction"] and change["speed"] >= 1.0
+        and change["turn_deg"] < 20 and not change["junction"] and change["speed"] >= 1.0 \
+        and not abs(change["sideways_m"]) < 1.5  # moved across, held (NaN: not known)
 
 
 def brakes(cars: list[Car], leads: dict) -> list[dict]:

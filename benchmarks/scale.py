@@ -306,7 +306,9 @@ def bare_esmini(xosc: Path, map_path: Path, settings: Any) -> float:
         return time.perf_counter() - started
 
 
-SPLIT = ("translate", "plan", "map", "start", "load", "step", "close", "pack", "transfer")
+#: a replay's split (``collect``: ``close`` + ``pack`` + ``transfer``, one figure in older code)
+SPLIT = ("translate", "plan", "map", "start", "load", "step", "collect", "close", "pack",
+         "transfer")
 
 
 def print_paired(rows: list[dict[str, Any]]) -> None:

@@ -22,6 +22,8 @@ from scenweave.roads.recorded_road import LaneStrip
 BORDER_RUN_ON_M = 30.0
 #: a path runs on this far straight along the car's last heading past its last position (m)
 PATH_RUN_ON_M = 80.0
+#: a lane's successors turning further than this make it a turning lane (deg)
+TURN_LANE_DEG = 30.0
 #: what a lane map is not read for (the lane labels are then all a detector knows)
 MAP_ERRORS = (OSError, ValueError, KeyError, IndexError, TypeError, AttributeError,
               AssertionError)
@@ -105,3 +107,28 @@ def on_path(path: Floats, points: Floats) -> tuple[Floats, Floats, Floats]:
     rows = np.arange(len(points))
     return (before[j] + u[rows, j] * lengths[j], off[rows, j],
             np.arctan2(segments[j, 1], segments[j, 0]))
+
+
+def lane_movement(strips: dict[str, LaneStrip], lane: str) -> str | None:
+    """The one movement lane ``lane`` leads to, from the map: ``left`` or ``right`` when
+    every successor turns that way by more than :data:`TURN_LANE_DEG` (a turning lane,
+    with its own arrow), ``straight`` when every one runs on within it; None where they
+    differ or the map does not say (a shared approach: the car's own path decides)."""
+    strip = strips.get(lane)
+    if strip is None or not strip.successors:
+        return None
+    found = set()
+    for name in strip.successors:
+        after = strips.get(name)
+        if after is None:
+            return None
+        turn = _heading(after.centre[-2:]) - _heading(strip.centre[-2:])
+        deg = float(np.degrees(np.angle(np.exp(1j * turn))))
+        found.add("left" if deg > TURN_LANE_DEG else "right" if deg < -TURN_LANE_DEG
+                  else "straight" if abs(deg) <= TURN_LANE_DEG else None)
+    return found.pop() if len(found) == 1 else None
+
+
+def _heading(points: Floats) -> float:
+    step = points[-1] - points[0]
+    return float(np.arctan2(step[1], step[0]))

@@ -24,11 +24,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.signal import savgol_filter
 
 from scenweave.mining.highway import lane_changes
+from scenweave.mining.lanes import lane_movement
 from scenweave.mining.lights import CODE_OF_STATE, adscene_header, frame_of, state_at
 from scenweave.mining.motion import PositionsSpeed, positions_speed, runs
 from scenweave.mining.scene import Event, Scene
@@ -38,6 +40,9 @@ from scenweave.mining.tracks import Floats, Mask, TrafficLight
 RIGHT_DEG, STRAIGHT_DEG = 30.0, 20.0
 #: the movement is judged over this much path past the line (or to the track's end)
 MOVEMENT_PATH_M = 30.0
+#: a car that drove this far past the line has shown its movement (a turn has turned by
+#: more than a straight car's limit), for the movement of its lane
+SHOWN_MOVEMENT_M = 10.0
 AFTER_STOP_S = 3.0
 HISTORY_S = 15.0
 #: a stop line is found within this of a car's front sideways (beyond its half length)
@@ -152,16 +157,38 @@ class UrbanScene:
 
     # --- at the light ----------------------------------------------------------------------
 
-    def light_events(self, i: int) -> Iterator[Event]:
+    def crossings(self, i: int, line: StopLine) -> tuple[Floats, Mask, list[int]]:
+        """How far ``line`` is ahead of track ``i``'s front per step, where the front is
+        beside it, and the step (at most one) before it crosses it in the line's lane."""
         track = self.scene.tracks[i]
         fx, fy = self.front(i)
+        ahead, beside = line.ahead_m(fx, fy), line.beside_m(fx, fy)
+        near = beside <= line.half_m + LINE_SIDE_M
+        steps = np.flatnonzero(near[:-1] & (ahead[:-1] > 0) & (ahead[1:] <= 0)
+                               & (track.lane[:-1] == line.lane))
+        return ahead, near, steps[:1].tolist()
+
+    @cached_property
+    def driven_from(self) -> dict[str, str]:
+        """Each stop line's lane -> the one movement every car recorded crossing it and
+        driving on :data:`SHOWN_MOVEMENT_M` took (two cars at least): a turning lane's own
+        arrow is the light for a car that stands in it (issue 32)."""
+        seen: dict[str, set[str]] = {}
+        counts: dict[str, int] = {}
+        for i in range(len(self.scene.tracks)):
+            for line in self.lines_of(i):
+                for k in self.crossings(i, line)[2]:
+                    if self.paths[i][-1] - self.paths[i][k + 1] >= SHOWN_MOVEMENT_M:
+                        seen.setdefault(line.lane, set()).add(self.movement(i, k + 1))
+                        counts[line.lane] = counts.get(line.lane, 0) + 1
+        return {lane: moves.pop() for lane, moves in seen.items()
+                if len(moves) == 1 and counts[lane] >= 2}
+
+    def light_events(self, i: int) -> Iterator[Event]:
         crossed_at: set[int] = set()
         for line in self.lines_of(i):
-            ahead, beside = line.ahead_m(fx, fy), line.beside_m(fx, fy)
-            near = beside <= line.half_m + LINE_SIDE_M
-            steps = np.flatnonzero(near[:-1] & (ahead[:-1] > 0) & (ahead[1:] <= 0)
-                                   & (track.lane[:-1] == line.lane))
-            for k in steps[:1].tolist():
+            ahead, near, steps = self.crossings(i, line)
+            for k in steps:
                 if k + 1 not in crossed_at:
                     crossed_at.add(k + 1)
                     event = self._crossing(i, line, k + 1, ahead)
@@ -206,6 +233,17 @@ class UrbanScene:
             return "right"
         return "left" if turned >= RIGHT_DEG else "unclear"
 
+    def stop_movement(self, i: int, k: int, line: StopLine) -> str:
+        """The movement a car standing at ``line`` from step ``k`` waits for: its own path
+        where it drives on far enough to show it, else its lane's (the one every recorded
+        car took from it, or the map's: a left-turn lane waits for its own arrow, whatever
+        the straight light shows), else straight on."""
+        path = self.paths[i]
+        if path[-1] - path[k] >= MOVEMENT_PATH_M:
+            return self.movement(i, k)
+        return self.driven_from.get(line.lane) or lane_movement(self.scene.strips, line.lane) \
+            or (self.movement(i, k) if k + 1 < len(path) else "straight")
+
     def light_for(self, line: StopLine, move: str) -> TrafficLight | None:
         """The light of the line's lane that controls the movement (a light for ``all``
         where none names it)."""
@@ -223,8 +261,7 @@ class UrbanScene:
         for k in np.flatnonzero(at_line)[:1].tolist():
             t = float(track.t[k])
             first = int(np.searchsorted(track.t, t - HISTORY_S))
-            light = self.light_for(line, self.movement(i, k) if k + 1 < len(track.t)
-                                   else "straight")
+            light = self.light_for(line, self.stop_movement(i, k, line))
             if light is None or state_at(light, t) not in ("red", "yellow"):
                 return None
             if speed[first:k + 1].max() < limits["approach_from_ms"]:

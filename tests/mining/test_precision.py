@@ -3,7 +3,8 @@
 A lane label that flips without the car crossing the line is no lane change; a tracker's
 sag-and-snap of a speed is no brake, and a spike inside a real brake does not split it; an
 ego standing all along has no braking lead; in town a car ahead on the ego's path, inside a
-junction's lanelet, still ends a free ride.
+junction's lanelet, still ends a free ride, and a car standing in a left-turn lane reads its
+own arrow.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from scenweave.mining import Track
 from scenweave.mining.detect import detect
 from scenweave.mining.motion import positions_speed
 from scenweave.mining.thresholds import load_thresholds
+from scenweave.mining.tracks import LightPhase, TrafficLight
 from tests.mining.synthetic import DT, braking, car, recording, steady
 
 LIMITS = load_thresholds()
@@ -114,3 +116,53 @@ def test_in_town_a_car_ahead_in_a_junction_lanelet_ends_the_free_ride():
     town = frozenset({"J"})
     assert "FRF" in codes(ego, beside, junctions=town)
     assert "FRF" not in codes(ego, beside, inside, junctions=town)
+
+
+# -- U4_1: the light of the car's own lane and movement ---------------------------------------
+
+def _town_car(track_id: str, x: np.ndarray, y: np.ndarray, lane: np.ndarray) -> Track:
+    t = np.round(np.arange(len(x)) * DT, 3)
+    step = np.hypot(np.diff(x), np.diff(y))
+    heading = np.unwrap(np.arctan2(np.gradient(y), np.gradient(x)))
+    s = np.concatenate([[0.0], np.cumsum(step)])
+    return Track(id=track_id, length_m=4.5, width_m=1.8, vehicle_type="car", t=t, x=x, y=y,
+                 heading=heading, speed=np.gradient(s, t), s=s, lane=lane.astype(object))
+
+
+def _turning_left(track_id: str, x0: float) -> Track:
+    """Along the left-turn lane (y = 1.75) at 8 m/s, turning left (radius 12 m) past x = 100."""
+    d = x0 + 8.0 * np.arange(0.0, 12.0 + DT / 2, DT) - 100.0  # path past x = 100
+    angle = np.clip(d, 0, None) / 12.0
+    x = np.where(d < 0, 100 + d, 100 + 12 * np.sin(np.minimum(angle, np.pi / 2)))
+    y = 1.75 + np.where(d < 0, 0, 12 - 12 * np.cos(np.minimum(angle, np.pi / 2))
+                        + np.clip(d - 12 * np.pi / 2, 0, None))
+    return _town_car(track_id, x, y, np.where(d < 0, "L", "J"))
+
+
+def _waiting_in_the_turn_lane() -> Track:
+    """Arrives at 8 m/s, brakes from 2 s and stands from 6 s with its front 2 m before the
+    stop line at x = 100, to the end (its own path never shows where it goes)."""
+    t = np.arange(0.0, 12.0 + DT / 2, DT)
+    v = np.clip(np.where(t < 2, 8.0, 8.0 - 2.0 * (t - 2)), 0, None)
+    x = 63.75 + np.concatenate([[0.0], np.cumsum((v[1:] + v[:-1]) / 2 * DT)])
+    return _town_car("waiter", x, np.full(len(t), 1.75), np.full(len(t), "L"))
+
+
+def _arrows(*tracks: Track) -> list:
+    lines = (("L", 100.0, 3.5, 100.0, 0.0), ("S", 100.0, 0.0, 100.0, -3.5))
+    red, green = (LightPhase(0.0, 30.0, "red"),), (LightPhase(0.0, 30.0, "green"),)
+    lights = [TrafficLight("arrow", ("L",), None, red, "left", lines[:1]),
+              TrafficLight("main", ("L", "S"), None, green, "straightRight", lines)]
+    rec = recording(*tracks)
+    rec.lights.extend(lights)
+    rec.junction_lanes = frozenset({"J"})
+    return [(e.code, e.ego, e.refused) for e in detect(rec, LIMITS) if e.code == "U4_1"]
+
+
+def test_a_car_standing_in_a_left_turn_lane_reads_its_own_red_arrow():
+    """The straight light is green, the lane's own left arrow red: a car standing at the
+    line of a lane every recorded car turned left from stops for its arrow (U4_1); with no
+    car showing where the lane goes, the lane's light for straight on (green) says nothing."""
+    turners = (_turning_left("first", 75.0), _turning_left("second", 85.0))
+    assert _arrows(_waiting_in_the_turn_lane(), *turners) == [("U4_1", "waiter", None)]
+    assert _arrows(_waiting_in_the_turn_lane()) == []

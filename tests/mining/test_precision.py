@@ -11,14 +11,19 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
+from lxml import etree
 
 from scenweave.mining import Track
 from scenweave.mining.detect import detect
 from scenweave.mining.motion import positions_speed
+from scenweave.mining.readers import read_file
+from scenweave.mining.scene import Scene
 from scenweave.mining.thresholds import load_thresholds
 from scenweave.mining.tracks import LightPhase, TrafficLight
+from tests.mining import make_fixtures as fixtures
 from tests.mining.synthetic import DT, braking, car, recording, steady
 
 LIMITS = load_thresholds()
@@ -166,3 +171,38 @@ def test_a_car_standing_in_a_left_turn_lane_reads_its_own_red_arrow():
     turners = (_turning_left("first", 75.0), _turning_left("second", 85.0))
     assert _arrows(_waiting_in_the_turn_lane(), *turners) == [("U4_1", "waiter", None)]
     assert _arrows(_waiting_in_the_turn_lane()) == []
+
+
+# -- the line from the file's lane map ----------------------------------------------------------
+
+def _two_lanes(path: Path, cars: dict[int, tuple[float, Callable[[int], float]]]) -> Path:
+    """A CommonRoad file of two straight lanelets driving towards -x (100: y -3.5..0, the
+    left lane; 101: y 0..3.5) and cars at 5 m/s for 6 s from ``x0``, at ``y(step)``."""
+    root = etree.Element("commonRoad", commonRoadVersion="2020a",
+                         benchmarkID="ZAM_Lines-1_1_T-1", timeStepSize=str(fixtures.DT),
+                         author="ScenWeave tests", affiliation="ScenWeave", source="synthetic",
+                         date="2026-01-01")
+    fixtures._lanelet(root, 100, -3.5, 0.0, None, 101)
+    fixtures._lanelet(root, 101, 0.0, 3.5, 100, None)
+    for lanelet in root.iter("lanelet"):  # no light here: a highway's two lanes
+        lanelet.remove(lanelet.find("trafficLightRef"))
+    for number, (x0, y_of) in cars.items():
+        fixtures._obstacle(root, number, "car", 4.5, 1.8, x0, 5.0, y_of)
+    etree.ElementTree(root).write(str(path), pretty_print=True, xml_declaration=True,
+                                  encoding="UTF-8")
+    return path
+
+
+def test_the_line_is_the_lanelets_border_in_a_file_with_a_lane_map(tmp_path, monkeypatch):
+    monkeypatch.setattr(fixtures, "STEPS", 60)
+    path = _two_lanes(tmp_path / "lines.xml", {
+        1: (95.0, lambda k: 1.75 - 3.5 * min(1.0, max(0.0, (k - 15) / 20))),  # right to left
+        # 1.5 m across, its label flips, but its centre stops 0.3 m past the line
+        2: (40.0, lambda k: 1.2 - 1.5 * min(1.0, max(0.0, (k - 20) / 10))),
+    })
+    recording = read_file(path)
+    assert Scene(recording, LIMITS).strips.keys() == {"100", "101"}
+    flipped = next(t for t in recording.tracks if t.id == "2")
+    assert len(set(flipped.lane)) == 2  # the label does flip
+    changes = {e.ego for e in detect(recording, LIMITS) if e.code in LANE_CHANGES}
+    assert changes == {"1"}

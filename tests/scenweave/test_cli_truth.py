@@ -189,7 +189,8 @@ def test_run_prints_its_line_then_problems_counted_with_the_first_few(mixed, tmp
     result = invoke("run", mixed, "--out", tmp_path, "--no-llm", "--no-replay")
     out = result.stdout.splitlines()
     assert out[0].startswith("run ") and "1 ok" in out[0] and "5 refused" in out[0]
-    err = result.stderr.splitlines()
+    started, *err = result.stderr.splitlines()
+    assert started.startswith("run ") and "--run-id" in started  # the id to resume by, said first
     assert err[0] == "refused: 5 records (5 input errors)"
     assert err[1].startswith("  BRAKE_BINS_VALUES.npy, row 0, field 'delta_vel_kmh': ")
     assert err[4].startswith("  and 2 more — see ") and err[4].endswith("summary.json")

@@ -300,10 +300,14 @@ def bare_esmini(xosc: Path, map_path: Path, settings: Any) -> float:
         prepared = Path(tmp) / "bare.xosc"
         prepared.write_bytes(xml)
         started = time.perf_counter()
-        subprocess.run([str(binary), "--osc", str(prepared), "--headless", "--fixed_timestep",
-                        str(settings.time_step_s), "--disable_log", "--disable_stdout",
-                        "--collision"], cwd=tmp, capture_output=True)
-        return time.perf_counter() - started
+        done = subprocess.run([str(binary), "--osc", str(prepared), "--headless",
+                               "--fixed_timestep", str(settings.time_step_s), "--disable_log",
+                               "--disable_stdout", "--collision"], cwd=tmp, capture_output=True)
+        elapsed = time.perf_counter() - started
+    if done.returncode != 0:  # a quick failure is no time to compare with
+        raise RuntimeError(f"bare esmini failed on {xosc} (exit {done.returncode}): "
+                           f"{done.stderr.decode(errors='replace')[-500:]}")
+    return elapsed
 
 
 #: a replay's split (``collect``: ``close`` + ``pack`` + ``transfer``, one figure in older code)

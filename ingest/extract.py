@@ -96,12 +96,11 @@ def lead_in_s(params: Mapping[str, Any], same_lane: SameLane | None) -> float:
     boot: a collision at 0.00 s). 0 when even the record's start is too close (which
     ``check_playable`` then says)."""
     longest = HIGHWAY_MANEUVER_START_S
-    present = same_lane is not None and (
-        same_lane.prefix == "npc" and params.get("has_npc")
-        or params.get(f"{same_lane.prefix}_present"))
-    if same_lane is None or not present:
+    if same_lane is None:
         return longest
     prefix = same_lane.prefix
+    if not params.get("has_npc" if prefix == "npc" else f"{prefix}_present"):
+        return longest
     gap, speed = params.get(f"{prefix}_distance_m"), params.get(f"{prefix}_speed_ms")
     if not isinstance(gap, float | int) or not isinstance(speed, float | int):
         return longest

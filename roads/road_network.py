@@ -31,6 +31,7 @@ from scenweave.roads.lanes import (
     section_samples,
 )
 from scenweave.roads.opendrive import OpenDriveMap, Road, RoadLink
+from scenweave.roads.plan_view import ReferencePose
 
 T = TypeVar("T")
 
@@ -119,11 +120,14 @@ class RoadNetwork:
         """Both borders of every drivable lane section, sampled about ``step_m`` apart along
         the road, in file order."""
         found = []
+        sampled: dict[tuple[str, int], tuple[np.ndarray, ReferencePose]] = {}
         for key in self.drivable_lanes():
             road = self.road(key.road_id)
             section = road.sections[key.section]
-            s = section_samples(section, step_m)
-            pose = road.plan_view.pose(s)
+            if (key.road_id, key.section) not in sampled:  # the lanes of a section share it
+                s = section_samples(section, step_m)
+                sampled[key.road_id, key.section] = s, road.plan_view.pose(s)
+            s, pose = sampled[key.road_id, key.section]
             for offsets in lane_border_offsets(road, section, key.lane_id, s):
                 t = offsets[0]
                 points = np.column_stack([pose.x - t * np.sin(pose.hdg),

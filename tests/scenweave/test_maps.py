@@ -68,7 +68,8 @@ def test_a_highway_record_on_a_town_without_highway_is_one_line_and_the_batch_go
     result = CliRunner().invoke(cli, ["run", str(data), "--out", str(tmp_path), "--no-llm",
                                       "--no-replay", "--map", "Town01", "--classes", "BRAKE,U4_1"])
     assert result.exit_code == 1, result.output  # three scenarios failed
-    lines = result.stderr.splitlines()
+    started, *lines = result.stderr.splitlines()
+    assert started.startswith("run ")  # the line naming the run's id comes first
     assert lines[0] == "failed: 3 scenarios (spawn 3)"
     assert lines[1:] == [f"  NoSpawnFits: BRAKE_B0_BRAKE_BINS_VALUES_row00000{row} (BRAKE): map "
                          "Town01 has no highway lane that fits (no highway spawn point in its "

@@ -7,6 +7,7 @@ so a scenario folder is either complete or absent; a rerun skips finished scenar
 from __future__ import annotations
 
 import errno
+import json
 import re
 import shutil
 import subprocess
@@ -61,6 +62,9 @@ class RunFolder:
         self.root = Path(root)
         #: this process made the folder (a resumed run's folder is not removed on failure)
         self.created = created
+        #: the outcomes this process committed, by folder name, as their status.json reads
+        #: back: the summary at the end of a batch reads no file it wrote itself
+        self._committed: dict[str, Outcome] = {}
 
     @classmethod
     def open(cls, out_root: Path, run_id: str | None = None) -> RunFolder:
@@ -150,12 +154,15 @@ class RunFolder:
         if final.exists():
             _remove_tree(final)
         staging.rename(final)
+        self._committed[final.name] = json.loads(json.dumps(outcome))
         return final
 
     def outcomes(self) -> list[Outcome]:
-        """Every finished scenario's outcome, sorted by scenario id."""
+        """Every finished scenario's outcome, sorted by scenario id; those this process
+        committed from memory, the others (an earlier run's) read from their folders."""
         return [outcome for path in sorted(self.root.glob(f"*/{STATUS_NAME}"))
-                if (outcome := read_outcome(path.parent)) is not None]
+                if (outcome := self._committed.get(path.parent.name)
+                    or read_outcome(path.parent)) is not None]
 
     def write(self, name: str, data: Any) -> Path:
         path = self.root / name

@@ -189,9 +189,28 @@ def _in_this_process(todo: list[tuple[int, Params]], stage: Callable[[Params], P
 
 #: the batch's matcher, set before the workers fork: they inherit it instead of unpickling it
 _worker_matcher: Matcher | None = None
-#: what a scenario's making imports, loaded before the workers fork so each starts warm
+#: what a scenario's making imports, loaded before the workers fork so each starts warm (the
+#: scenario library's scenariogeneration and scipy alone are ~1.2 s of CPU per worker)
 _PIPELINE_MODULES = ("scenweave.corpus", "scenweave.schemas", "scenweave.judge",
-                     "scenweave.player", "scenweave.presentation.replay_figures")
+                     "scenweave.player", "scenweave.presentation.replay_figures",
+                     "scenweave.scenario_lib.builder")
+
+
+def _warm_before_fork(settings: PipelineSettings) -> None:
+    """Do once, in this process, what every worker would do for its first scenario: import
+    the pipeline, read the map (the matcher's lane graph), build its road graph (the
+    replay's map cut) and sample its lanes' borders (the replay figure). Forked workers
+    inherit all of it."""
+    from scenweave import roads
+    from scenweave.presentation.replay_panels import warm_lanes
+
+    for module in _PIPELINE_MODULES:
+        importlib.import_module(module)
+    map_path = roads.resolve_map(settings.map).path
+    roads.road_network(map_path)
+    if settings.replay is not None:
+        roads.road_graph(map_path)
+        warm_lanes(map_path)
 
 
 def _process_in_worker(params: Params, index: int, staging: Path,
@@ -206,15 +225,15 @@ def _in_processes(todo: list[tuple[int, Params]], stage: Callable[[Params], Path
                   jobs: int) -> Iterator[tuple[Params, Path, dict]]:
     """Each scenario made in one of ``jobs`` worker processes, yielded as it finishes.
 
-    Workers are forked once this process has imported the pipeline and loaded the matcher, so
-    they start at once with both (spawned workers imported everything again and unpickled the
-    matcher, ~4 s before the first scenario on two busy cores: a --jobs 2 run of 102 sample
-    records was 1.2x a --jobs 1 run). A forked worker starts its own player server
-    (``player.engine`` forgets the parent's at a fork).
+    Workers are forked once this process has imported the pipeline, loaded the matcher and
+    read the map (``_warm_before_fork``), so they start at once with all of it (spawned
+    workers imported everything again and unpickled the matcher, ~4 s before the first
+    scenario on two busy cores: a --jobs 2 run of 102 sample records was 1.2x a --jobs 1
+    run). A forked worker starts its own player server (``player.engine`` forgets the
+    parent's at a fork).
     """
     global _worker_matcher
-    for module in _PIPELINE_MODULES:
-        importlib.import_module(module)
+    _warm_before_fork(settings)
     _worker_matcher = matcher
     context = multiprocessing.get_context("fork")
     with ProcessPoolExecutor(jobs, mp_context=context) as pool:

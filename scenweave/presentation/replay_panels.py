@@ -334,6 +334,13 @@ def _cropped(xs: np.ndarray, ys: np.ndarray, sx: Scale,
     return np.where(keep, xs, np.nan), np.where(keep, ys, np.nan)
 
 
+def warm_lanes(map_path: Any) -> None:
+    """Read ``map_path`` and sample its lanes' borders now, once per process, as the first
+    figure drawn on it would: a batch does it before it forks its workers, which inherit both
+    instead of each making them for its first figure."""
+    _lane_borders(_network(map_path))
+
+
 def _network(map_path: Any) -> Any:
     from scenweave import roads
 

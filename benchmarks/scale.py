@@ -35,6 +35,7 @@ import argparse
 import json
 import math
 import os
+import resource
 import shutil
 import signal
 import statistics
@@ -169,6 +170,32 @@ def print_run(jobs: int, r: dict, base: dict | None) -> None:
           f"{r['end_s']:.2f} s = {serial / r['elapsed_s']:.0%} of the wall time ({r['load']})")
     print("    peak RSS (MiB, largest of each kind): " + ", ".join(
         f"{role} {mib:.0f} (of {count})" for role, (count, mib) in sorted(r["peaks"].items())))
+
+
+def start_cpu(raw: Path, out: Path) -> dict[str, float]:
+    """The start in CPU seconds, which a loaded machine hardly changes (wall time it does):
+    ``scenweave run RAW --no-llm --limit 1`` with ``python -X importtime``: the CPU of the
+    command and every process it waited for (its player server and the scenario's child),
+    the wall time, and the imports' time (every module's self time summed)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    started = time.perf_counter()
+    done = subprocess.run([sys.executable, "-X", "importtime", *CLI[1:], "run", str(raw),
+                           "--no-llm", "--limit", "1", "--out", str(out), "--run-id", "start"],
+                          env=ENV, cwd=ROOT, capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - started
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    imports_us = sum(int(line.split("|")[0].split(":")[1]) for line in done.stderr.splitlines()
+                     if line.startswith("import time:") and "self" not in line)
+    return {"wall_s": wall, "imports_s": imports_us / 1e6,
+            "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)}
+
+
+def print_start_cpu(r: dict[str, float]) -> None:
+    """The start's CPU line (a run of one record, its own first scenario included)."""
+    print(f"start, one record (run --limit 1, its scenario, summary and report included): "
+          f"{r['cpu_s']:.2f} s CPU, of which imports {r['imports_s']:.2f} s "
+          f"(-X importtime: each module's own time summed, a wall clock, so a loaded machine "
+          f"stretches it); {r['wall_s']:.2f} s wall ({load_average()})")
 
 
 def _idle_workers(url: str) -> int:
@@ -357,6 +384,7 @@ def main() -> None:
                   f"{'met' if ratio >= 1.9 else 'MISSED'}); time to the first scenario "
                   f"{runs[1]['first_s']:.2f} s (target <= 1 s: "
                   f"{'met' if runs[1]['first_s'] <= 1 else 'MISSED'})")
+        print_start_cpu(start_cpu(raw, out))
         small = sample_data(Path(tmp) / "small", max(1, args.per_class // 3))
         fewer = timed_run(small, out, 1, "small")
         print_run(1, fewer, None)

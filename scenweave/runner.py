@@ -24,7 +24,6 @@ from scenweave.console import refused_records
 from scenweave.in_situ_records import InSituWriter
 from scenweave.inputs import InputSelection, LoadedInput, load_input
 from scenweave.pipeline import PipelineSettings, process_scenario
-from scenweave.presentation.report import write_run_report
 from scenweave.progress import progress
 from scenweave.run_folder import RunFolder, Started
 from scenweave.schemas.params import Params
@@ -147,6 +146,8 @@ def _run_into(folder: RunFolder, started: Started, loaded: LoadedInput,
     issues = [i.to_dict() for i in loaded.report.issues]
     summary = summarize(folder, issues)
     folder.write(SUMMARY_FILE, summary)
+    from scenweave.presentation.report import write_run_report  # here: none before the first
+
     write_run_report(folder.root)
     return RunResult(folder, summary, skipped, issues, played_later=len(later))
 

@@ -201,17 +201,21 @@ def _warm_before_fork(settings: PipelineSettings) -> None:
     """Do once, in this process, what every worker would do for its first scenario: import
     the pipeline, read the map (the matcher's lane graph), build its road graph (the
     replay's map cut) and sample its lanes' borders (the replay figure). Forked workers
-    inherit all of it."""
+    inherit all of it. A map that cannot be read is left to the scenarios, each of which
+    fails for it as it did without this."""
     from scenweave import roads
     from scenweave.presentation.replay_panels import warm_lanes
 
     for module in _PIPELINE_MODULES:
         importlib.import_module(module)
-    map_path = roads.resolve_map(settings.map).path
-    roads.road_network(map_path)
-    if settings.replay is not None:
-        roads.road_graph(map_path)
-        warm_lanes(map_path)
+    try:
+        map_path = roads.resolve_map(settings.map).path
+        roads.road_network(map_path)
+        if settings.replay is not None:
+            roads.road_graph(map_path)
+            warm_lanes(map_path)
+    except Exception:  # noqa: BLE001 - only a head start; the scenarios meet it themselves
+        return
 
 
 def _process_in_worker(params: Params, index: int, staging: Path,

@@ -104,16 +104,18 @@ def default_matcher(map_name: str | None = None) -> SpawnMatcher:
 
 def run_batch(data: Path, out_root: Path, selection: InputSelection, settings: PipelineSettings,
               run_id: str | None = None, retry_failed: bool = False,
-              matcher: Matcher | None = None, jobs: int = 1) -> RunResult:
+              matcher: Matcher | None = None, jobs: int = 1, announce: bool = False) -> RunResult:
     """Run every selected record of ``data`` into ``out_root/<run_id>/``; resume if it exists.
 
     ``jobs`` > 1 makes the scenarios in that many fresh processes (each gets the matcher once);
-    this process commits each scenario folder.
+    this process commits each scenario folder. ``announce``: say the run's id and how to resume
+    it as it starts (``scenweave run``; a bench or demo resumes by its own id, not this one).
     """
     loaded = load_input(Path(data), selection)
     matcher = matcher or default_matcher(settings.map)
     folder = RunFolder.open(out_root, run_id)
-    folder.announce()
+    if announce:
+        folder.announce()
     if settings.agent is not None:  # the LLM calls are logged under the run
         settings = replace(settings, agent=replace(settings.agent, run_id=folder.run_id))
     with folder.started() as started:

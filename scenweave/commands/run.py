@@ -108,7 +108,7 @@ def run(data: Path, out_root: Path, no_llm: bool, run_id: str | None, resume: bo
     try:
         result = run_batch(data, out_root, selection, settings, run_id=run_id,
                            retry_failed=retry_failed, matcher=matcher_for(matcher, settings.map),
-                           jobs=jobs)
+                           jobs=jobs, announce=True)
     except NothingMatched as err:  # found before any run folder is made: nothing written
         click.echo(str(err), err=True)
         raise click.exceptions.Exit(exit_codes.PROBLEMS) from err

@@ -499,16 +499,55 @@ def following(scene: Scene) -> Iterator[Event]:
                             or scene.speed_at_step(p.track, p.step) < least else p.track
                             for p in partner])
             ids[scene.positions[i].filled < least] = -1
-            yield from _episodes(scene, code, i, ids, limits)
+            clear, noisy = _apart(scene, i, partner, limits["min_gap_m"])
+            ids[~clear & ~noisy] = -1
+            yield from _episodes(scene, code, i, ids, clear, limits)
 
 
-def _episodes(scene: Scene, code: str, ego: int, ids: Steps,
+def _apart(scene: Scene, ego: int, partner: list[Neighbour | None],
+           least_m: float) -> tuple[Mask, Mask]:
+    """Per step of the ego: whether its partner's bumper is more than ``least_m`` away,
+    along the path and along the road (the record's series gap; its sign is the road
+    frame's, which a town's bends can turn), and whether either car's position is tracking
+    noise then. Two boxes side by side or overlapping (Lankershim 2-10's 2713 and 2731,
+    4.0-4.8 s) follow nobody."""
+    track = scene.tracks[ego]
+    clear, noisy = np.zeros(len(track.t), bool), np.zeros(len(track.t), bool)
+    for k, found in enumerate(partner):
+        if found is None:
+            continue
+        noisy[k] = scene.positions[ego].noise[k] or scene.positions[found.track].noise[found.step]
+        road = scene.gap(ego, found.track, float(track.t[k]))
+        clear[k] = found.gap_m > least_m and road is not None and abs(road) > least_m
+    return clear, noisy
+
+
+def _episodes(scene: Scene, code: str, ego: int, ids: Steps, clear: Mask,
               limits: dict[str, float]) -> Iterator[Event]:
+    """Each run of one partner, from its first step that is ``clear`` with the follower in
+    the lead's lane to its last that is ``clear`` (a run may pass tracking noise, never
+    start or end in it)."""
     track = scene.tracks[ego]
     for other in set(ids[ids >= 0].tolist()):
         for first, last in runs(ids == other):
-            yield from _windows(scene, code, ego, int(other), float(track.t[first]),
-                                float(track.t[last]), limits)
+            kept = (np.flatnonzero(clear[first:last + 1]) + first).tolist()
+            start = next((k for k in kept if _in_lead_lane(scene, code, ego, int(other), k)),
+                         None)
+            if start is None:
+                continue
+            yield from _windows(scene, code, ego, int(other), float(track.t[start]),
+                                float(track.t[kept[-1]]), limits)
+
+
+def _in_lead_lane(scene: Scene, code: str, ego: int, npc: int, k: int) -> bool:
+    """Whether at the ego's step ``k`` the follower drives where the lead drove: a car
+    cutting in has the lead on its path while still beside it (Peachtree 2's 500 behind
+    512, 0.6-3.2 s), which no follow can start from."""
+    step = scene.step_at(npc, float(scene.tracks[ego].t[k]))
+    if step is None:
+        return False
+    lead, follower = ((npc, step), (ego, k)) if code == "FLF" else ((ego, k), (npc, step))
+    return scene.behind_in_lane(*lead, *follower)
 
 
 def _windows(scene: Scene, code: str, ego: int, npc: int, start: float, end: float,

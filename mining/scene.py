@@ -31,6 +31,8 @@ ON_PATH_M = 1.6
 ON_PATH_HEADING_DEG = 45.0
 #: cars further apart than this (m, centres) are not looked at for a lead
 LEAD_SEARCH_M = 90.0
+#: a lead's path run on straight back from its first position is trusted to this (deg)
+RUN_ON_SPREAD_DEG = 10.0
 #: a point of the road is recorded when some car was recorded this close to it (m)
 SEEN_WITHIN_M = 3.0
 
@@ -104,6 +106,23 @@ class Scene:
         if not self.town:
             return self.traffic.leader(i, k)
         return self._path_leads[i][k]
+
+    def behind_in_lane(self, lead: int, m: int, follower: int, k: int) -> bool:
+        """Whether track ``follower`` at its step ``k`` drives where track ``lead`` drove to
+        reach its step ``m``: within :data:`ON_PATH_M` of the lead's earlier positions, run
+        on straight back from the first of them with :data:`RUN_ON_SPREAD_DEG` of leeway (a
+        heading at a track's start is a guess). On a highway the lanes say it
+        (:meth:`lead`); in town a car that has a lead on the path it drives next may still
+        be beside it, cutting in (Peachtree 2's 500 beside 512), or the lead may still be
+        cutting in ahead of it."""
+        if not self.town:
+            return True
+        car, me = self.tracks[lead], self.tracks[follower]
+        behind = path_from(car.x[m::-1], car.y[m::-1], float(car.heading[0]) + np.pi)
+        along, off, _ = on_path(behind, np.array([[me.x[k], me.y[k]]]))
+        recorded = float(np.hypot(*np.diff(behind[:-1], axis=0).T).sum())
+        beyond = max(float(along[0]) - recorded, 0.0)
+        return bool(off[0] <= ON_PATH_M + beyond * np.tan(np.radians(RUN_ON_SPREAD_DEG)))
 
     def sees_ahead(self, i: int, k: int, distance_m: float) -> bool:
         """Whether the recording covers the road ``distance_m`` ahead of track ``i``'s front

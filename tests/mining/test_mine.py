@@ -41,7 +41,11 @@ def test_mined_records_are_canonical_and_say_where_they_come_from(tmp_path):
 
 def test_events_no_scenario_can_play_are_skipped_with_the_reason(tmp_path):
     squeezed = recording(car("lead", 10, 35, steady(15), 2), car("ego", 10, 30, steady(25), 2))
-    report = mine_recordings([squeezed], tmp_path, load_thresholds())
+    # a follow now ends where the bumpers meet (issue 36); thresholds that let the detector
+    # take the overlap show what mining does with an event no scenario can play
+    limits = load_thresholds()
+    limits["follow"] = {**limits["follow"], "min_gap_m": -1e9}
+    report = mine_recordings([squeezed], tmp_path, limits)
     assert report.skipped, "a car running into its lead is no record"
     assert all(s["reason"] and s["scenario_id"] for s in report.skipped)
 

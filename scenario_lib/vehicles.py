@@ -84,6 +84,12 @@ def least_reference_gap_m(other_type: str | None, ahead: bool) -> float:
     return abs(reference_gap_m(MIN_BUMPER_GAP_M if ahead else -MIN_BUMPER_GAP_M, other_type))
 
 
+def ego_front_m() -> float:
+    """How far the ego's front bumper lies ahead of its reference point, the point a spawn
+    places (m)."""
+    return _front_of(VEHICLE_MODELS["ego"].length_m)
+
+
 def _front_of(length_m: float) -> float:
     """How far the front bumper lies ahead of the reference point (the box centre is
     ``BOX_CENTRE_AHEAD`` x length ahead of it)."""

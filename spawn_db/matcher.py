@@ -38,6 +38,7 @@ from scenweave.roads.map_ref import MapRef, resolve_map
 from scenweave.roads.road_network import LaneKey, LanePoint, RoadNetwork
 from scenweave.roads.signals import junction_approach
 from scenweave.scenario_lib.kinematics import lane_change_length_m, start_gap_m
+from scenweave.scenario_lib.vehicles import ego_front_m
 from scenweave.schemas.params import NumberReader, Params, actor_value, unchecked
 from scenweave.spawn_db.database import (
     DEFAULT_DB_PATH,
@@ -167,6 +168,9 @@ class Requirements:
     #: metres ahead that must have no signalised junction (highway): the whole drive until
     #: the stop trigger, or (``lights_after_manoeuvre``) until the manoeuvre ends
     light_free_m: float = 0.0
+    #: a class that passes its stop line: the farthest the line may lie ahead of the spawn,
+    #: the recorded drive less the ego's front (``None``: no line to pass, or no drive known)
+    stop_line_within_m: float | None = None
 
     @classmethod
     def from_params(cls, params: Params) -> Requirements:
@@ -196,7 +200,7 @@ class Requirements:
             tfl_ds_m=number.optional("tfl_ds_m"),
             drive_distance_m=number.optional("drive_distance_m"),
             light_movement=_light_movement(params) if domain == "urban" else None,
-            light_free_m=ahead)
+            light_free_m=ahead, stop_line_within_m=_stop_line_within_m(params))
 
     def lights_after_manoeuvre(self) -> Requirements:
         """These needs with a light allowed on the route once the manoeuvre has ended.
@@ -209,10 +213,25 @@ class Requirements:
 
 
 
-def _light_movement(params: Params) -> str | None:
-    maneuver = maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
+def _maneuver_of(params: Params) -> maneuvers.Maneuver | None:
+    return maneuvers.find(params.get("maneuver_class")) or maneuvers.by_tag(
         str(params.get("maneuver_tag", "")))
+
+
+def _light_movement(params: Params) -> str | None:
+    maneuver = _maneuver_of(params)
     return None if maneuver is None or maneuver.light is None else maneuver.turn
+
+
+def _stop_line_within_m(params: Params) -> float | None:
+    """How far ahead of the spawn the stop line of a class that passes it may lie: the
+    recorded drive less the ego's front, so the ego crosses the line it crossed in the
+    record (else the replay's REPLAY_NO_PASS: issue 36)."""
+    maneuver, drive = _maneuver_of(params), NumberReader(params).optional("drive_distance_m")
+    if params.get("domain") != "urban" or maneuver is None or maneuver.light is None \
+            or maneuver.stops_at_line or drive is None:
+        return None
+    return drive - ego_front_m()
 
 
 class SpawnMatcher:
@@ -679,6 +698,11 @@ def _urban_filters(entry: dict[str, Any], needs: Requirements) -> Iterator[Rejec
         yield Rejection("traffic_light", "no traffic light ahead of the spawn")
     elif movement is not None and _light_for(entry, movement) is None:
         yield Rejection("traffic_light", f"no light controls the {movement} movement")
+    stop_line, within = entry["surroundings"]["stop_line_distance_m"], needs.stop_line_within_m
+    if within is not None and stop_line is not None and stop_line > within:
+        yield Rejection("stop_line_reach", f"the stop line is {stop_line:.1f} m ahead, the "
+                        f"recorded drive reaches {within:.1f} m (less the ego's front): the "
+                        "ego would never cross it")
     maneuver = maneuvers.by_tag(needs.tag)
     if maneuver is None or not suits_urban(entry, maneuver):  # asked now: plugins spawn too
         yield Rejection("suitable_for", f"{needs.tag!r} does not suit it (a light class needs "

@@ -6,7 +6,8 @@ from typing import Any
 
 TAGS = {"BRAKE": "brake", "CINF": "cut_in_front", "CINB": "cut_in_behind", "LCF":
         "lane_change_front", "FLB": "follow_behind", "FRF": "free_ride_front",
-        "U1_1": "in_lane_driving", "U4_1": "stop_at_tfl_red", "U4_4": "turn_right_at_tfl_green"}
+        "U1_1": "in_lane_driving", "U4_1": "stop_at_tfl_red", "U4_3": "straight_tfl_green",
+        "U4_4": "turn_right_at_tfl_green"}
 
 
 def highway(code: str, *, ego_ms: float = 30.0, duration_s: float = 4.0,

@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from scenweave.scenario_lib.vehicles import ego_front_m
 from scenweave.spawn_db import NoSpawnFits, ParamsError, SpawnMatcher
 from tests.spawn_db.contract_params import highway, urban
 
@@ -226,3 +227,19 @@ def test_bad_params_are_one_clear_error(matcher):
         matcher.find({**highway("BRAKE"), "domain": "rural"})
     with pytest.raises(ParamsError, match="gap_ahead_m='far'"):
         matcher.find({**highway("BRAKE"), "gap_ahead_m": "far"})
+
+
+@pytest.mark.parametrize("code", ["U4_3", "U4_4"])
+def test_a_class_passing_its_stop_line_spawns_where_the_recorded_drive_crosses_it(
+        matcher, code):
+    """Issue 36: the stop line lies no farther ahead than the recorded drive takes the ego's
+    front (else the replay's REPLAY_NO_PASS); a drive too short for any line is one error."""
+    params = urban(code, tfl_ds_m=30.0, drive_distance_m=45.0)
+    reach = 45.0 - ego_front_m()
+    candidates = matcher.find(params, top_n=500)
+    assert candidates
+    for candidate in candidates:
+        assert candidate.entry["surroundings"]["stop_line_distance_m"] <= reach
+    with pytest.raises(NoSpawnFits, match=rf"{code}.*stop_line_reach"):
+        matcher.find({**params, "drive_distance_m": 3.0})
+    assert matcher.find(urban("U4_1", drive_distance_m=3.0), top_n=1)  # it stops: no pass

@@ -8,6 +8,8 @@ from collections.abc import Callable
 import numpy as np
 
 from scenweave.mining import Recording, Track
+from scenweave.mining.detect import detect
+from scenweave.mining.thresholds import load_thresholds
 
 DT = 0.1
 
@@ -40,3 +42,17 @@ def switch(first: int, second: int, at_s: float) -> Callable[[np.ndarray], np.nd
 
 def recording(*tracks: Track, source: str = "synthetic") -> Recording:
     return Recording(source=source, dt=DT, tracks=list(tracks), reader="synthetic")
+
+
+def profile(*points: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
+    """A value through ``(time, value)`` points, linear in between (a speed, a lane)."""
+    times, values = zip(*points, strict=True)
+    return lambda t: np.interp(t, times, values)
+
+
+def events_by_code(rec: Recording) -> dict[str, list]:
+    """What the detectors find in ``rec`` with the shipped thresholds, by class code."""
+    found: dict[str, list] = {}
+    for event in detect(rec, load_thresholds()):
+        found.setdefault(event.code, []).append(event)
+    return found

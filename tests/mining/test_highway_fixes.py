@@ -13,29 +13,19 @@ import numpy as np
 import pytest
 
 from scenweave.mining import Recording, Track
-from scenweave.mining.detect import detect
 from scenweave.mining.mine import mine_recordings
 from scenweave.mining.thresholds import load_thresholds
 from scenweave.player import Playback
 from scenweave.player.playback import Box
-from tests.mining.synthetic import DT, braking, car, recording, steady
+from tests.mining.synthetic import DT, braking, car, events_by_code, profile, recording, steady
 
 LIMITS = load_thresholds()
 
 
 def events(*tracks: Track, removed: tuple[Track, ...] = ()) -> dict[str, list]:
-    found: dict[str, list] = {}
     rec = recording(*tracks)
     rec.removed.extend(removed)
-    for event in detect(rec, LIMITS):
-        found.setdefault(event.code, []).append(event)
-    return found
-
-
-def profile(*points: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
-    """Speed through ``(time, speed)`` points, linear in between."""
-    times, speeds = zip(*points, strict=True)
-    return lambda t: np.interp(t, times, speeds)
+    return events_by_code(rec)
 
 
 def changer(track_id: str, duration_s: float, s0: float, v: float, lane_at: Callable,

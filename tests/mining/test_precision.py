@@ -24,7 +24,7 @@ from scenweave.mining.scene import Scene
 from scenweave.mining.thresholds import load_thresholds
 from scenweave.mining.tracks import LightPhase, TrafficLight
 from tests.mining import make_fixtures as fixtures
-from tests.mining.synthetic import DT, braking, car, recording, steady
+from tests.mining.synthetic import DT, braking, car, events_by_code, profile, recording, steady
 
 LIMITS = load_thresholds()
 LANE_CHANGES = {"LCF", "LCB", "CINF", "CINB", "COUTF", "COUTB"}
@@ -33,15 +33,7 @@ LANE_CHANGES = {"LCF", "LCB", "CINF", "CINB", "COUTF", "COUTB"}
 def codes(*tracks: Track, junctions: frozenset[str] = frozenset()) -> dict[str, list]:
     rec = recording(*tracks)
     rec.junction_lanes = junctions
-    found: dict[str, list] = {}
-    for event in detect(rec, LIMITS):
-        found.setdefault(event.code, []).append(event)
-    return found
-
-
-def profile(*points: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
-    times, speeds = zip(*points, strict=True)
-    return lambda t: np.interp(t, times, speeds)
+    return events_by_code(rec)
 
 
 def neighbours() -> list[Track]:

@@ -14,15 +14,10 @@ from scenweave.mining import Track
 from scenweave.mining.detect import detect
 from scenweave.mining.motion import POSITIONS_AVERAGE_S, positions_speed
 from scenweave.mining.thresholds import load_thresholds
-from tests.mining.synthetic import DT, car, recording, steady
+from tests.mining.synthetic import DT, car, profile, recording, steady
 
 LIMITS = load_thresholds()
 LANE_M = 3.5
-
-
-def profile(*points: tuple[float, float]) -> Callable[[np.ndarray], np.ndarray]:
-    times, values = zip(*points, strict=True)
-    return lambda t: np.interp(t, times, values)
 
 
 def test_a_box_that_jumps_ahead_and_back_is_tracking_noise_not_speed():

@@ -17,8 +17,7 @@ from pathlib import Path
 import pytest
 
 from scenweave import roads
-from scenweave.player import ReplaySettings, engine, find_esmini, replay_file
-from scenweave.player.errors import PlayerUnavailable
+from scenweave.player import ReplaySettings, engine, replay_file
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = roads.DEFAULT_MAP_PATH
@@ -66,12 +65,7 @@ SCENARIO = """<?xml version="1.0" encoding="utf-8"?>
 """
 
 
-@pytest.fixture(autouse=True)
-def _needs_esmini():
-    try:
-        find_esmini()
-    except PlayerUnavailable as err:
-        pytest.skip(str(err))
+pytestmark = pytest.mark.usefixtures("needs_esmini")
 
 
 def _scenario(tmp_path: Path, stop: float = 2.0, map_name: str = "Town04",

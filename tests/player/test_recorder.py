@@ -20,7 +20,6 @@ import pytest
 
 from scenweave import roads
 from scenweave.player import ReplaySettings, engine, find_esmini, replay_file
-from scenweave.player.errors import PlayerUnavailable
 from tests.player.test_engine_server import SCENARIO
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -53,12 +52,7 @@ print(json.dumps([bulk.playback().to_dict(), per_step.to_dict()]))
 """
 
 
-@pytest.fixture(autouse=True)
-def _needs_esmini():
-    try:
-        find_esmini()
-    except PlayerUnavailable as err:
-        pytest.skip(str(err))
+pytestmark = pytest.mark.usefixtures("needs_esmini")
 
 
 def _two_cars(tmp_path: Path) -> Path:

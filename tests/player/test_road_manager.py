@@ -9,18 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from scenweave.player import PlayerUnavailable, find_esmini
 from scenweave.player.road_manager import PointGroup, probe_map
 from scenweave.roads.recorded_road import convert
 from tests.roads.recorded_network import HALF, LANE, lights, strips
 
-
-@pytest.fixture(autouse=True)
-def _needs_esmini() -> None:
-    try:
-        find_esmini()
-    except PlayerUnavailable as err:
-        pytest.skip(str(err))
+pytestmark = pytest.mark.usefixtures("needs_esmini")
 
 
 @pytest.fixture(scope="module")

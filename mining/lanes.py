@@ -68,17 +68,11 @@ def signed_distance(points: Floats, line: Floats) -> Floats:
     first, last = line[1] - line[0], line[-1] - line[-2]
     line = np.vstack([line[0] - BORDER_RUN_ON_M * first / max(np.hypot(*first), 1e-9), line,
                       line[-1] + BORDER_RUN_ON_M * last / max(np.hypot(*last), 1e-9)])
-    starts, segments = line[:-1], np.diff(line, axis=0)
-    squared = np.maximum(np.einsum("ij,ij->i", segments, segments), 1e-12)
-    rel = points[:, None, :] - starts[None, :, :]
-    u = np.clip(np.einsum("pij,ij->pi", rel, segments) / squared, 0.0, 1.0)
-    off = rel - u[..., None] * segments[None]
-    distance = np.hypot(off[..., 0], off[..., 1])
-    nearest = np.argmin(distance, axis=1)
-    rows = np.arange(len(points))
-    chosen, rel = segments[nearest], rel[rows, nearest]
+    segments = np.diff(line, axis=0)
+    j, _, distance, rel = _nearest_segment(line[:-1], segments, points)
+    chosen = segments[j]
     cross = chosen[:, 0] * rel[:, 1] - chosen[:, 1] * rel[:, 0]
-    return distance[rows, nearest] * np.where(cross >= 0, 1.0, -1.0)
+    return distance * np.where(cross >= 0, 1.0, -1.0)
 
 
 def path_from(x: Floats, y: Floats, heading: float) -> Floats:
@@ -100,13 +94,21 @@ def on_path(path: Floats, points: Floats) -> tuple[Floats, Floats, Floats]:
                 np.zeros(len(points)))
     segments, lengths, starts = segments[keep], lengths[keep], path[:-1][keep]
     before = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+    j, u, off, _ = _nearest_segment(starts, segments, points)
+    return (before[j] + u * lengths[j], off, np.arctan2(segments[j, 1], segments[j, 0]))
+
+
+def _nearest_segment(starts: Floats, segments: Floats,
+                     points: Floats) -> tuple[np.ndarray, Floats, Floats, Floats]:
+    """For each point, the polyline segment nearest to it: its index, how far along it the
+    nearest point lies (0..1), the distance, and the point relative to the segment's start."""
+    squared = np.maximum(np.einsum("ij,ij->i", segments, segments), 1e-12)
     rel = points[:, None, :] - starts[None, :, :]
-    u = np.clip(np.einsum("pij,ij->pi", rel, segments) / lengths**2, 0.0, 1.0)
+    u = np.clip(np.einsum("pij,ij->pi", rel, segments) / squared, 0.0, 1.0)
     off = np.hypot(*np.moveaxis(rel - u[..., None] * segments[None], -1, 0))
     j = np.argmin(off, axis=1)
     rows = np.arange(len(points))
-    return (before[j] + u[rows, j] * lengths[j], off[rows, j],
-            np.arctan2(segments[j, 1], segments[j, 0]))
+    return j, u[rows, j], off[rows, j], rel[rows, j]
 
 
 def lane_movement(strips: dict[str, LaneStrip], lane: str) -> str | None:
